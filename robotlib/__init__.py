@@ -1,0 +1,48 @@
+"""robotlib: mobile-robotics courseware around a simulated (or real) Pioneer 3-DX.
+
+The paper's robot API is importable from the top level::
+
+    from robotlib import robot, move, ismovedone, readsonar, disconnect
+"""
+
+from .robot import (
+    Robot,
+    RobotState,
+    RobotTimeout,
+    disconnect,
+    isheadingdone,
+    ismovedone,
+    move,
+    pose,
+    readsonar,
+    robot,
+    setdeltaheading,
+    setheading,
+    setrotvel,
+    setvel,
+    stop,
+)
+from .world import World, load_world, world_names
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "Robot",
+    "RobotState",
+    "RobotTimeout",
+    "World",
+    "disconnect",
+    "isheadingdone",
+    "ismovedone",
+    "load_world",
+    "move",
+    "pose",
+    "readsonar",
+    "robot",
+    "setdeltaheading",
+    "setheading",
+    "setrotvel",
+    "setvel",
+    "stop",
+    "world_names",
+]

@@ -1,0 +1,42 @@
+"""The ``robotlib`` command line: one entry point, subcommands loaded lazily.
+
+Each subcommand lives in its own module, which provides
+``add_arguments(parser)`` and ``run(args) -> int``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+
+COMMANDS = {
+    "sim-server": ("robotlib.pioneer.server", "serve the simulator over the Pioneer protocol"),
+    "reproduce": ("robotlib.experiment", "run the paper's MCL experiment over many seeds"),
+    "bench": ("robotlib.benchmarks", "measure kernels and the MCL step"),
+    "release": ("robotlib.course.release", "write labs/ from solutions/"),
+    "grade": ("robotlib.course.grade", "grade a folder of submissions with nbval"),
+}
+"""Subcommand name to (module, one-line help)."""
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run the ``robotlib`` command line; return the exit status."""
+    argv = sys.argv[1:] if argv is None else argv
+    parser = argparse.ArgumentParser(prog="robotlib", description=__doc__.splitlines()[0])
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    for name, (_, help_) in COMMANDS.items():
+        sub.add_parser(name, help=help_, add_help=False)
+    if not argv or argv[0] not in COMMANDS:
+        args = parser.parse_args(argv)
+        parser.print_help()
+        return 2
+    module = importlib.import_module(COMMANDS[argv[0]][0])
+    cmd_parser = argparse.ArgumentParser(prog=f"robotlib {argv[0]}")
+    module.add_arguments(cmd_parser)
+    args = cmd_parser.parse_args(argv[1:])
+    return int(module.run(args) or 0)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

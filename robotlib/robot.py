@@ -1,0 +1,320 @@
+"""The paper's robot API: one `Robot` interface, several backends.
+
+``robot(address)`` opens a robot; the same functions (``move``,
+``setheading``, ``setdeltaheading``, ``ismovedone``, ``isheadingdone``,
+``readsonar``, ``disconnect``, plus ``setvel``, ``setrotvel``, ``stop`` and
+``pose``) drive the in-process simulator (``"sim:corridor"``) or a Pioneer
+over its protocol (``"tcp://127.0.0.1:8101"``, ``"serial:///dev/ttyUSB0"``).
+
+Backends implement three small private methods (`Robot._send`,
+`Robot._update`, `Robot._close`); the motion bookkeeping that ARIA does on the
+client side (move and heading completion) is written once, here.
+"""
+
+from __future__ import annotations
+
+import importlib
+import math
+import time
+from abc import ABC, abstractmethod
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .geometry import wrap_angle
+from .p3dx import HEADING_DONE_TOLERANCE, MOVE_DONE_TOLERANCE
+
+__all__ = [
+    "Robot",
+    "RobotState",
+    "RobotTimeout",
+    "robot",
+    "move",
+    "setheading",
+    "setdeltaheading",
+    "setvel",
+    "setrotvel",
+    "stop",
+    "ismovedone",
+    "isheadingdone",
+    "readsonar",
+    "pose",
+    "disconnect",
+    "BACKENDS",
+]
+
+
+class RobotTimeout(TimeoutError):
+    """A robot did not reach a state, or did not answer, in the time allowed."""
+
+
+@dataclass(frozen=True)
+class RobotState:
+    """What a robot reports each cycle, in SI units.
+
+    Attributes
+    ----------
+    pose : numpy.ndarray, shape (3,)
+        Odometry pose ``(x, y, theta)``, m and rad (the robot's own estimate,
+        not the truth).
+    velocity : tuple of float
+        Translational (m/s) and rotational (rad/s) velocity.
+    sonar : numpy.ndarray, shape (8,)
+        Front sonar ranges, m; ``SONAR_MAX_RANGE`` (5 m) means no echo.
+    stalled : bool
+        A wheel is stalled (the robot pushes against an obstacle).
+    time : float
+        The robot's clock, s.
+    motors_enabled : bool
+        Motors are on.
+    """
+
+    pose: np.ndarray
+    velocity: tuple[float, float]
+    sonar: np.ndarray
+    stalled: bool = False
+    time: float = 0.0
+    motors_enabled: bool = True
+    extra: dict = field(default_factory=dict, compare=False)
+
+
+class Robot(ABC):
+    """A Pioneer-like robot, simulated or real.
+
+    All arguments and results are SI: metres, radians, seconds. Every poll
+    (`ismovedone`, `isheadingdone`, `readsonar`, `pose`) waits for the robot's
+    next cycle (100 ms on a Pioneer; one simulated step in the simulator) and
+    returns what it reported then. Use as a context manager to disconnect on
+    exit.
+    """
+
+    def __init__(self):
+        self._state: RobotState | None = None
+        self._move_start: np.ndarray | None = None
+        self._move_distance = 0.0
+        self._heading_target: float | None = None
+        self._closed = False
+
+    # -- what a backend implements -------------------------------------
+    @abstractmethod
+    def _send(self, command: str, value: float | None = None) -> None:
+        """Send one motion command in SI units.
+
+        ``command`` is a protocol command name: ``MOVE`` (m), ``HEAD``
+        (absolute heading, rad, odometry frame), ``VEL`` (m/s), ``RVEL``
+        (rad/s), ``SETV`` (m/s), ``SETRV`` (rad/s), ``SETA`` (m/s^2),
+        ``SETRA`` (rad/s^2), ``STOP`` (no value).
+        """
+
+    @abstractmethod
+    def _update(self) -> RobotState:
+        """Wait for the next cycle and return the robot's state then."""
+
+    @abstractmethod
+    def _close(self) -> None:
+        """Stop the robot and release its connection."""
+
+    # -- state -------------------------------------------------------------
+    def _poll(self) -> RobotState:
+        if self._closed:
+            raise RuntimeError("robot is disconnected")
+        self._state = self._update()
+        return self._state
+
+    def _latest(self) -> RobotState:
+        return self._state if self._state is not None else self._poll()
+
+    @property
+    def state(self) -> RobotState:
+        """The state from the last poll (polls once if there was none)."""
+        return self._latest()
+
+    # -- the paper's Table 1 --------------------------------------------
+    def move(self, distance: float) -> None:
+        """Drive ``distance`` metres straight ahead (negative: backwards)."""
+        self._move_start = self._latest().pose.copy()
+        self._move_distance = float(distance)
+        self._send("MOVE", float(distance))
+
+    def setheading(self, theta: float) -> None:
+        """Turn to the absolute heading ``theta`` (rad, odometry frame)."""
+        self._heading_target = wrap_angle(float(theta))
+        self._send("HEAD", self._heading_target)
+
+    def setdeltaheading(self, dtheta: float) -> None:
+        """Turn by ``dtheta`` radians from the current heading (positive: left)."""
+        self.setheading(self._latest().pose[2] + float(dtheta))
+
+    def setvel(self, v: float) -> None:
+        """Drive at ``v`` m/s until told otherwise (cancels a move)."""
+        self._move_start = None
+        self._send("VEL", float(v))
+
+    def setrotvel(self, w: float) -> None:
+        """Turn at ``w`` rad/s until told otherwise (cancels a heading)."""
+        self._heading_target = None
+        self._send("RVEL", float(w))
+
+    def stop(self) -> None:
+        """Stop translation and rotation (cancels any move or heading)."""
+        self._move_start = None
+        self._heading_target = None
+        self._send("STOP")
+
+    def set_max_velocity(self, v: float) -> None:
+        """Limit the translational speed of later motions, m/s."""
+        self._send("SETV", float(v))
+
+    def set_max_rot_velocity(self, w: float) -> None:
+        """Limit the rotational speed of later motions, rad/s."""
+        self._send("SETRV", float(w))
+
+    def ismovedone(self) -> bool:
+        """Poll once; True when the last `move` is within 40 mm of its distance.
+
+        True as well when no move is under way.
+        """
+        st = self._poll()
+        if self._move_start is None:
+            return True
+        travelled = math.hypot(*(st.pose[:2] - self._move_start[:2]))
+        return abs(travelled - abs(self._move_distance)) < MOVE_DONE_TOLERANCE
+
+    def isheadingdone(self) -> bool:
+        """Poll once; True when the heading is within 3 degrees of its target.
+
+        True as well when no heading is under way.
+        """
+        st = self._poll()
+        if self._heading_target is None:
+            return True
+        return abs(wrap_angle(st.pose[2] - self._heading_target)) < (
+            HEADING_DONE_TOLERANCE
+        )
+
+    def readsonar(self) -> np.ndarray:
+        """Poll once; the eight front sonar ranges, shape (8,), m (5 m: no echo)."""
+        return self._poll().sonar.copy()
+
+    def pose(self) -> np.ndarray:
+        """Poll once; the odometry pose ``(x, y, theta)``, m and rad."""
+        return self._poll().pose.copy()
+
+    def wait_move_done(self, timeout: float = 30.0) -> None:
+        """Poll until `ismovedone`; raise `RobotTimeout` after ``timeout`` robot seconds."""
+        self._wait(self.ismovedone, timeout, "move")
+
+    def wait_heading_done(self, timeout: float = 30.0) -> None:
+        """Poll until `isheadingdone`; raise `RobotTimeout` after ``timeout`` robot seconds."""
+        self._wait(self.isheadingdone, timeout, "heading")
+
+    def _wait(self, done, timeout: float, what: str) -> None:
+        t0 = self._latest().time
+        wall0 = time.monotonic()
+        while not done():
+            if self._state.time - t0 > timeout or time.monotonic() - wall0 > timeout:
+                raise RobotTimeout(f"{what} not done after {timeout} s")
+
+    def disconnect(self) -> None:
+        """Stop the robot and close the connection (safe to call twice)."""
+        if not self._closed:
+            self._closed = True
+            self._close()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.disconnect()
+
+
+BACKENDS = {
+    "sim": "robotlib.sim:SimRobot",
+    "tcp": "robotlib.pioneer.client:PioneerRobot",
+    "serial": "robotlib.pioneer.client:PioneerRobot",
+}
+"""Address scheme to backend class (``module:Class``), imported on first use."""
+
+
+def robot(address: str = "sim:corridor", **options) -> Robot:
+    """Open a robot by address.
+
+    Parameters
+    ----------
+    address : str
+        ``"sim:NAME_OR_PATH"`` for the in-process simulator in a shipped world
+        or a world file; ``"tcp://HOST:PORT"`` for MobileSim or
+        ``robotlib sim-server``; ``"serial:///dev/ttyUSB0"`` for a real
+        Pioneer over RS-232.
+    **options
+        Passed to the backend's ``from_address`` (e.g. ``seed=1`` for the
+        simulator, ``timeout=5.0`` for a Pioneer).
+
+    Returns
+    -------
+    Robot
+    """
+    scheme = address.split(":", 1)[0]
+    if scheme not in BACKENDS:
+        raise ValueError(
+            f"unknown robot address {address!r}: expected one of "
+            + ", ".join(f"{s}:..." for s in BACKENDS)
+        )
+    module, cls = BACKENDS[scheme].split(":")
+    backend = getattr(importlib.import_module(module), cls)
+    return backend.from_address(address, **options)
+
+
+def move(r: Robot, distance: float) -> None:
+    """Drive ``distance`` metres straight ahead; see `Robot.move`."""
+    r.move(distance)
+
+
+def setheading(r: Robot, theta: float) -> None:
+    """Turn to absolute heading ``theta`` rad; see `Robot.setheading`."""
+    r.setheading(theta)
+
+
+def setdeltaheading(r: Robot, dtheta: float) -> None:
+    """Turn by ``dtheta`` rad; see `Robot.setdeltaheading`."""
+    r.setdeltaheading(dtheta)
+
+
+def setvel(r: Robot, v: float) -> None:
+    """Drive at ``v`` m/s; see `Robot.setvel`."""
+    r.setvel(v)
+
+
+def setrotvel(r: Robot, w: float) -> None:
+    """Turn at ``w`` rad/s; see `Robot.setrotvel`."""
+    r.setrotvel(w)
+
+
+def stop(r: Robot) -> None:
+    """Stop; see `Robot.stop`."""
+    r.stop()
+
+
+def ismovedone(r: Robot) -> bool:
+    """Poll once; see `Robot.ismovedone`."""
+    return r.ismovedone()
+
+
+def isheadingdone(r: Robot) -> bool:
+    """Poll once; see `Robot.isheadingdone`."""
+    return r.isheadingdone()
+
+
+def readsonar(r: Robot) -> np.ndarray:
+    """Poll once; eight ranges in m; see `Robot.readsonar`."""
+    return r.readsonar()
+
+
+def pose(r: Robot) -> np.ndarray:
+    """Poll once; odometry pose; see `Robot.pose`."""
+    return r.pose()
+
+
+def disconnect(r: Robot) -> None:
+    """Stop and close; see `Robot.disconnect`."""
+    r.disconnect()

@@ -1,0 +1,391 @@
+"""Worlds: wall segments in metres, bounds, a start pose, and maps made from them.
+
+A `World` is immutable. Read one from a file with `load_world` (a short name
+such as ``"corridor"`` or a path to a ``.wld`` or ``.map`` file), or build one
+from segments. Grids (occupancy, distance field, admissible free space) are
+computed on demand and cached per resolution.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from . import _geometry
+from .geometry import as_rng
+from .p3dx import ROBOT_RADIUS
+
+__all__ = ["World", "Grid", "WORLDS_DIR", "load_world", "world_names"]
+
+WORLDS_DIR = Path(__file__).resolve().parent.parent / "worlds"
+"""The project's ``worlds/`` folder (short names are looked up here)."""
+
+POINT_SIZE = 0.02
+"""Side of the small cross that stands for one map DATA point, m."""
+
+
+@dataclass(frozen=True)
+class Grid:
+    """A regular grid over the plane.
+
+    Attributes
+    ----------
+    data : numpy.ndarray, shape (ny, nx)
+        Cell values; row ``i`` is ``y``, column ``j`` is ``x``.
+    origin : tuple of float
+        ``(x0, y0)``: world coordinates of the lower-left corner of cell
+        ``[0, 0]``, m.
+    resolution : float
+        Side of a cell, m.
+    """
+
+    data: np.ndarray
+    origin: tuple[float, float]
+    resolution: float
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        """Grid shape ``(ny, nx)``."""
+        return self.data.shape
+
+    @property
+    def extent(self) -> tuple[float, float, float, float]:
+        """``(xmin, xmax, ymin, ymax)`` in m, as matplotlib's ``imshow`` wants."""
+        ny, nx = self.data.shape
+        x0, y0 = self.origin
+        return (x0, x0 + nx * self.resolution, y0, y0 + ny * self.resolution)
+
+    def cell_of(self, xy) -> tuple[np.ndarray, np.ndarray]:
+        """Return ``(i, j)`` cell indices of points ``xy`` (shape (..., 2), m).
+
+        Indices may fall outside the grid; check them against `shape`.
+        """
+        xy = np.asarray(xy, dtype=float)
+        j = np.floor((xy[..., 0] - self.origin[0]) / self.resolution).astype(np.int64)
+        i = np.floor((xy[..., 1] - self.origin[1]) / self.resolution).astype(np.int64)
+        return i, j
+
+    def centres(self) -> np.ndarray:
+        """Return the centres of all cells, shape (ny, nx, 2), m."""
+        ny, nx = self.data.shape
+        xs = self.origin[0] + (np.arange(nx) + 0.5) * self.resolution
+        ys = self.origin[1] + (np.arange(ny) + 0.5) * self.resolution
+        gx, gy = np.meshgrid(xs, ys)
+        return np.stack([gx, gy], axis=-1)
+
+
+@dataclass(frozen=True, eq=False)
+class World:
+    """A planar world of wall segments.
+
+    Parameters
+    ----------
+    segments : array_like, shape (M, 4)
+        Walls as ``x1, y1, x2, y2``, m.
+    bounds : tuple of float, optional
+        ``(xmin, ymin, xmax, ymax)``, m. Defaults to the segments' bounding
+        box (with the points and the start pose), grown by 0.5 m.
+    start : tuple of float, optional
+        Robot start pose ``(x, y, theta)`` in m and rad; defaults to the
+        centre of the bounds, heading 0.
+    points : array_like, shape (P, 2), optional
+        Point obstacles (a ``.map`` file's DATA), m.
+    name : str, optional
+        A short name, e.g. ``"corridor"``.
+    source : pathlib.Path, optional
+        The file the world was read from, if any.
+    """
+
+    segments: np.ndarray
+    bounds: tuple[float, float, float, float] | None = None
+    start: tuple[float, float, float] | None = None
+    points: np.ndarray | None = None
+    name: str = ""
+    source: Path | None = None
+    _cache: dict = field(default_factory=dict, repr=False, compare=False)
+
+    def __post_init__(self):
+        seg = np.ascontiguousarray(np.asarray(self.segments, dtype=float))
+        if seg.size == 0:
+            seg = np.zeros((0, 4))
+        if seg.ndim != 2 or seg.shape[1] != 4:
+            raise ValueError(f"segments must have shape (M, 4), got {seg.shape}")
+        pts = np.zeros((0, 2)) if self.points is None else self.points
+        pts = np.ascontiguousarray(np.asarray(pts, dtype=float).reshape(-1, 2))
+        if not (np.all(np.isfinite(seg)) and np.all(np.isfinite(pts))):
+            raise ValueError("segments and points must be finite")
+        seg.setflags(write=False)
+        pts.setflags(write=False)
+        object.__setattr__(self, "segments", seg)
+        object.__setattr__(self, "points", pts)
+        if self.bounds is None:
+            xy = np.concatenate([seg[:, :2], seg[:, 2:], pts])
+            if self.start is not None:
+                xy = np.concatenate([xy, [self.start[:2]]])
+            if len(xy) == 0:
+                xy = np.zeros((1, 2))
+            lo, hi = xy.min(axis=0) - 0.5, xy.max(axis=0) + 0.5
+            object.__setattr__(self, "bounds", (lo[0], lo[1], hi[0], hi[1]))
+        b = tuple(float(v) for v in self.bounds)
+        if len(b) != 4 or not (b[0] < b[2] and b[1] < b[3]):
+            raise ValueError(f"bounds must be (xmin, ymin, xmax, ymax), got {b}")
+        object.__setattr__(self, "bounds", b)
+        if self.start is None:
+            centre = ((b[0] + b[2]) / 2, (b[1] + b[3]) / 2, 0.0)
+            object.__setattr__(self, "start", centre)
+        object.__setattr__(self, "start", tuple(float(v) for v in self.start))
+
+    def __eq__(self, other) -> bool:
+        """Equal walls, points, bounds and start (name and source ignored)."""
+        if not isinstance(other, World):
+            return NotImplemented
+        return (
+            np.array_equal(self.segments, other.segments)
+            and np.array_equal(self.points, other.points)
+            and self.bounds == other.bounds
+            and self.start == other.start
+        )
+
+    __hash__ = None
+
+    @property
+    def size(self) -> tuple[float, float]:
+        """Width and height of the bounds, m."""
+        return (self.bounds[2] - self.bounds[0], self.bounds[3] - self.bounds[1])
+
+    @property
+    def obstacles(self) -> np.ndarray:
+        """All obstacle segments, shape (M', 4), m: the walls plus a small cross
+        (side `POINT_SIZE`) for each point obstacle. Sensing and collisions use
+        these."""
+        if "obstacles" not in self._cache:
+            h = POINT_SIZE / 2
+            p = self.points
+            crosses = np.concatenate(
+                [
+                    np.column_stack([p[:, 0] - h, p[:, 1], p[:, 0] + h, p[:, 1]]),
+                    np.column_stack([p[:, 0], p[:, 1] - h, p[:, 0], p[:, 1] + h]),
+                ]
+            )
+            obs = np.ascontiguousarray(np.concatenate([self.segments, crosses]))
+            obs.setflags(write=False)
+            self._cache["obstacles"] = obs
+        return self._cache["obstacles"]
+
+    def distance_to_walls(self, xy) -> np.ndarray:
+        """Distance from points to the nearest obstacle.
+
+        Parameters
+        ----------
+        xy : array_like, shape (..., 2)
+            Points, m.
+
+        Returns
+        -------
+        numpy.ndarray, shape (...)
+            Distances, m (``inf`` in a world with no obstacles).
+        """
+        xy = np.asarray(xy, dtype=float)
+        flat = np.ascontiguousarray(xy.reshape(-1, 2))
+        out = np.empty(len(flat))
+        _geometry.min_distance_to_segments(flat, self.obstacles, out)
+        return out.reshape(xy.shape[:-1])
+
+    def is_free(self, xy, radius: float = ROBOT_RADIUS) -> np.ndarray:
+        """Test whether a disc of ``radius`` at each point touches nothing.
+
+        Parameters
+        ----------
+        xy : array_like, shape (..., 2)
+            Centres, m.
+        radius : float
+            Disc radius, m (the Pioneer 3-DX's by default; 0 for a point).
+
+        Returns
+        -------
+        numpy.ndarray of bool, shape (...)
+            True where the disc lies inside the bounds and clear of every
+            obstacle.
+        """
+        xy = np.asarray(xy, dtype=float)
+        xmin, ymin, xmax, ymax = self.bounds
+        inside = (
+            (xy[..., 0] - radius >= xmin)
+            & (xy[..., 0] + radius <= xmax)
+            & (xy[..., 1] - radius >= ymin)
+            & (xy[..., 1] + radius <= ymax)
+        )
+        return inside & (self.distance_to_walls(xy) > radius)
+
+    def _empty_grid(self, resolution: float) -> tuple[tuple[int, int], tuple]:
+        if not resolution > 0:
+            raise ValueError(f"resolution must be positive, got {resolution}")
+        xmin, ymin, xmax, ymax = self.bounds
+        nx = max(1, int(np.ceil((xmax - xmin) / resolution - 1e-9)))
+        ny = max(1, int(np.ceil((ymax - ymin) / resolution - 1e-9)))
+        return (ny, nx), (xmin, ymin)
+
+    def occupancy_grid(self, resolution: float = 0.05) -> Grid:
+        """Rasterise the obstacles.
+
+        Parameters
+        ----------
+        resolution : float
+            Cell side, m.
+
+        Returns
+        -------
+        Grid
+            ``data`` is a bool array, True where an obstacle crosses the cell.
+        """
+        key = ("occupancy", float(resolution))
+        if key not in self._cache:
+            shape, origin = self._empty_grid(resolution)
+            occ = np.zeros(shape, dtype=np.bool_)
+            _geometry.rasterise_segments(
+                self.obstacles, origin[0], origin[1], float(resolution), occ
+            )
+            occ.setflags(write=False)
+            self._cache[key] = Grid(occ, origin, float(resolution))
+        return self._cache[key]
+
+    def distance_field(self, resolution: float = 0.05) -> Grid:
+        """Distance from each cell centre to the nearest obstacle.
+
+        Parameters
+        ----------
+        resolution : float
+            Cell side, m.
+
+        Returns
+        -------
+        Grid
+            ``data`` is float64, m (exact to the segments, not to the cells).
+        """
+        key = ("distance", float(resolution))
+        if key not in self._cache:
+            shape, origin = self._empty_grid(resolution)
+            grid = Grid(np.zeros(shape), origin, float(resolution))
+            dist = self.distance_to_walls(grid.centres())
+            dist.setflags(write=False)
+            self._cache[key] = Grid(dist, origin, float(resolution))
+        return self._cache[key]
+
+    def free_space(self, resolution: float = 0.05, radius: float = ROBOT_RADIUS) -> Grid:
+        """The admissible area: cells a robot of ``radius`` can reach from the start.
+
+        A cell is admissible when a disc of ``radius`` at its centre is free
+        (`is_free`) and it connects to the start pose's cell through free
+        cells. If the start itself is not free, every free cell is admissible.
+
+        Parameters
+        ----------
+        resolution : float
+            Cell side, m.
+        radius : float
+            Robot radius, m.
+
+        Returns
+        -------
+        Grid
+            ``data`` is a bool array.
+        """
+        key = ("free", float(resolution), float(radius))
+        if key not in self._cache:
+            dist = self.distance_field(resolution)
+            free = self.is_free(dist.centres(), radius) & (dist.data > radius)
+            i, j = dist.cell_of(np.array(self.start[:2]))
+            ny, nx = free.shape
+            if 0 <= i < ny and 0 <= j < nx and free[i, j]:
+                free = _flood_fill(free, int(i), int(j))
+            free.setflags(write=False)
+            self._cache[key] = Grid(free, dist.origin, dist.resolution)
+        return self._cache[key]
+
+    def sample_free_poses(
+        self,
+        n: int,
+        rng: np.random.Generator | int | None = None,
+        resolution: float = 0.05,
+        radius: float = ROBOT_RADIUS,
+    ) -> np.ndarray:
+        """Draw poses uniformly over the admissible area, headings uniform.
+
+        Parameters
+        ----------
+        n : int
+            Number of poses.
+        rng : numpy.random.Generator, int or None
+            Randomness source or seed.
+        resolution, radius : float
+            Passed to `free_space`, m.
+
+        Returns
+        -------
+        numpy.ndarray, shape (n, 3)
+            Poses ``(x, y, theta)``, m and rad.
+        """
+        rng = as_rng(rng)
+        grid = self.free_space(resolution, radius)
+        cells = np.flatnonzero(grid.data)
+        if len(cells) == 0:
+            raise ValueError(f"world {self.name!r} has no free space for r={radius}")
+        pick = cells[rng.integers(0, len(cells), size=n)]
+        i, j = np.divmod(pick, grid.shape[1])
+        u = rng.random((n, 3))
+        out = np.empty((n, 3))
+        out[:, 0] = grid.origin[0] + (j + u[:, 0]) * grid.resolution
+        out[:, 1] = grid.origin[1] + (i + u[:, 1]) * grid.resolution
+        out[:, 2] = np.pi - 2.0 * np.pi * u[:, 2]
+        return out
+
+
+def _flood_fill(free: np.ndarray, i0: int, j0: int) -> np.ndarray:
+    """Cells of ``free`` 4-connected to ``(i0, j0)``."""
+    out = np.zeros_like(free)
+    _geometry.flood_fill(free, i0, j0, out)
+    return out
+
+
+def world_names() -> list[str]:
+    """Short names of the worlds shipped in `WORLDS_DIR`."""
+    names = {p.stem for p in WORLDS_DIR.glob("*.wld")}
+    names |= {p.stem for p in WORLDS_DIR.glob("*.map")}
+    return sorted(names)
+
+
+def load_world(name_or_path: str | Path) -> World:
+    """Load a world by short name (``"corridor"``) or from a file path.
+
+    Parameters
+    ----------
+    name_or_path : str or pathlib.Path
+        A name from `world_names`, or a path to a ``.wld`` or ``.map`` file.
+
+    Returns
+    -------
+    World
+
+    Raises
+    ------
+    FileNotFoundError
+        If neither a shipped world nor a file of that name exists.
+    robotlib.worldfiles.WorldFileError
+        If the file is malformed.
+    """
+    from .worldfiles import read_world
+
+    path = Path(name_or_path)
+    if not path.exists() and path.suffix == "" and path.parent == Path("."):
+        for ext in (".wld", ".map"):
+            if (WORLDS_DIR / f"{path.name}{ext}").exists():
+                path = WORLDS_DIR / f"{path.name}{ext}"
+                break
+        else:
+            raise FileNotFoundError(
+                f"no world named {str(name_or_path)!r}; "
+                f"shipped worlds: {', '.join(world_names())}"
+            )
+    return read_world(path)
