@@ -201,11 +201,11 @@ class Robot(ABC):
         return self._poll().pose.copy()
 
     def wait_move_done(self, timeout: float = 30.0) -> None:
-        """Poll until `ismovedone`; raise `RobotTimeout` after ``timeout`` robot seconds."""
+        """Poll until `ismovedone`; `RobotTimeout` after ``timeout`` s."""
         self._wait(self.ismovedone, timeout, "move")
 
     def wait_heading_done(self, timeout: float = 30.0) -> None:
-        """Poll until `isheadingdone`; raise `RobotTimeout` after ``timeout`` robot seconds."""
+        """Poll until `isheadingdone`; `RobotTimeout` after ``timeout`` s."""
         self._wait(self.isheadingdone, timeout, "heading")
 
     def _wait(self, done, timeout: float, what: str) -> None:

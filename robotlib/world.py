@@ -157,9 +157,11 @@ class World:
 
     @property
     def obstacles(self) -> np.ndarray:
-        """All obstacle segments, shape (M', 4), m: the walls plus a small cross
-        (side `POINT_SIZE`) for each point obstacle. Sensing and collisions use
-        these."""
+        """All obstacle segments, shape (M', 4), m.
+
+        The walls plus a small cross (side `POINT_SIZE`) for each point
+        obstacle. Sensing and collisions use these.
+        """
         if "obstacles" not in self._cache:
             h = POINT_SIZE / 2
             p = self.points
@@ -273,8 +275,10 @@ class World:
             self._cache[key] = Grid(dist, origin, float(resolution))
         return self._cache[key]
 
-    def free_space(self, resolution: float = 0.05, radius: float = ROBOT_RADIUS) -> Grid:
-        """The admissible area: cells a robot of ``radius`` can reach from the start.
+    def free_space(
+        self, resolution: float = 0.05, radius: float = ROBOT_RADIUS
+    ) -> Grid:
+        """Return the admissible area: cells a robot can reach from the start.
 
         A cell is admissible when a disc of ``radius`` at its centre is free
         (`is_free`) and it connects to the start pose's cell through free
