@@ -95,3 +95,16 @@ def flood_fill(free, i0, j0, out):
                 stack[top, 0] = a
                 stack[top, 1] = b
                 top += 1
+
+
+@nb.njit(**JIT)
+def nearest_distance(px, py, segments):
+    """Distance from ``(px, py)`` to the nearest of ``segments`` (M, 4); inf if none."""
+    best = np.inf
+    for m in range(segments.shape[0]):
+        d = point_segment_distance(
+            px, py, segments[m, 0], segments[m, 1], segments[m, 2], segments[m, 3]
+        )
+        if d < best:
+            best = d
+    return best

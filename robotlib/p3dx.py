@@ -51,3 +51,20 @@ MOVE_DONE_TOLERANCE = 0.040
 """``isMoveDone``: within this distance of the commanded travel, m."""
 HEADING_DONE_TOLERANCE = math.radians(3.0)
 """``isHeadingDone``: within this angle of the target heading, rad."""
+
+AXLE_TRACK = 1.0 / (1000.0 * 0.0056 / 2.0)
+"""Effective wheel separation from ARIA's DiffConvFactor (0.0056), m.
+
+ARIA turns a wheel-speed difference into a rotational velocity as
+``w = (right - left) / 2 * DiffConvFactor`` (mm/s to rad/s), which is a
+differential drive with this track.
+"""
+
+DEFAULT_MAX_VELOCITY = 0.75
+"""Translational speed limit at start-up (``TransVelMax``), m/s."""
+DEFAULT_MAX_ROT_VELOCITY = math.radians(100.0)
+"""Rotational speed limit at start-up (``RotVelMax``), rad/s."""
+DEFAULT_ACCELERATION = 0.3
+"""Translational acceleration and deceleration at start-up, m/s^2."""
+DEFAULT_ROT_ACCELERATION = math.radians(100.0)
+"""Rotational acceleration and deceleration at start-up, rad/s^2."""

@@ -1,0 +1,450 @@
+"""A deterministic Pioneer 3-DX simulator stepped on simulated time.
+
+`Simulator` holds a world and any number of robots (`SimBody`) and advances
+them together, one 100 ms cycle per `Simulator.step`, as a Pioneer's
+controller does. Each body keeps its true pose and its odometry pose apart:
+the odometry integrates what the wheels did, the truth adds slip drawn from an
+`OdometryNoise` model. Walls (and other robots) stop a body and set its stall
+flag. Sonar readings come from `robotlib.sonar`'s cone model at the true pose.
+
+`SimRobot` wraps a body as a `robotlib.robot.Robot`, so the paper's API runs
+on it; each poll is one simulated cycle.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import _geometry, _raycast
+from .geometry import as_rng, wrap_angle
+from .p3dx import (
+    AXLE_TRACK,
+    CYCLE,
+    DEFAULT_ACCELERATION,
+    DEFAULT_MAX_ROT_VELOCITY,
+    DEFAULT_MAX_VELOCITY,
+    DEFAULT_ROT_ACCELERATION,
+    MAX_ROT_VELOCITY,
+    MAX_VELOCITY,
+    ROBOT_LENGTH_FRONT,
+    ROBOT_LENGTH_REAR,
+    ROBOT_RADIUS,
+    ROBOT_WIDTH,
+)
+from .robot import Robot, RobotState
+from .sonar import SonarModel
+from .world import World, load_world
+
+__all__ = ["OdometryNoise", "Simulator", "SimBody", "SimRobot"]
+
+_STOPPED_V = 0.004
+_STOPPED_W = math.radians(1.0)
+_BISECTIONS = 6
+
+
+@dataclass(frozen=True)
+class OdometryNoise:
+    """How the true motion strays from what the odometry measured.
+
+    Per cycle, with the measured increment ``ds`` (m) and ``dtheta`` (rad),
+    the true increment gets zero-mean Gaussian errors whose variances grow
+    linearly with the motion (a random walk, independent of the cycle length):
+
+    - translation: ``var = trans_per_m**2 * |ds|`` (m^2)
+    - rotation: ``var = rot_per_rad**2 * |dtheta| + rot_per_m**2 * |ds|``
+      (rad^2)
+
+    Attributes
+    ----------
+    trans_per_m : float
+        Translation error after 1 m of travel, standard deviation, m.
+    rot_per_rad : float
+        Heading error after turning 1 rad, standard deviation, rad.
+    rot_per_m : float
+        Heading error after 1 m of travel, standard deviation, rad.
+    """
+
+    trans_per_m: float = 0.03
+    rot_per_rad: float = 0.03
+    rot_per_m: float = 0.02
+
+    @classmethod
+    def none(cls) -> OdometryNoise:
+        """Return a model with perfect odometry."""
+        return cls(0.0, 0.0, 0.0)
+
+
+def _arc(pose: np.ndarray, ds: float, dth: float) -> None:
+    """Move ``pose`` in place along an arc of length ``ds`` turning ``dth``."""
+    mid = pose[2] + 0.5 * dth
+    pose[0] += ds * math.cos(mid)
+    pose[1] += ds * math.sin(mid)
+    pose[2] = wrap_angle(pose[2] + dth)
+
+
+def _ramp(current: float, target: float, accel: float, decel: float) -> float:
+    """Velocity one cycle later, moving towards ``target`` within the limits."""
+    speeding_up = abs(target) > abs(current) and target * current >= 0
+    step = (accel if speeding_up else decel) * CYCLE
+    return current + min(max(target - current, -step), step)
+
+
+def _approach(remaining: float, vmax: float, decel: float) -> float:
+    """Speed towards a goal ``remaining`` away that can still stop on it."""
+    speed = min(vmax, math.sqrt(2.0 * decel * abs(remaining)), abs(remaining) / CYCLE)
+    return math.copysign(speed, remaining)
+
+
+def _footprint_segments(pose: np.ndarray) -> np.ndarray:
+    """Return the robot's rectangular outline as four segments (4, 4), m."""
+    c, s = math.cos(pose[2]), math.sin(pose[2])
+    hw = ROBOT_WIDTH / 2
+    corners = [
+        (ROBOT_LENGTH_FRONT, hw),
+        (-ROBOT_LENGTH_REAR, hw),
+        (-ROBOT_LENGTH_REAR, -hw),
+        (ROBOT_LENGTH_FRONT, -hw),
+    ]
+    xy = [(pose[0] + c * x - s * y, pose[1] + s * x + c * y) for x, y in corners]
+    return np.array([[*xy[i], *xy[(i + 1) % 4]] for i in range(4)])
+
+
+class SimBody:
+    """One simulated Pioneer 3-DX inside a `Simulator`.
+
+    Create bodies with `Simulator.add_robot`. Commands take SI units (see
+    `command`); `state` is what the robot reports after the last cycle.
+    """
+
+    def __init__(self, sim: Simulator, pose, rng: np.random.Generator):
+        self._sim = sim
+        self._rng = rng
+        self._initial = np.array(pose, dtype=float)
+        self._reset()
+
+    def _reset(self) -> None:
+        self.true_pose = self._initial.copy()
+        self._odo = self._initial.copy()
+        self._v = 0.0
+        self._w = 0.0
+        self._vmax = DEFAULT_MAX_VELOCITY
+        self._wmax = DEFAULT_MAX_ROT_VELOCITY
+        self._accel = self._decel = DEFAULT_ACCELERATION
+        self._raccel = self._rdecel = DEFAULT_ROT_ACCELERATION
+        self._trans_goal: tuple[str, float] = ("vel", 0.0)
+        self._move_from = self._odo[:2].copy()
+        self._rot_goal: tuple[str, float] = ("vel", 0.0)
+        self._motors = True
+        self._sonar_on = True
+        self.stalled = False
+        self._sonar = np.full(len(self._sim.sonar.sensors), self._sim.sonar.max_range)
+
+    # -- commands ---------------------------------------------------------
+    def command(self, name: str, value=None) -> None:
+        """Apply a motion command, in SI units.
+
+        Parameters
+        ----------
+        name : str
+            ``MOVE`` (m), ``HEAD`` (rad, absolute, odometry frame), ``DHEAD``
+            (rad, relative), ``VEL`` (m/s), ``RVEL`` (rad/s), ``VEL2``
+            (``(left, right)`` wheel speeds, m/s), ``SETV`` (m/s), ``SETRV``
+            (rad/s), ``SETA`` (m/s^2; negative sets the deceleration),
+            ``SETRA`` (rad/s^2; negative sets the deceleration), ``STOP``.
+        value : float, tuple or None
+            The argument, as above.
+
+        Raises
+        ------
+        ValueError
+            For an unknown command or a missing argument.
+        """
+        name = name.upper()
+        if name == "STOP":
+            self._trans_goal = ("vel", 0.0)
+            self._rot_goal = ("vel", 0.0)
+            return
+        if value is None:
+            raise ValueError(f"command {name} needs a value")
+        if name == "VEL2":
+            left, right = (float(v) for v in value)
+            self._trans_goal = ("vel", (left + right) / 2)
+            self._rot_goal = ("vel", (right - left) / AXLE_TRACK)
+            return
+        value = float(value)
+        if name == "MOVE":
+            self._trans_goal = ("move", value)
+            self._move_from = self._odo[:2].copy()
+        elif name == "VEL":
+            self._trans_goal = ("vel", value)
+        elif name == "HEAD":
+            self._rot_goal = ("head", wrap_angle(value))
+        elif name == "DHEAD":
+            self._rot_goal = ("head", wrap_angle(self._odo[2] + value))
+        elif name == "RVEL":
+            self._rot_goal = ("vel", value)
+        elif name == "SETV":
+            self._vmax = min(abs(value), MAX_VELOCITY)
+        elif name == "SETRV":
+            self._wmax = min(abs(value), MAX_ROT_VELOCITY)
+        elif name == "SETA":
+            if value >= 0:
+                self._accel = value
+            else:
+                self._decel = -value
+        elif name == "SETRA":
+            if value >= 0:
+                self._raccel = value
+            else:
+                self._rdecel = -value
+        else:
+            raise ValueError(f"unknown command {name!r}")
+
+    def set_true_pose(self, pose) -> None:
+        """Move the robot to ``pose`` (m, rad) without touching its odometry."""
+        self.true_pose = np.array(pose, dtype=float)
+        self.true_pose[2] = wrap_angle(self.true_pose[2])
+
+    def reset_odometry(self) -> None:
+        """Set the odometry pose to (0, 0, 0) here (a Pioneer's SETO)."""
+        self._odo[:] = 0.0
+        self._move_from = self._odo[:2].copy()
+
+    def enable_motors(self, on: bool) -> None:
+        """Switch the motors on or off; off stops the robot at once."""
+        self._motors = bool(on)
+        if not on:
+            self._v = self._w = 0.0
+
+    def enable_sonar(self, on: bool) -> None:
+        """Switch the sonar ring on or off; off reports no echo on every sonar."""
+        self._sonar_on = bool(on)
+        if not on:
+            self._sonar[:] = self._sim.sonar.max_range
+
+    # -- reports ----------------------------------------------------------
+    @property
+    def moving(self) -> bool:
+        """Whether the robot moves faster than 4 mm/s or 1 deg/s."""
+        return abs(self._v) >= _STOPPED_V or abs(self._w) >= _STOPPED_W
+
+    @property
+    def state(self) -> RobotState:
+        """What the robot reports after the last cycle (odometry, not truth)."""
+        return RobotState(
+            pose=self._odo.copy(),
+            velocity=(self._v, self._w),
+            sonar=self._sonar.copy(),
+            stalled=self.stalled,
+            time=self._sim.time,
+            motors_enabled=self._motors,
+        )
+
+    # -- one cycle ----------------------------------------------------------
+    def _control(self) -> tuple[float, float]:
+        """Velocities the controller commands this cycle."""
+        kind, goal = self._trans_goal
+        if kind == "move":
+            travelled = math.hypot(*(self._odo[:2] - self._move_from))
+            v_target = _approach(
+                goal - math.copysign(travelled, goal), self._vmax, self._decel
+            )
+        else:
+            v_target = min(max(goal, -self._vmax), self._vmax)
+        kind, goal = self._rot_goal
+        if kind == "head":
+            w_target = _approach(
+                wrap_angle(goal - self._odo[2]), self._wmax, self._rdecel
+            )
+        else:
+            w_target = min(max(goal, -self._wmax), self._wmax)
+        v = _ramp(self._v, v_target, self._accel, self._decel)
+        w = _ramp(self._w, w_target, self._raccel, self._rdecel)
+        return v, w
+
+    def _advance(self, obstacles: np.ndarray, others: list[np.ndarray]) -> None:
+        """Move one cycle: controller, slip, collisions, odometry."""
+        noise = self._rng.standard_normal(2)
+        if not self._motors:
+            self._v = self._w = 0.0
+            self.stalled = False
+            return
+        v, w = self._control()
+        ds, dth = v * CYCLE, w * CYCLE
+        model = self._sim.odometry
+        true_ds = ds + noise[0] * model.trans_per_m * math.sqrt(abs(ds))
+        true_dth = dth + noise[1] * math.sqrt(
+            model.rot_per_rad**2 * abs(dth) + model.rot_per_m**2 * abs(ds)
+        )
+        fraction = self._free_fraction(true_ds, true_dth, obstacles, others)
+        self.stalled = fraction < 1.0
+        _arc(self.true_pose, true_ds * fraction, true_dth)
+        _arc(self._odo, ds * fraction, dth)
+        self._v = v * fraction if not self.stalled else 0.0
+        self._w = w
+
+    def _clear(self, pose: np.ndarray, obstacles, others) -> bool:
+        if _geometry.nearest_distance(pose[0], pose[1], obstacles) <= ROBOT_RADIUS:
+            return False
+        return all(math.hypot(*(pose[:2] - o[:2])) > 2 * ROBOT_RADIUS for o in others)
+
+    def _free_fraction(self, ds, dth, obstacles, others) -> float:
+        """Largest share of this cycle's translation that keeps the robot clear."""
+        trial = self.true_pose.copy()
+        _arc(trial, ds, dth)
+        if ds == 0.0 or self._clear(trial, obstacles, others):
+            return 1.0
+        lo, hi = 0.0, 1.0
+        for _ in range(_BISECTIONS):
+            mid = 0.5 * (lo + hi)
+            trial[:] = self.true_pose
+            _arc(trial, ds * mid, dth)
+            if self._clear(trial, obstacles, others):
+                lo = mid
+            else:
+                hi = mid
+        return lo
+
+    def _sense(self, obstacles: np.ndarray) -> None:
+        """Take this cycle's sonar readings at the true pose."""
+        model = self._sim.sonar
+        n = len(model.sensors)
+        uniforms = self._rng.random((1, n, 2))
+        normals = self._rng.standard_normal((1, n))
+        if not self._sonar_on:
+            return
+        out = np.empty((1, n))
+        _raycast.sonar_scan(
+            self.true_pose[None, :],
+            model.sensors,
+            obstacles,
+            model.n_rays,
+            model.cone,
+            model.max_range,
+            model.min_range,
+            model.cos_specular,
+            model.noise_std,
+            model.multipath_prob,
+            model.dropout_prob,
+            uniforms,
+            normals,
+            out,
+        )
+        self._sonar = out[0]
+
+
+class Simulator:
+    """Robots in a world, stepped together on simulated time.
+
+    Parameters
+    ----------
+    world : World
+        The world the robots live in.
+    seed : numpy.random.Generator, int or None
+        Randomness for odometry slip and sonar noise; each robot gets its own
+        stream spawned from it, so a seed reproduces every run bit for bit.
+    sonar : SonarModel, optional
+        The robots' sonar ring and its noise (default: a Pioneer 3-DX's).
+    odometry : OdometryNoise, optional
+        The odometry error model.
+    """
+
+    def __init__(
+        self,
+        world: World,
+        seed: np.random.Generator | int | None = None,
+        sonar: SonarModel | None = None,
+        odometry: OdometryNoise | None = None,
+    ):
+        self.world = world
+        self.sonar = SonarModel() if sonar is None else sonar
+        self.odometry = OdometryNoise() if odometry is None else odometry
+        self._rng = as_rng(seed)
+        self.bodies: list[SimBody] = []
+        self.time = 0.0
+
+    def add_robot(self, pose=None) -> SimBody:
+        """Add a robot at ``pose`` (m, rad; default: the world's start pose).
+
+        Raises
+        ------
+        ValueError
+            If the robot would overlap a wall or another robot.
+        """
+        pose = np.array(self.world.start if pose is None else pose, dtype=float)
+        if pose.shape != (3,):
+            raise ValueError(f"pose must be (x, y, theta), got shape {pose.shape}")
+        pose[2] = wrap_angle(pose[2])
+        body = SimBody(self, pose, self._rng.spawn(1)[0])
+        others = [b.true_pose for b in self.bodies]
+        if not body._clear(pose, self.world.obstacles, others):
+            raise ValueError(f"a robot at {tuple(pose)} would overlap a wall or robot")
+        self.bodies.append(body)
+        return body
+
+    def _obstacles_for(self, body: SimBody) -> np.ndarray:
+        """World obstacles plus the outlines of every other robot."""
+        others = [
+            _footprint_segments(b.true_pose) for b in self.bodies if b is not body
+        ]
+        if not others:
+            return self.world.obstacles
+        return np.ascontiguousarray(np.concatenate([self.world.obstacles, *others]))
+
+    def step(self) -> None:
+        """Advance every robot by one cycle (`robotlib.p3dx.CYCLE`, 100 ms)."""
+        for body in self.bodies:
+            others = [b.true_pose for b in self.bodies if b is not body]
+            body._advance(self.world.obstacles, others)
+        for body in self.bodies:
+            body._sense(self._obstacles_for(body))
+        self.time += CYCLE
+
+    def reset(self) -> None:
+        """Put every robot back at its initial pose, stopped, odometry reset."""
+        for body in self.bodies:
+            body._reset()
+        self.time = 0.0
+
+
+class SimRobot(Robot):
+    """The in-process simulator behind the `robotlib.robot.Robot` interface.
+
+    Each poll advances the whole simulator by one cycle.
+
+    Parameters
+    ----------
+    sim : Simulator
+        The simulator.
+    body : SimBody, optional
+        The body to drive; default: a new one at the world's start pose.
+    """
+
+    def __init__(self, sim: Simulator, body: SimBody | None = None):
+        super().__init__()
+        self.simulator = sim
+        self.body = sim.add_robot() if body is None else body
+        self._state = self.body.state
+
+    @classmethod
+    def from_address(cls, address: str, seed=None, **options) -> SimRobot:
+        """Open ``"sim:NAME_OR_PATH"``; ``options`` go to `Simulator`."""
+        where = address.split(":", 1)[1] or "corridor"
+        return cls(Simulator(load_world(where), seed=seed, **options))
+
+    def true_pose(self) -> np.ndarray:
+        """Return the true pose ``(x, y, theta)`` (for evaluation only)."""
+        return self.body.true_pose.copy()
+
+    def _send(self, command: str, value=None) -> None:
+        self.body.command(command, value)
+
+    def _update(self) -> RobotState:
+        self.simulator.step()
+        return self.body.state
+
+    def _close(self) -> None:
+        self.body.command("STOP")
