@@ -11,8 +11,14 @@ import importlib
 import sys
 
 COMMANDS = {
-    "sim-server": ("robotlib.pioneer.server", "serve the simulator over the Pioneer protocol"),
-    "reproduce": ("robotlib.experiment", "run the paper's MCL experiment over many seeds"),
+    "sim-server": (
+        "robotlib.pioneer.server",
+        "serve the simulator over the Pioneer protocol",
+    ),
+    "reproduce": (
+        "robotlib.experiment",
+        "run the paper's MCL experiment over many seeds",
+    ),
     "bench": ("robotlib.benchmarks", "measure kernels and the MCL step"),
     "release": ("robotlib.course.release", "write labs/ from solutions/"),
     "grade": ("robotlib.course.grade", "grade a folder of submissions with nbval"),
@@ -23,7 +29,9 @@ COMMANDS = {
 def main(argv: list[str] | None = None) -> int:
     """Run the ``robotlib`` command line; return the exit status."""
     argv = sys.argv[1:] if argv is None else argv
-    parser = argparse.ArgumentParser(prog="robotlib", description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(
+        prog="robotlib", description=__doc__.splitlines()[0]
+    )
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     for name, (_, help_) in COMMANDS.items():
         sub.add_parser(name, help=help_, add_help=False)
