@@ -1,0 +1,328 @@
+"""Generate the shipped worlds in this folder.
+
+Run ``python worlds/make_worlds.py`` from the repository root to rewrite
+``corridor.wld``, ``corridor2.wld``, ``maze.wld``, ``arena.wld`` and
+``office.map``. The files themselves are committed; this script documents how
+they were made and regenerates them identically (the maze uses a fixed seed).
+
+All coordinates here are whole millimetres, as in the files.
+
+- ``corridor``: the paper's aliased corridor. A 28 m x 2 m corridor with seven
+  1 m doors on each side into closed rooms, spaced every 4 m, so that places
+  near either end look alike to eight sonars. It is deliberately not
+  symmetric: the last south door and one north door break the spacing, the
+  north-west corner is chamfered, and an alcove opens off the north wall near
+  the east end.
+- ``corridor2``: a second aliased corridor, 1.8 m wide, 19 m long with 0.9 m
+  doors every 3 m (3.5 m on the north side), then an L bend north for 10 m
+  with three more rooms; for testing MCL on a corridor it was not tuned on.
+- ``maze``: an 8 x 6 maze of 1.5 m cells (a seeded depth-first maze with a
+  few extra openings, so there are loops).
+- ``arena``: an open 10 m x 10 m arena with six box obstacles.
+- ``office``: a 20 m x 15 m office in MobileSim ``2D-Map`` form: a corridor,
+  seven rooms, a table and a shelf as DATA points, a ``Sim.BoxObstacle``, a
+  ``Dock`` before the ``RobotHome`` (the home wins) and a ``ForbiddenArea``.
+"""
+
+from __future__ import annotations
+
+import math
+import random
+from pathlib import Path
+
+from robotlib.world import World
+from robotlib.worldfiles import write_wld
+
+HERE = Path(__file__).resolve().parent
+
+Segment = tuple[int, int, int, int]
+
+
+def wall_with_doors(a: int, b: int, doors, at: int, vertical: bool) -> list[Segment]:
+    """Wall from ``a`` to ``b`` along one axis at ``at``, with door gaps.
+
+    ``doors`` are ``(lo, hi)`` openings along the wall, sorted.
+    """
+    pieces, pos = [], a
+    for lo, hi in sorted(doors):
+        if lo > pos:
+            pieces.append((pos, lo))
+        pos = hi
+    if pos < b:
+        pieces.append((pos, b))
+    if vertical:
+        return [(at, lo, at, hi) for lo, hi in pieces]
+    return [(lo, at, hi, at) for lo, hi in pieces]
+
+
+def rooms(
+    at: int, partitions: list[int], doors, depth: int, vertical: bool = False
+) -> list[Segment]:
+    """Build a row of closed rooms along a corridor wall.
+
+    The corridor wall lies at ``at`` (a y for a horizontal row, an x for a
+    vertical one) from the first to the last partition, with ``doors``; the
+    rooms reach ``depth`` (signed) away from it, separated by ``partitions``
+    (which include both end walls).
+    """
+    a, b = partitions[0], partitions[-1]
+    back = at + depth
+    segs = wall_with_doors(a, b, doors, at, vertical)
+    segs += wall_with_doors(a, b, [], back, vertical)
+    for p in partitions:
+        segs.append((at, p, back, p) if vertical else (p, at, p, back))
+    return segs
+
+
+def box(x: int, y: int, w: int, h: int) -> list[Segment]:
+    """Four walls of an axis-aligned rectangle with corner ``(x, y)``."""
+    return [
+        (x, y, x + w, y),
+        (x + w, y, x + w, y + h),
+        (x + w, y + h, x, y + h),
+        (x, y + h, x, y),
+    ]
+
+
+def to_world(
+    segments: list[Segment], size: tuple[int, int], start: tuple[int, int, float]
+) -> World:
+    """Make a World (metres, radians) from millimetre walls, size and start (deg)."""
+    return World(
+        segments=[[v / 1000 for v in s] for s in segments],
+        bounds=(0.0, 0.0, size[0] / 1000, size[1] / 1000),
+        start=(start[0] / 1000, start[1] / 1000, math.radians(start[2])),
+    )
+
+
+def corridor() -> World:
+    """Build the paper's long aliased corridor (28 m x 2 m)."""
+    south = rooms(
+        3000,
+        [500, 5000, 9000, 13000, 17000, 21000, 25000, 28500],
+        [
+            (2500, 3500),
+            (6500, 7500),
+            (10500, 11500),
+            (14500, 15500),
+            (18500, 19500),
+            (22500, 23500),
+            (26000, 27000),  # 3.5 m after the previous door, not 4 m
+        ],
+        -2500,
+    )
+    north = rooms(
+        5000,
+        [500, 5000, 9000, 13000, 17000, 21000, 25000, 27000],
+        [
+            (2500, 3500),
+            (6500, 7500),
+            (10500, 11500),
+            (15000, 16000),  # shifted by 0.5 m
+            (18500, 19500),
+            (22500, 23500),
+            (25500, 26500),
+        ],
+        2500,
+    )
+    ends = [
+        (500, 3000, 500, 4500),  # west end, chamfered at the north corner
+        (500, 4500, 1000, 5000),
+        (28500, 3000, 28500, 5000),  # east end, flat
+        # the north wall beyond the last room, with an alcove 1 m x 0.6 m
+        (27000, 5000, 27300, 5000),
+        (27300, 5000, 27300, 5600),
+        (27300, 5600, 28300, 5600),
+        (28300, 5600, 28300, 5000),
+        (28300, 5000, 28500, 5000),
+        (27000, 7500, 28500, 7500),  # close the solid block behind the alcove
+        (28500, 5000, 28500, 7500),
+    ]
+    return to_world(south + north + ends, (29000, 8000), (1500, 4000, 0.0))
+
+
+def corridor2() -> World:
+    """Build a second aliased corridor: 1.8 m wide, 19 m, then an L bend north."""
+    south = rooms(
+        2500,
+        [500, 3500, 6500, 9500, 12500, 15500, 19800],
+        [
+            (1500, 2400),
+            (4500, 5400),
+            (7500, 8400),
+            (10500, 11400),
+            (13500, 14400),
+            (16800, 17700),
+        ],
+        -2000,
+    )
+    north = rooms(
+        4300,
+        [500, 4000, 7500, 11000, 14500, 18000],
+        [(2000, 2900), (5500, 6400), (9000, 9900), (12500, 13400), (15500, 16400)],
+        2000,
+    )
+    # the vertical leg's west rooms: x 16000..18000, y 6300..14000
+    west = rooms(
+        18000,
+        [6300, 9300, 12300, 14000],
+        [(7300, 8200), (10300, 11200), (12800, 13700)],
+        -2000,
+        vertical=True,
+    )
+    rest = [
+        (500, 2500, 500, 4300),  # west end of the corridor
+        (19800, 2500, 19800, 14000),  # east wall of the L
+        (18000, 14000, 19800, 14000),  # north end of the L
+    ]
+    return to_world(south + north + west + rest, (20500, 14500), (1500, 3400, 0.0))
+
+
+def maze(cols: int = 8, rows: int = 6, cell: int = 1500, seed: int = 7) -> World:
+    """Build a seeded depth-first maze of ``cols`` x ``rows`` cells of ``cell`` mm."""
+    rnd = random.Random(seed)
+    x0 = y0 = 500
+    # open[(c, r, dc, dr)]: the wall between cell (c, r) and (c + dc, r + dr) is open
+    opened: set[tuple[int, int, int, int]] = set()
+    seen = {(0, 0)}
+    stack = [(0, 0)]
+    while stack:
+        c, r = stack[-1]
+        nbrs = [
+            (c + dc, r + dr)
+            for dc, dr in ((1, 0), (-1, 0), (0, 1), (0, -1))
+            if 0 <= c + dc < cols
+            and 0 <= r + dr < rows
+            and (c + dc, r + dr) not in seen
+        ]
+        if not nbrs:
+            stack.pop()
+            continue
+        nc, nr = rnd.choice(nbrs)
+        a, b = min((c, r), (nc, nr)), max((c, r), (nc, nr))
+        opened.add((a[0], a[1], b[0] - a[0], b[1] - a[1]))
+        seen.add((nc, nr))
+        stack.append((nc, nr))
+    # a few extra openings make loops
+    walls = [
+        (c, r, dc, dr)
+        for c in range(cols)
+        for r in range(rows)
+        for dc, dr in ((1, 0), (0, 1))
+        if c + dc < cols and r + dr < rows and (c, r, dc, dr) not in opened
+    ]
+    for w in rnd.sample(walls, 4):
+        opened.add(w)
+    segs: list[Segment] = []
+    # horizontal walls: between rows r-1 and r (r = 0 and rows are the outside)
+    for r in range(rows + 1):
+        y = y0 + r * cell
+        run = None
+        for c in range(cols + 1):
+            closed = c < cols and (r in (0, rows) or (c, r - 1, 0, 1) not in opened)
+            if closed and run is None:
+                run = c
+            elif not closed and run is not None:
+                segs.append((x0 + run * cell, y, x0 + c * cell, y))
+                run = None
+    for c in range(cols + 1):
+        x = x0 + c * cell
+        run = None
+        for r in range(rows + 1):
+            closed = r < rows and (c in (0, cols) or (c - 1, r, 1, 0) not in opened)
+            if closed and run is None:
+                run = r
+            elif not closed and run is not None:
+                segs.append((x, y0 + run * cell, x, y0 + r * cell))
+                run = None
+    size = (2 * x0 + cols * cell, 2 * y0 + rows * cell)
+    return to_world(segs, size, (x0 + cell // 2, y0 + cell // 2, 0.0))
+
+
+def arena() -> World:
+    """Build an open 10 m x 10 m arena with six boxes."""
+    segs = box(500, 500, 10000, 10000)
+    for b in [
+        (2500, 2500, 1000, 1000),
+        (6500, 2000, 1500, 800),
+        (4500, 5500, 800, 1600),
+        (7500, 7000, 1200, 1200),
+        (2000, 7500, 600, 1400),
+        (8500, 4500, 700, 700),
+    ]:
+        segs += box(*b)
+    return to_world(segs, (11000, 11000), (1500, 1500, 45.0))
+
+
+def office_map() -> str:
+    """Return the text of ``office.map`` (20 m x 15 m)."""
+    segs = box(0, 0, 20000, 15000)
+    # corridor y 6500..8500 across the building; rooms south and north
+    segs += wall_with_doors(
+        0,
+        20000,
+        [(2000, 3000), (7000, 8000), (11500, 12500), (16500, 17500)],
+        6500,
+        False,
+    )
+    segs += wall_with_doors(
+        0, 20000, [(2500, 3500), (8500, 9500), (14500, 15500)], 8500, False
+    )
+    segs += [(x, 0, x, 6500) for x in (5000, 10000, 15000)]
+    segs += [(x, 8500, x, 15000) for x in (6000, 12000)]
+    segs += [(16000, 8500, 16000, 12500)]  # a half wall in the north-east room
+    points = []
+    for k in range(24):  # a round table, 0.6 m radius, in the north-west room
+        a = 2 * math.pi * k / 24
+        points.append(
+            (3000 + round(600 * math.cos(a)), 12000 + round(600 * math.sin(a)))
+        )
+    points += [(x, 14700) for x in range(6500, 11501, 250)]  # a shelf, north wall
+    lines = [
+        "2D-Map-Ex2",
+        "Sources: robotlib",
+        "MinPos: -500 -500",
+        "MaxPos: 20500 15500",
+        f"NumPoints: {len(points)}",
+        "PointsAreSorted: false",
+        "LineMinPos: 0 0",
+        "LineMaxPos: 20000 15000",
+        f"NumLines: {len(segs)}",
+        "LinesAreSorted: false",
+        "Resolution: 100",
+        'MapInfo: ObjectType Name=Sim.BoxObstacle "Label=Box" Shape=Rectangle',
+        'Cairn: Dock 18500 7500 180.000000 "" ICON "dock"',
+        'Cairn: RobotHome 1500 7500 0.000000 "" ICON "home"',
+        'Cairn: Goal 17500 12000 0.000000 "" ICON "lab"',
+        'Cairn: Sim.BoxObstacle 7500 3000 0.000000 "" ICON "crate" 7000 2500 8000 3500',
+        'Cairn: ForbiddenArea 0 0 0.000000 "" ICON "stairs" 17000 13000 19500 14500',
+        "LINES",
+        *(" ".join(str(v) for v in s) for s in segs),
+        "DATA",
+        *(f"{x} {y}" for x, y in points),
+    ]
+    return "\n".join(lines) + "\n"
+
+
+def main() -> None:
+    """Write every world into this folder."""
+    notes = {
+        "corridor": "The paper's aliased corridor: 28 m x 2 m, doors on both sides.",
+        "corridor2": "A second aliased corridor with an L bend.",
+        "maze": "An 8 x 6 maze of 1.5 m cells.",
+        "arena": "An open 10 m x 10 m arena with six boxes.",
+    }
+    makers = {
+        "corridor": corridor,
+        "corridor2": corridor2,
+        "maze": maze,
+        "arena": arena,
+    }
+    for name, make in makers.items():
+        comment = f"{notes[name]}\nGenerated by worlds/make_worlds.py; units mm, deg."
+        write_wld(make(), HERE / f"{name}.wld", comment=comment)
+    (HERE / "office.map").write_text(office_map(), encoding="ascii")
+
+
+if __name__ == "__main__":
+    main()
