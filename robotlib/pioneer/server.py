@@ -1,0 +1,563 @@
+"""``robotlib sim-server``: the simulator over the Pioneer protocol, as MobileSim.
+
+Each simulated robot listens on its own TCP port (8101, 8102, ... on
+127.0.0.1 by default) or on a pseudo-terminal (the serial path). A client
+runs the SYNC handshake, sends OPEN and then gets a SIP every 100 ms of
+simulated time; the simulator runs in real time, or ``speed`` times faster.
+`Session` is the protocol of one link, bytes in and bytes out, with no I/O;
+`SimServer` moves bytes between sessions and sockets in one thread with a
+selector. Garbage, bad checksums, truncated or malformed packets are skipped;
+a client that vanishes or misbehaves is dropped, its robot stopped, and the
+next client is accepted on the same port.
+"""
+
+from __future__ import annotations
+
+import argparse
+import logging
+import math
+import os
+import selectors
+import socket
+import threading
+import time
+import tty
+
+import numpy as np
+
+from ..p3dx import CYCLE
+from .commands import SYNC0, SYNC1, SYNC2, decode_si
+from .packets import PacketDecoder, PacketError, frame
+from .sip import (
+    ConvFactors,
+    default_config,
+    encode_config,
+    encode_sip,
+    encode_sync2_reply,
+    factors_for,
+    sip_from_si,
+)
+from .transport import DEFAULT_PORT
+
+__all__ = ["Session", "SimServer", "add_arguments", "run"]
+
+log = logging.getLogger(__name__)
+
+_MOTION = {"MOVE", "HEAD", "DHEAD", "VEL", "RVEL", "VEL2", "SETV", "SETRV", "STOP"}
+_MAX_OUTBOX = 64 * 1024
+
+
+class Session:
+    """The Pioneer protocol of one link to one simulated robot (no I/O).
+
+    Parameters
+    ----------
+    sim : robotlib.sim.Simulator
+        The simulator (for SIM_RESET).
+    body : robotlib.sim.SimBody
+        The robot this link drives.
+    name, robot_class, subclass : str
+        What the SYNC2 reply reports.
+    config : dict, optional
+        The config packet's fields (default: `default_config`).
+    watchdog : float
+        Stop the robot after this long without a packet from the client, s.
+    clock : callable
+        Wall-clock time, s (for the watchdog).
+    """
+
+    def __init__(
+        self,
+        sim,
+        body,
+        *,
+        name: str = "robotlib",
+        robot_class: str = "Pioneer",
+        subclass: str = "p3dx",
+        config: dict | None = None,
+        watchdog: float = 2.0,
+        clock=time.monotonic,
+    ):
+        self.sim = sim
+        self.body = body
+        self.ident = (name, robot_class, subclass)
+        self.factors: ConvFactors = factors_for(subclass)
+        self.config = default_config(name=name, subtype=subclass, **(config or {}))
+        self.watchdog = watchdog
+        self.clock = clock
+        self.decoder = PacketDecoder()
+        self.expect = SYNC0  # next sync id; 3 = synced, waiting for OPEN
+        self.open = False
+        self.ignored = 0
+        self.last_packet = clock()
+        self._watchdog_fired = False
+
+    def receive(self, data: bytes) -> bytes:
+        """Take bytes from the client; return the bytes to send back."""
+        out = []
+        for pkt in self.decoder.feed(data):
+            self.last_packet = self.clock()
+            self._watchdog_fired = False
+            try:
+                out.append(self.handle(pkt.id, pkt.data))
+            except (PacketError, ValueError, TypeError) as exc:
+                self.ignored += 1
+                log.debug("ignored packet 0x%02x: %s", pkt.id, exc)
+        return b"".join(out)
+
+    def handle(self, packet_id: int, data: bytes) -> bytes:
+        """Act on one packet; return the reply bytes (often none)."""
+        if not self.open:
+            return self._handle_sync(packet_id, data)
+        from .packets import Packet
+
+        cmd = decode_si(Packet(packet_id, data), self.factors.vel2_divisor)
+        name, value = cmd.name, cmd.value
+        if name in _MOTION:
+            self.body.command(name, value)
+        elif name == "ROTATE":
+            self.body.command("RVEL", value)
+        elif name in ("SETA", "SETRA"):
+            if value != 0:  # an acceleration of 0 would freeze the robot
+                self.body.command(name, value)
+        elif name == "ESTOP":
+            self.body.command("STOP")
+        elif name == "ENABLE":
+            self.body.enable_motors(bool(value))
+        elif name == "SONAR":
+            self.body.enable_sonar(bool(value))
+        elif name == "SETO":
+            self.body.reset_odometry()
+        elif name == "CONFIG":
+            return encode_config(self.config)
+        elif name == "SIM_SET_POSE":
+            self.body.set_true_pose(value)
+        elif name == "SIM_RESET":
+            self.sim.reset()
+        elif name == "CLOSE":
+            self.close()
+        # PULSE, OPEN again, HOSTBAUD and unknown commands: nothing to do
+        return b""
+
+    def _handle_sync(self, packet_id: int, data: bytes) -> bytes:
+        if packet_id == SYNC0 and not data:
+            self.expect = SYNC1
+            return frame(SYNC0)
+        if packet_id == SYNC1 and self.expect == SYNC1 and not data:
+            self.expect = SYNC2
+            return frame(SYNC1)
+        if packet_id == SYNC2 and self.expect == SYNC2 and not data:
+            self.expect = 3
+            return encode_sync2_reply(*self.ident)
+        if packet_id == 1 and self.expect == 3:  # OPEN
+            self.open = True
+            self.body.command("STOP")
+            return b""
+        if packet_id in (SYNC0, SYNC1, SYNC2):
+            self.expect = SYNC0  # out of order: start again
+        return b""
+
+    def close(self) -> None:
+        """End the connection's open state: stop the robot, wait for a new SYNC."""
+        if self.open:
+            self.body.command("STOP")
+        self.open = False
+        self.expect = SYNC0
+
+    def tick(self) -> bytes:
+        """After a simulator step: the SIP to send (b"" unless open)."""
+        if not self.open:
+            return b""
+        if not self._watchdog_fired and self.clock() - self.last_packet > self.watchdog:
+            self.body.command("STOP")
+            self._watchdog_fired = True
+        st = self.body.state
+        enabled = bool(getattr(self.body, "_sonar_on", True))
+        sonar = list(enumerate(st.sonar[:16])) if enabled else []
+        sip = sip_from_si(
+            st.pose,
+            st.velocity[0],
+            st.velocity[1],
+            sonar,
+            stalled=st.stalled,
+            motors_enabled=st.motors_enabled,
+            sonar_enabled=enabled,
+            moving=bool(self.body.moving),
+            factors=self.factors,
+        )
+        return encode_sip(sip)
+
+
+class _Endpoint:
+    """One robot's link: a TCP listener or a pseudo-terminal, and its session."""
+
+    def __init__(self, server: SimServer, body, kind: str):
+        self.server = server
+        self.body = body
+        self.kind = kind
+        self.listener: socket.socket | None = None
+        self.conn: socket.socket | None = None
+        self.fd: int | None = None  # pty master
+        self.slave_fd: int | None = None
+        self.path: str | None = None
+        self.port: int | None = None
+        self.session: Session | None = None
+        self.outbox = bytearray()
+        self.clients = 0
+
+    def new_session(self) -> Session:
+        return Session(self.server.sim, self.body, **self.server.session_options)
+
+
+class SimServer:
+    """Serve simulated Pioneers over the protocol.
+
+    Parameters
+    ----------
+    world : str or World
+        World name or file (ignored if ``sim`` is given).
+    robots : int
+        Robots served over TCP, on ports ``port``, ``port + 1``, ...
+    ptys : int
+        Further robots served over pseudo-terminals (see `pty_paths`).
+    port : int
+        First TCP port; 0 picks free ports (see `ports`).
+    host : str
+        Address to bind (loopback by default).
+    speed : float
+        Simulated seconds per wall-clock second (1 = real time).
+    seed : Generator, int or None
+        The simulator's randomness.
+    sim : robotlib.sim.Simulator, optional
+        Serve robots of this simulator (new bodies are added to it).
+    session_options
+        Passed to each `Session` (``name``, ``subclass``, ``watchdog``...).
+    """
+
+    def __init__(
+        self,
+        world="corridor",
+        *,
+        robots: int = 1,
+        ptys: int = 0,
+        port: int = DEFAULT_PORT,
+        host: str = "127.0.0.1",
+        speed: float = 1.0,
+        seed=None,
+        sim=None,
+        drop_after: float = 10.0,
+        **session_options,
+    ):
+        if not speed > 0 or not math.isfinite(speed):
+            raise ValueError(f"speed must be a positive number, got {speed!r}")
+        if robots < 0 or ptys < 0 or robots + ptys < 1:
+            raise ValueError("serve at least one robot")
+        if sim is None:
+            from ..sim import Simulator
+            from ..world import World, load_world
+
+            if not isinstance(world, World):
+                world = load_world(world)
+            sim = Simulator(world, seed)
+        self.sim = sim
+        self.host = host
+        self.period = CYCLE / float(speed)
+        self.drop_after = drop_after
+        self.session_options = session_options
+        self.error: BaseException | None = None
+        self._stop = threading.Event()
+        self._thread: threading.Thread | None = None
+        self._sel = selectors.DefaultSelector()
+        self.endpoints: list[_Endpoint] = []
+        try:
+            for i in range(robots + ptys):
+                body = _add_body(sim, i)
+                ep = _Endpoint(self, body, "tcp" if i < robots else "pty")
+                if ep.kind == "tcp":
+                    self._listen(ep, port + i if port else 0)
+                else:
+                    self._open_pty(ep)
+                self.endpoints.append(ep)
+        except BaseException:
+            self._close_all()
+            raise
+
+    # -- setup ------------------------------------------------------------
+    def _listen(self, ep: _Endpoint, port: int) -> None:
+        s = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
+        ep.listener = s
+        s.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        s.bind((self.host, port))
+        s.listen(4)
+        s.setblocking(False)
+        ep.port = s.getsockname()[1]
+        self._sel.register(s, selectors.EVENT_READ, ("accept", ep))
+
+    def _open_pty(self, ep: _Endpoint) -> None:
+        master, slave = os.openpty()
+        tty.setraw(slave)
+        os.set_blocking(master, False)
+        ep.fd, ep.slave_fd, ep.path = master, slave, os.ttyname(slave)
+        ep.session = ep.new_session()
+        self._sel.register(master, selectors.EVENT_READ, ("pty", ep))
+
+    @property
+    def ports(self) -> list[int]:
+        """The TCP ports, one per TCP robot."""
+        return [ep.port for ep in self.endpoints if ep.kind == "tcp"]
+
+    @property
+    def pty_paths(self) -> list[str]:
+        """The pseudo-terminal device paths (``/dev/pts/N``), one per pty robot."""
+        return [ep.path for ep in self.endpoints if ep.kind == "pty"]
+
+    @property
+    def addresses(self) -> list[str]:
+        """Robot addresses for `robotlib.robot`: ``tcp://...`` then ``serial://...``."""
+        tcp = [f"tcp://{self.host}:{p}" for p in self.ports]
+        return tcp + [f"serial://{p}" for p in self.pty_paths]
+
+    # -- running ------------------------------------------------------------
+    def start(self) -> SimServer:
+        """Serve in a background thread; return self."""
+        self._thread = threading.Thread(
+            target=self._serve, name="sim-server", daemon=True
+        )
+        self._thread.start()
+        return self
+
+    def serve(self, duration: float | None = None) -> None:
+        """Serve in this thread for ``duration`` s (None: until `stop`)."""
+        if duration is not None:
+            timer = threading.Timer(duration, self._stop.set)
+            timer.daemon = True
+            timer.start()
+        self._serve()
+
+    def stop(self, timeout: float = 2.0) -> None:
+        """Stop serving, close every socket and pty (idempotent)."""
+        self._stop.set()
+        if self._thread is not None and self._thread is not threading.current_thread():
+            self._thread.join(timeout)
+        self._close_all()
+
+    def __enter__(self) -> SimServer:
+        return self.start() if self._thread is None else self
+
+    def __exit__(self, *exc) -> None:
+        self.stop()
+
+    def _serve(self) -> None:
+        next_tick = time.monotonic() + self.period
+        try:
+            while not self._stop.is_set():
+                wait = max(0.0, min(0.1, next_tick - time.monotonic()))
+                for key, _ in self._sel.select(wait):
+                    kind, ep = key.data
+                    try:
+                        if kind == "accept":
+                            self._accept(ep)
+                        elif kind == "conn":
+                            self._read_conn(ep)
+                        else:
+                            self._read_pty(ep)
+                    except Exception as exc:  # a misbehaving client, not the server
+                        log.warning("robot %s: dropping client: %s", ep.port, exc)
+                        self._drop(ep)
+                now = time.monotonic()
+                if now >= next_tick:
+                    self._tick()
+                    next_tick += self.period
+                    if now - next_tick > 5 * self.period:  # fell behind: do not burst
+                        next_tick = now + self.period
+        except BaseException as exc:
+            self.error = exc
+            log.exception("sim-server stopped on an error")
+        finally:
+            self._close_all()
+
+    def _tick(self) -> None:
+        active = [ep for ep in self.endpoints if ep.session and ep.session.open]
+        if not active:
+            return
+        self.sim.step()
+        now = time.monotonic()
+        for ep in active:
+            s = ep.session
+            if now - s.last_packet > self.drop_after:
+                log.info("robot %s: client silent, closing its session", ep.port)
+                if ep.kind == "tcp":
+                    self._drop(ep)
+                else:
+                    s.close()
+                continue
+            self._send(ep, s.tick())
+
+    # -- TCP ------------------------------------------------------------------
+    def _accept(self, ep: _Endpoint) -> None:
+        if ep.conn is not None:
+            return
+        try:
+            conn, _ = ep.listener.accept()
+        except BlockingIOError:
+            return
+        conn.setblocking(False)
+        conn.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+        ep.conn = conn
+        ep.clients += 1
+        ep.session = ep.new_session()
+        ep.outbox.clear()
+        self._sel.unregister(ep.listener)  # one client at a time; others wait
+        self._sel.register(conn, selectors.EVENT_READ, ("conn", ep))
+
+    def _read_conn(self, ep: _Endpoint) -> None:
+        try:
+            data = ep.conn.recv(4096)
+        except BlockingIOError:
+            return
+        except OSError:
+            data = b""
+        if not data:
+            self._drop(ep)
+            return
+        self._send(ep, ep.session.receive(data))
+
+    def _send(self, ep: _Endpoint, data: bytes) -> None:
+        if not data:
+            return
+        if ep.kind == "pty":
+            try:
+                os.write(ep.fd, data)
+            except BlockingIOError:
+                pass  # nobody reads the line: the bytes are lost, as on a cable
+            return
+        if ep.conn is None:
+            return
+        ep.outbox += data
+        try:
+            sent = ep.conn.send(ep.outbox)
+            del ep.outbox[:sent]
+        except BlockingIOError:
+            pass
+        except OSError:
+            self._drop(ep)
+            return
+        if len(ep.outbox) > _MAX_OUTBOX:
+            log.info("robot %s: client does not read, dropping it", ep.port)
+            self._drop(ep)
+
+    def _drop(self, ep: _Endpoint) -> None:
+        """Forget the client: stop its robot, close its socket, accept the next."""
+        if ep.session is not None:
+            ep.session.close()
+        if ep.kind == "pty":
+            return
+        ep.session = None
+        if ep.conn is not None:
+            try:
+                self._sel.unregister(ep.conn)
+            except (KeyError, ValueError):
+                pass
+            ep.conn.close()
+            ep.conn = None
+            if ep.listener is not None and not self._stop.is_set():
+                self._sel.register(ep.listener, selectors.EVENT_READ, ("accept", ep))
+
+    # -- pty --------------------------------------------------------------------
+    def _read_pty(self, ep: _Endpoint) -> None:
+        try:
+            data = os.read(ep.fd, 4096)
+        except (BlockingIOError, InterruptedError):
+            return
+        except OSError:
+            return  # EIO while no process holds the slave open
+        self._send(ep, ep.session.receive(data))
+
+    def _close_all(self) -> None:
+        for ep in self.endpoints:
+            for sock in (ep.conn, ep.listener):
+                if sock is not None:
+                    try:
+                        self._sel.unregister(sock)
+                    except (KeyError, ValueError):
+                        pass
+                    sock.close()
+            ep.conn = ep.listener = None
+            for fd in (ep.fd, ep.slave_fd):
+                if fd is not None:
+                    try:
+                        self._sel.unregister(fd)
+                    except (KeyError, ValueError):
+                        pass
+                    try:
+                        os.close(fd)
+                    except OSError:
+                        pass
+            ep.fd = ep.slave_fd = None
+        try:
+            self._sel.close()
+        except (OSError, RuntimeError):
+            pass
+
+
+def _add_body(sim, index: int):
+    """Add a robot: the world's start pose, else the nearest clear spot beside it."""
+    if index == 0 and not sim.bodies:
+        return sim.add_robot()
+    start = np.asarray(sim.world.start, dtype=float)
+    c, s = math.cos(start[2]), math.sin(start[2])
+    for k in range(1, 40):
+        for sign in (1, -1):
+            for along in (0.0, -0.6, 0.6):
+                side = sign * 0.6 * k
+                pose = start + [along * c - side * s, along * s + side * c, 0.0]
+                try:
+                    return sim.add_robot(pose)
+                except ValueError:
+                    continue
+    raise ValueError("no clear spot for another robot near the start pose")
+
+
+# -- the command line -------------------------------------------------------------
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """Arguments of ``robotlib sim-server``."""
+    parser.add_argument("--world", default="corridor", help="world name or file")
+    parser.add_argument("--port", type=int, default=DEFAULT_PORT, help="first TCP port")
+    parser.add_argument("--host", default="127.0.0.1", help="address to bind")
+    parser.add_argument("--robots", type=int, default=1, help="robots on TCP ports")
+    parser.add_argument(
+        "--pty", type=int, default=0, metavar="N",
+        help="also serve N robots on pseudo-terminals (serial path)",
+    )  # fmt: skip
+    parser.add_argument(
+        "--speed", type=float, default=1.0, help="simulated s per real s (1: real time)"
+    )
+    parser.add_argument("--seed", type=int, default=None, help="simulator seed")
+    parser.add_argument("--name", default="robotlib", help="name in the SYNC2 reply")
+    parser.add_argument(
+        "--duration", type=float, default=None, help="stop after this many s"
+    )
+
+
+def run(args: argparse.Namespace) -> int:
+    """Serve until interrupted (or ``--duration``); return the exit status."""
+    logging.basicConfig(level=logging.INFO, format="sim-server: %(message)s")
+    server = SimServer(
+        args.world,
+        robots=args.robots,
+        ptys=args.pty,
+        port=args.port,
+        host=args.host,
+        speed=args.speed,
+        seed=args.seed,
+        name=args.name,
+    )
+    for addr in server.addresses:
+        log.info("serving %s", addr)
+    try:
+        server.serve(args.duration)
+    except KeyboardInterrupt:
+        pass
+    finally:
+        server.stop()
+    return 0 if server.error is None else 1
