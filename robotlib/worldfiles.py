@@ -67,6 +67,7 @@ from __future__ import annotations
 import math
 import os
 import re
+from decimal import Context, Decimal
 from pathlib import Path
 from typing import IO
 
@@ -91,7 +92,7 @@ __all__ = [
 MAP_MAGICS = ("2D-Map", "2D-Map-Ex", "2D-Map-Ex2")
 """First lines that mark an ARIA map file."""
 
-WALL = "4 numbers x1 y1 x2 y2 (mm) for a wall"
+_WALL = "4 numbers x1 y1 x2 y2 (mm) for a wall"
 _NUMBER = re.compile(r"[+-]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")
 _LINE_BREAK = re.compile(r"\r\n|\r|\n")
 _CAIRN_TOKEN = re.compile(r'"[^"]*"|\S+')
@@ -153,64 +154,70 @@ def _short(s: str, n: int = 60) -> str:
 
 def _numbers(
     tokens: list[str], source: str, lineno: int, what: str, line: str
-) -> list[float]:
-    """Parse plain finite decimal numbers, or raise a located error."""
+) -> list[Decimal]:
+    """Parse plain finite decimal numbers (exactly), or raise a located error."""
     out = []
     for tok in tokens:
         if not _NUMBER.fullmatch(tok):
             raise WorldFileError(source, lineno, f"expected {what}, got {_short(line)}")
-        v = float(tok)
-        if not math.isfinite(v):
+        try:
+            d = _CTX.create_decimal(tok)
+        except ArithmeticError:  # an exponent beyond even Decimal's range
+            d = Decimal("nan")
+        if not (d.is_finite() and math.isfinite(float(d))):
             raise WorldFileError(
                 source, lineno, f"expected {what}, got {tok!r} (out of range)"
             )
-        out.append(v)
+        out.append(d)
     return out
 
 
-def _mm(v: float) -> float:
-    """Millimetres to metres."""
-    return v / 1000.0
+# Exact decimal arithmetic for the unit conversions, so that a written value
+# reads back to the very same float.
+_CTX = Context(prec=80, Emax=10**6, Emin=-(10**6), traps=[])
+_PI = Decimal(
+    "3.14159265358979323846264338327950288419716939937510582097494459230781640628"
+)
 
 
-def _deg(v: float) -> float:
-    """Degrees to radians wrapped to (-pi, pi]."""
-    return float(wrap_angle(math.radians(v)))
+def _mm(v: Decimal) -> float:
+    """Millimetres (exact decimal) to metres, correctly rounded."""
+    return float(v.scaleb(-3, _CTX))
 
 
-def _shortest(value: float, target: float, back) -> str:
-    """Shortest decimal text ``s`` near ``value`` with ``back(float(s)) == target``."""
-    if (
-        value == int(value)
-        and abs(value) < 2.0**53
-        and back(float(int(value))) == target
-    ):
-        return str(int(value))
-    candidates = [value]
-    lo = hi = value
-    for _ in range(8):
-        lo, hi = math.nextafter(lo, -math.inf), math.nextafter(hi, math.inf)
-        candidates += [lo, hi]
-    for c in candidates:
-        if back(c) == target:
-            for digits in range(1, 18):
-                s = f"{c:.{digits}g}"
-                if back(float(s)) == target:
-                    return s
-            return repr(c)
-    return repr(value)
+def _deg(v: Decimal) -> float:
+    """Degrees (exact decimal) to radians, wrapped to (-pi, pi]."""
+    return float(wrap_angle(float(_CTX.divide(_CTX.multiply(v, _PI), 180))))
+
+
+def _text(d: Decimal) -> str:
+    """Decimal as file text: an integer when whole, else plain decimal notation."""
+    if d == d.to_integral_value(context=_CTX) and abs(d) < 10**18:
+        return str(int(d))
+    return str(d.normalize(_CTX))
+
+
+def _mm_decimal(m: float) -> Decimal:
+    """Return the shortest decimal of the metres ``m`` in millimetres (exact)."""
+    return Decimal(repr(float(m))).scaleb(3, _CTX)
 
 
 def _fmt_mm(m: float) -> str:
     """Metres as millimetre text that reads back to exactly ``m``."""
-    m = float(m)
-    return _shortest(m * 1000.0, m, _mm) if m != 0 else "0"
+    return _text(_mm_decimal(m))
 
 
 def _fmt_deg(theta: float) -> str:
     """Radians as degree text that reads back (via `_deg`) to exactly ``theta``."""
     theta = float(theta)
-    return _shortest(math.degrees(theta), theta, _deg) if theta != 0 else "0"
+    if theta == 0.0:
+        return "0"
+    deg = _CTX.divide(_CTX.multiply(Decimal(theta), 180), _PI)
+    for digits in range(1, 40):
+        d = Context(prec=digits).plus(deg)
+        if _deg(d) == theta:
+            return _text(d)
+    return _text(deg)
 
 
 def _make_world(
@@ -223,8 +230,8 @@ def _make_world(
     path: Path | None,
 ) -> World:
     """Build the World in metres, growing ``declared`` bounds over the contents."""
-    seg = np.asarray(segments, dtype=float).reshape(-1, 4) / 1000.0
-    pts = np.asarray(points, dtype=float).reshape(-1, 2) / 1000.0
+    seg = np.asarray(segments, dtype=float).reshape(-1, 4)
+    pts = np.asarray(points, dtype=float).reshape(-1, 2)
     bounds = None
     if declared is not None:
         xmin, ymin, xmax, ymax = declared
@@ -296,7 +303,7 @@ def parse_wld(
     """
     segments: list[list[float]] = []
     width = height = None
-    origin = (0.0, 0.0)
+    origin = (Decimal(0), Decimal(0))
     start = None
     for lineno, raw in enumerate(_lines(text), start=1):
         line = raw.split(";", 1)[0]
@@ -309,9 +316,11 @@ def parse_wld(
                 raise WorldFileError(
                     source,
                     lineno,
-                    f"expected {WALL}, got {_short(line)}",
+                    f"expected {_WALL}, got {_short(line)}",
                 )
-            segments.append(_numbers(tokens, source, lineno, WALL, line))
+            segments.append(
+                [_mm(v) for v in _numbers(tokens, source, lineno, _WALL, line)]
+            )
             continue
         key = first.lower()
         args = tokens[1:]
@@ -352,7 +361,7 @@ def parse_wld(
         )
     declared = None
     if width is not None or height is not None:
-        seg = np.asarray(segments, dtype=float).reshape(-1, 4) / 1000.0
+        seg = np.asarray(segments, dtype=float).reshape(-1, 4)
         xy = np.concatenate([seg[:, :2], seg[:, 2:]])
         if start is not None:
             xy = np.concatenate([xy, [start[:2]]])
@@ -361,11 +370,11 @@ def parse_wld(
         lo, hi = xy.min(axis=0) - 0.5, xy.max(axis=0) + 0.5
         ox, oy = _mm(origin[0]), _mm(origin[1])
         if width is not None:
-            xr = (ox, _mm(origin[0] + width))
+            xr = (ox, _mm(_CTX.add(origin[0], width)))
         else:
             xr = (float(lo[0]), float(hi[0]))
         if height is not None:
-            yr = (oy, _mm(origin[1] + height))
+            yr = (oy, _mm(_CTX.add(origin[1], height)))
         else:
             yr = (float(lo[1]), float(hi[1]))
         if not (xr[0] < xr[1] and yr[0] < yr[1]):
@@ -384,28 +393,20 @@ def format_wld(world: World, comment: str | None = None) -> str:
     lines = []
     if comment:
         lines += [f"; {c}".rstrip() for c in comment.splitlines()]
-    # width/height are written as the difference of the mm corners so that the
+    # width/height are the exact differences of the mm corners, so that the
     # reader's origin + width reproduces xmax exactly.
-    ox, oy = _fmt_mm(xmin), _fmt_mm(ymin)
-    ex, ey = _fmt_mm(xmax), _fmt_mm(ymax)
-    w = _fmt_size(ox, ex, xmax)
-    h = _fmt_size(oy, ey, ymax)
+    lo = [_mm_decimal(xmin), _mm_decimal(ymin)]
+    w = _text(_CTX.subtract(_mm_decimal(xmax), lo[0]))
+    h = _text(_CTX.subtract(_mm_decimal(ymax), lo[1]))
     lines += [f"width {w}", f"height {h}"]
-    if float(ox) != 0.0 or float(oy) != 0.0:
-        lines.append(f"origin {ox} {oy}")
+    if lo[0] != 0 or lo[1] != 0:
+        lines.append(f"origin {_text(lo[0])} {_text(lo[1])}")
     x, y, th = world.start
     lines.append(f"position {_fmt_mm(x)} {_fmt_mm(y)} {_fmt_deg(th)}")
     lines.append("; walls: x1 y1 x2 y2 (mm)")
     for s in world.segments:
         lines.append(" ".join(_fmt_mm(v) for v in s))
     return "\n".join(lines) + "\n"
-
-
-def _fmt_size(lo_text: str, hi_text: str, hi_m: float) -> str:
-    """Size text ``d`` (mm) such that ``(float(lo) + float(d)) / 1000 == hi_m``."""
-    lo = float(lo_text)
-    d = float(hi_text) - lo
-    return _shortest(d, hi_m, lambda v: _mm(lo + v))
 
 
 def write_wld(
@@ -523,14 +524,18 @@ def parse_map(
                 raise WorldFileError(
                     source, lineno, f"expected {what}, got {_short(line)}"
                 )
-            segments.append(_numbers(tokens, source, lineno, what, line))
+            segments.append(
+                [_mm(v) for v in _numbers(tokens, source, lineno, what, line)]
+            )
         elif section == "DATA":
             what = "2 numbers x y (mm) in DATA"
             if len(tokens) != 2:
                 raise WorldFileError(
                     source, lineno, f"expected {what}, got {_short(line)}"
                 )
-            points.append(_numbers(tokens, source, lineno, what, line))
+            points.append(
+                [_mm(v) for v in _numbers(tokens, source, lineno, what, line)]
+            )
         elif section is None and head[0] in "0123456789+-.":
             raise WorldFileError(
                 source,
@@ -562,8 +567,8 @@ def parse_map(
     if declared is not None:
         # a box that is a point or a line (one wall, one DATA point) gets the
         # default margin rather than no area at all
-        seg = np.asarray(segments, dtype=float).reshape(-1, 4) / 1000.0
-        pts = np.asarray(points, dtype=float).reshape(-1, 2) / 1000.0
+        seg = np.asarray(segments, dtype=float).reshape(-1, 4)
+        pts = np.asarray(points, dtype=float).reshape(-1, 2)
         xy = np.concatenate(
             [seg[:, :2], seg[:, 2:], pts, [declared[:2]], [declared[2:]]]
         )
@@ -603,8 +608,8 @@ def _parse_cairn(args: str, source: str, lineno: int, line: str):
 
 
 def _box_walls(theta: float, rect) -> list[list[float]]:
-    """Four walls (mm) of the rectangle ``rect`` rotated by ``theta`` about (0, 0)."""
-    x1, y1, x2, y2 = rect
+    """Four walls (m) of the box ``rect`` (mm) rotated by ``theta`` about (0, 0)."""
+    x1, y1, x2, y2 = (_mm(v) for v in rect)
     corners = [(x1, y1), (x2, y1), (x2, y2), (x1, y2)]
     if theta != 0.0:
         c, s = math.cos(theta), math.sin(theta)
