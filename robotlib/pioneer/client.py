@@ -244,6 +244,8 @@ class PioneerRobot(Robot):
                 return
             si = sip_to_si(raw, self.factors)
             pose = self._odometry.update(si.x_raw, si.y_raw, si.theta)
+            if not si.sonar_enabled:
+                self._sonar[:] = SONAR_MAX_RANGE  # sonar off: no echo anywhere
             for i, rng in si.sonar.items():
                 if 0 <= i < len(self._sonar):
                     self._sonar[i] = min(rng, SONAR_MAX_RANGE)
@@ -305,7 +307,9 @@ class PioneerRobot(Robot):
                 left = deadline - time.monotonic()
                 if left <= 0:
                     raise LinkTimeout(
-                        f"{self.transport.name}: no SIP for {self.timeouts.link} s"
+                        f"{self.transport.name}: no SIP from the robot for "
+                        f"{self.timeouts.link} s (link timeout): the robot or the "
+                        "link is dead"
                     )
                 self._cond.wait(left)
             return self._robot_state
