@@ -63,71 +63,150 @@ def cast_segments(poses, angles, max_range, segments, out):
 
 
 @nb.njit(**JIT)
-def ray_grid(occupied, x0, y0, resolution, ox, oy, angle, max_range):
-    """Distance from ``(ox, oy)`` along ``angle`` to the first occupied cell.
+def _edt_1d(f, n, v, z, out):
+    """Write the squared distance transform of ``f[:n]`` into ``out``.
 
-    Walks the cells the ray crosses in order (Amanatides and Woo's traversal)
-    and returns the distance to the boundary where it enters the first
-    occupied cell: 0 if it starts in one or outside the grid; the distance to
-    the grid's edge if it leaves the grid first; ``max_range`` if it travels
-    that far without a hit.
+    Felzenszwalb and Huttenlocher's lower envelope of parabolas; ``v`` and
+    ``z`` are scratch arrays.
+    """
+    k = 0
+    v[0] = 0
+    z[0] = -np.inf
+    z[1] = np.inf
+    for q in range(1, n):
+        if f[q] == np.inf:
+            continue
+        while True:
+            p = v[k]
+            if f[p] == np.inf:
+                s = -np.inf
+            else:
+                s = ((f[q] + q * q) - (f[p] + p * p)) / (2.0 * q - 2.0 * p)
+            if s <= z[k] and k > 0:
+                k -= 1
+            else:
+                break
+        if f[v[k]] == np.inf:
+            v[k] = q
+            continue
+        k += 1
+        v[k] = q
+        z[k] = s
+        z[k + 1] = np.inf
+    k = 0
+    for q in range(n):
+        while z[k + 1] < q:
+            k += 1
+        p = v[k]
+        out[q] = np.inf if f[p] == np.inf else (q - p) * (q - p) + f[p]
+
+
+_JUMP = 3.0
+"""Clearance, in cells, from which the grid caster jumps instead of stepping."""
+
+
+@nb.njit(**JIT)
+def clearance_field(occupied, out):
+    """Write the grid caster's field into ``out``, shape ``occupied.shape + 2``.
+
+    ``out`` is the occupancy grid padded with a ring of occupied cells (the
+    grid's edge counts as a wall): -1 on occupied cells, elsewhere the cell's
+    clearance in cells, a lower bound on the distance from any point of the
+    cell to an occupied cell (an exact Euclidean distance transform between
+    cell centres, less one cell diagonal).
     """
     ny, nx = occupied.shape
-    gx = (ox - x0) / resolution
-    gy = (oy - y0) / resolution
-    j = int(math.floor(gx))
-    i = int(math.floor(gy))
-    if i < 0 or i >= ny or j < 0 or j >= nx or occupied[i, j]:
+    n = max(ny, nx) + 2
+    f = np.empty(n)
+    d = np.empty(n)
+    v = np.empty(n, dtype=np.int64)
+    z = np.empty(n + 1)
+    sq = np.empty((ny + 2, nx + 2))
+    for i in range(ny + 2):
+        for j in range(nx + 2):
+            inside = 0 < i <= ny and 0 < j <= nx
+            f[j] = np.inf if inside and not occupied[i - 1, j - 1] else 0.0
+        _edt_1d(f, nx + 2, v, z, d)
+        sq[i, :] = d[: nx + 2]
+    for j in range(nx + 2):
+        for i in range(ny + 2):
+            f[i] = sq[i, j]
+        _edt_1d(f, ny + 2, v, z, d)
+        for i in range(ny + 2):
+            if d[i] == 0.0:
+                out[i, j] = -1.0
+            else:
+                out[i, j] = max(math.sqrt(d[i]) - math.sqrt(2.0), 0.0)
+
+
+@nb.njit(**JIT)
+def ray_grid(field, x0, y0, resolution, ox, oy, angle, max_range):
+    """Distance from ``(ox, oy)`` along ``angle`` to the first occupied cell.
+
+    ``field`` comes from `clearance_field`. Returns the distance to the
+    boundary where the ray enters the first occupied cell: 0 if it starts in
+    one or outside the grid; the distance to the grid's edge if it leaves the
+    grid first; ``max_range`` if it travels that far without a hit.
+
+    Near obstacles the ray walks from cell to cell in order (Amanatides and
+    Woo's traversal); through open space it jumps ahead by the clearance.
+    """
+    gx = (ox - x0) / resolution + 1.0
+    gy = (oy - y0) / resolution + 1.0
+    ny = field.shape[0] - 2
+    nx = field.shape[1] - 2
+    if not (1.0 <= gx < nx + 1.0 and 1.0 <= gy < ny + 1.0):
         return 0.0
     dx = math.cos(angle)
     dy = math.sin(angle)
+    step_j = 1 if dx > 0 else -1
+    step_i = 1 if dy > 0 else -1
+    t_delta_x = 1.0 / abs(dx) if abs(dx) > _EPS else np.inf
+    t_delta_y = 1.0 / abs(dy) if abs(dy) > _EPS else np.inf
     limit = max_range / resolution
-    if dx > _EPS:
-        step_j = 1
-        t_max_x = (j + 1 - gx) / dx
-        t_delta_x = 1.0 / dx
-    elif dx < -_EPS:
-        step_j = -1
-        t_max_x = (gx - j) / -dx
-        t_delta_x = -1.0 / dx
-    else:
-        step_j = 0
-        t_max_x = np.inf
-        t_delta_x = np.inf
-    if dy > _EPS:
-        step_i = 1
-        t_max_y = (i + 1 - gy) / dy
-        t_delta_y = 1.0 / dy
-    elif dy < -_EPS:
-        step_i = -1
-        t_max_y = (gy - i) / -dy
-        t_delta_y = -1.0 / dy
-    else:
-        step_i = 0
-        t_max_y = np.inf
-        t_delta_y = np.inf
+    t = 0.0
     while True:
-        if t_max_x < t_max_y:
-            t = t_max_x
-            t_max_x += t_delta_x
-            j += step_j
-        else:
-            t = t_max_y
-            t_max_y += t_delta_y
-            i += step_i
-        if t >= limit:
-            return max_range
-        if i < 0 or i >= ny or j < 0 or j >= nx or occupied[i, j]:
+        px = gx + t * dx
+        py = gy + t * dy
+        j = int(math.floor(px))
+        i = int(math.floor(py))
+        c = field[i, j]
+        if c < 0.0:
             return t * resolution
+        if c >= _JUMP:
+            t += c
+            if t >= limit:
+                return max_range
+            continue
+        # Walk cell by cell from the point at t until a hit or open space.
+        t_max_x = t + ((j + 1 - px) if dx > 0 else (px - j)) * t_delta_x
+        t_max_y = t + ((i + 1 - py) if dy > 0 else (py - i)) * t_delta_y
+        while True:
+            if t_max_x < t_max_y:
+                t = t_max_x
+                t_max_x += t_delta_x
+                j += step_j
+            else:
+                t = t_max_y
+                t_max_y += t_delta_y
+                i += step_i
+            if t >= limit:
+                return max_range
+            c = field[i, j]
+            if c < 0.0:
+                return t * resolution
+            if c >= _JUMP:
+                break
+        t += 1e-9
 
 
 @nb.njit(**JIT_PARALLEL)
-def cast_grid(poses, angles, max_range, occupied, x0, y0, resolution, out):
+def cast_grid(poses, angles, max_range, field, x0, y0, resolution, out):
     """Grid version of `cast_segments`: ``out[k, r]`` via `ray_grid`."""
     for k in nb.prange(poses.shape[0]):
         for r in range(angles.shape[0]):
             out[k, r] = ray_grid(
-                occupied,
+                field,
                 x0,
                 y0,
                 resolution,

@@ -10,7 +10,7 @@ import numpy as np
 from . import _raycast
 from .world import Grid, World
 
-__all__ = ["cast_rays", "cast_rays_grid"]
+__all__ = ["cast_rays", "cast_rays_grid", "grid_field"]
 
 
 def _poses(poses) -> np.ndarray:
@@ -56,7 +56,32 @@ def cast_rays(walls, poses, angles, max_range: float = 5.0) -> np.ndarray:
     return out
 
 
-def cast_rays_grid(grid: Grid, poses, angles, max_range: float = 5.0) -> np.ndarray:
+def grid_field(grid: Grid) -> np.ndarray:
+    """Precompute what `cast_rays_grid` needs from a grid.
+
+    Compute it once per grid when casting many batches (it costs a distance
+    transform of the grid).
+
+    Parameters
+    ----------
+    grid : Grid
+        Boolean occupancy grid.
+
+    Returns
+    -------
+    numpy.ndarray, shape (ny + 2, nx + 2)
+        The grid padded with a ring of occupied cells: -1 where occupied,
+        elsewhere a lower bound on the free distance around the cell, in cells.
+    """
+    occ = np.ascontiguousarray(grid.data, dtype=np.bool_)
+    out = np.empty((occ.shape[0] + 2, occ.shape[1] + 2))
+    _raycast.clearance_field(occ, out)
+    return out
+
+
+def cast_rays_grid(
+    grid: Grid, poses, angles, max_range: float = 5.0, field=None
+) -> np.ndarray:
     """Range along each ray to the first occupied cell of a grid.
 
     Parameters
@@ -70,6 +95,8 @@ def cast_rays_grid(grid: Grid, poses, angles, max_range: float = 5.0) -> np.ndar
         Ray directions relative to each pose's heading, rad.
     max_range : float
         Rays that hit nothing within this distance report it, m.
+    field : numpy.ndarray, shape (ny + 2, nx + 2), optional
+        `grid_field` of ``grid``, if already computed.
 
     Returns
     -------
@@ -77,10 +104,22 @@ def cast_rays_grid(grid: Grid, poses, angles, max_range: float = 5.0) -> np.ndar
         Ranges in m, to the boundary of the first occupied cell (0 from
         inside an occupied cell or outside the grid).
     """
-    occ = np.ascontiguousarray(grid.data, dtype=np.bool_)
     p = _poses(poses)
     a = np.ascontiguousarray(np.atleast_1d(np.asarray(angles, dtype=np.float64)))
+    field = grid_field(grid) if field is None else field
+    ny, nx = grid.shape
+    if field.shape != (ny + 2, nx + 2):
+        raise ValueError(f"field has shape {field.shape}, grid {grid.shape}")
     out = np.empty((len(p), len(a)))
     x0, y0 = grid.origin
-    _raycast.cast_grid(p, a, float(max_range), occ, x0, y0, grid.resolution, out)
+    _raycast.cast_grid(
+        p,
+        a,
+        float(max_range),
+        np.ascontiguousarray(field, dtype=np.float64),
+        x0,
+        y0,
+        grid.resolution,
+        out,
+    )
     return out

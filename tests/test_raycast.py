@@ -109,3 +109,18 @@ def test_bad_shapes_are_rejected():
         cast_rays(BOX, [1.0, 2.0], [0.0])
     with pytest.raises(ValueError, match="segments"):
         cast_rays(np.zeros((2, 3)), [0, 0, 0], [0.0])
+
+
+def test_grid_field_is_the_centre_distance_transform_less_a_diagonal():
+    from robotlib.raycast import grid_field
+    from robotlib.world import Grid
+
+    occ = np.random.default_rng(1).random((23, 31)) < 0.05
+    field = grid_field(Grid(occ, (0.0, 0.0), 1.0))
+    padded = np.pad(occ, 1, constant_values=True)
+    np.testing.assert_array_equal(field < 0, padded)
+    # Brute force: distances between centres to occupied (or border) cells.
+    ii, jj = np.nonzero(padded)
+    for i, j in zip(*np.nonzero(~padded), strict=True):
+        d = np.sqrt((ii - i) ** 2 + (jj - j) ** 2).min()
+        assert field[i, j] == pytest.approx(max(d - math.sqrt(2), 0.0))
