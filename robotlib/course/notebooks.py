@@ -1,0 +1,279 @@
+"""Notebook helpers for the course tools: markers, check cells, release.
+
+A lab's source notebook (in ``solutions/``) marks
+
+- solutions, in code or markdown cells, between ``### BEGIN SOLUTION`` and
+  ``### END SOLUTION`` lines; the release replaces each region with
+  ``# YOUR CODE HERE`` / ``raise NotImplementedError()`` (code, at the
+  marker's indentation) or ``YOUR ANSWER HERE`` (markdown);
+- graded check cells, by their metadata
+  ``{"robotlib": {"grade_id": "weights", "points": 2}}``; a check cell may
+  hold hidden tests between ``### BEGIN HIDDEN TESTS`` and
+  ``### END HIDDEN TESTS``, removed on release and put back at grading.
+
+Notebooks are written deterministically (sorted keys, one-space indent, a
+final newline, no outputs or execution counts in released labs, cell ids kept
+from the source), so regenerating ``labs/`` gives no diff.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import re
+from dataclasses import dataclass
+from pathlib import Path
+
+import nbformat
+from nbformat import NotebookNode
+
+__all__ = [
+    "META_KEY",
+    "NotebookError",
+    "CheckCell",
+    "read_notebook",
+    "notebook_text",
+    "write_notebook",
+    "check_meta",
+    "check_cells",
+    "cell_id",
+    "strip_region",
+    "release_notebook",
+    "NBVAL_TAGS",
+]
+
+META_KEY = "robotlib"
+"""Cell metadata key holding ``grade_id`` and ``points`` of a check cell."""
+
+SOLUTION = ("### BEGIN SOLUTION", "### END SOLUTION")
+HIDDEN = ("### BEGIN HIDDEN TESTS", "### END HIDDEN TESTS")
+CODE_STUB = ("# YOUR CODE HERE", "raise NotImplementedError()")
+ANSWER_STUB = ("YOUR ANSWER HERE",)
+
+NBVAL_TAGS = frozenset(
+    {
+        "nbval-ignore-output",
+        "nbval-check-output",
+        "nbval-raises-exception",
+        "nbval-skip",
+        "raises-exception",
+        "pytest-validate-ignore-output",
+    }
+)
+"""Cell tags that change what nbval does with a cell."""
+
+KERNELSPEC = {
+    "display_name": "Python 3 (ipykernel)",
+    "language": "python",
+    "name": "python3",
+}
+
+_GRADE_ID = re.compile(r"^[A-Za-z][A-Za-z0-9_.-]{0,63}$")
+
+
+class NotebookError(ValueError):
+    """A lab notebook is malformed (bad markers, bad check metadata, ...)."""
+
+
+@dataclass(frozen=True)
+class CheckCell:
+    """A graded check cell of a lab.
+
+    Attributes
+    ----------
+    grade_id : str
+        The check's name (a gradebook column).
+    points : float
+        Points earned when the check passes.
+    cell_id : str
+        The cell's id (stable across releases).
+    index : int
+        Position of the cell in the notebook (all cells counted).
+    """
+
+    grade_id: str
+    points: float
+    cell_id: str
+    index: int
+
+
+def read_notebook(path: str | Path) -> NotebookNode:
+    """Read a notebook (nbformat 4) from ``path``.
+
+    Raises
+    ------
+    NotebookError
+        If the file is not a readable notebook.
+    """
+    try:
+        return nbformat.read(str(path), as_version=4)
+    except Exception as exc:  # json, validation and encoding errors alike
+        raise NotebookError(f"{path}: not a readable notebook ({exc})") from exc
+
+
+def notebook_text(nb: NotebookNode) -> str:
+    """Serialise ``nb`` deterministically (sorted keys, final newline)."""
+    return nbformat.writes(nb, version=4) + "\n"
+
+
+def write_notebook(nb: NotebookNode, path: str | Path) -> bool:
+    """Write ``nb`` to ``path`` if its text changed; return True if written."""
+    path = Path(path)
+    text = notebook_text(nb)
+    if path.exists() and path.read_text(encoding="utf-8") == text:
+        return False
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(path.name + ".tmp")
+    tmp.write_text(text, encoding="utf-8")
+    tmp.replace(path)
+    return True
+
+
+def check_meta(cell: dict, where: str = "cell") -> dict | None:
+    """Return ``{"grade_id", "points"}`` of a check cell, or None.
+
+    Parameters
+    ----------
+    cell : dict
+        A notebook cell.
+    where : str
+        Names the cell in error messages.
+
+    Raises
+    ------
+    NotebookError
+        If the cell carries malformed check metadata.
+    """
+    meta = cell.get("metadata", {}).get(META_KEY)
+    if not isinstance(meta, dict) or "grade_id" not in meta:
+        return None
+    gid = meta["grade_id"]
+    if not isinstance(gid, str) or not _GRADE_ID.match(gid):
+        raise NotebookError(f"{where}: bad grade_id {gid!r} (letters, digits, _.-)")
+    points = meta.get("points", 1)
+    if isinstance(points, bool) or not isinstance(points, int | float) or points <= 0:
+        raise NotebookError(f"{where}: points of {gid!r} must be > 0, got {points!r}")
+    if cell.get("cell_type") != "code":
+        raise NotebookError(f"{where}: check {gid!r} must be a code cell")
+    return {"grade_id": gid, "points": points}
+
+
+def cell_id(cell: dict, name: str, index: int) -> str:
+    """Return the cell's id, or one derived from ``name`` and ``index``."""
+    cid = cell.get("id")
+    if cid:
+        return str(cid)
+    return hashlib.sha1(f"{name}:{index}".encode()).hexdigest()[:12]
+
+
+def check_cells(nb: NotebookNode, name: str = "notebook") -> list[CheckCell]:
+    """List the check cells of a lab notebook, in order.
+
+    Raises
+    ------
+    NotebookError
+        On malformed metadata or a grade id used twice.
+    """
+    out: list[CheckCell] = []
+    seen: set[str] = set()
+    for i, cell in enumerate(nb.cells):
+        meta = check_meta(cell, f"{name}: cell {i}")
+        if meta is None:
+            continue
+        if meta["grade_id"] in seen:
+            raise NotebookError(
+                f"{name}: cell {i}: grade_id {meta['grade_id']!r} used twice"
+            )
+        seen.add(meta["grade_id"])
+        out.append(
+            CheckCell(meta["grade_id"], meta["points"], cell_id(cell, name, i), i)
+        )
+    return out
+
+
+def strip_region(
+    source: str, markers: tuple[str, str], stub: tuple[str, ...], where: str = "cell"
+) -> str:
+    """Replace every ``markers`` region of ``source`` by ``stub`` lines.
+
+    Each stub line gets the indentation of the begin marker. With an empty
+    ``stub`` the region is removed.
+
+    Raises
+    ------
+    NotebookError
+        On an unclosed, unopened or nested region.
+    """
+    begin, end = markers
+    out: list[str] = []
+    inside = False
+    for n, line in enumerate(source.splitlines(), 1):
+        stripped = line.strip()
+        if stripped == begin:
+            if inside:
+                raise NotebookError(f"{where}, line {n}: nested {begin!r}")
+            inside = True
+            indent = line[: len(line) - len(line.lstrip())]
+            out.extend(indent + s for s in stub)
+        elif stripped == end:
+            if not inside:
+                raise NotebookError(f"{where}, line {n}: {end!r} without {begin!r}")
+            inside = False
+        elif not inside:
+            out.append(line)
+    if inside:
+        raise NotebookError(f"{where}: {begin!r} is never closed")
+    return "\n".join(out)
+
+
+def _has_marker(source: str, markers: tuple[str, str]) -> bool:
+    return any(line.strip() in markers for line in source.splitlines())
+
+
+def release_notebook(nb: NotebookNode, name: str = "notebook") -> NotebookNode:
+    """Return the student version of a solution notebook.
+
+    Solutions are replaced by stubs, hidden tests removed, outputs and
+    execution counts cleared, cell metadata reduced to the check tag (check
+    cells are also marked not deletable and not editable), cell ids kept
+    (or derived from ``name`` and the position when missing), notebook
+    metadata reduced to the kernelspec and the ``robotlib`` entry.
+
+    Raises
+    ------
+    NotebookError
+        On malformed markers or check metadata.
+    """
+    check_cells(nb, name)  # validates
+    cells = []
+    for i, cell in enumerate(nb.cells):
+        where = f"{name}: cell {i}"
+        meta = check_meta(cell, where)
+        source = cell.source
+        if meta is not None:
+            if _has_marker(source, SOLUTION):
+                raise NotebookError(f"{where}: a check cell cannot hold a solution")
+            source = strip_region(source, HIDDEN, (), where).rstrip()
+        else:
+            if _has_marker(source, HIDDEN):
+                raise NotebookError(f"{where}: hidden tests outside a check cell")
+            stub = CODE_STUB if cell.cell_type == "code" else ANSWER_STUB
+            source = strip_region(source, SOLUTION, stub, where)
+        cid = cell_id(cell, name, i)
+        if cell.cell_type == "code":
+            new = nbformat.v4.new_code_cell(source)
+        elif cell.cell_type == "markdown":
+            new = nbformat.v4.new_markdown_cell(source)
+            if cell.get("attachments"):
+                new.attachments = cell.attachments
+        else:
+            new = nbformat.v4.new_raw_cell(source)
+        new.id = cid
+        if meta is not None:
+            new.metadata = {META_KEY: meta, "deletable": False, "editable": False}
+        cells.append(new)
+    out = nbformat.v4.new_notebook(cells=cells)
+    out.metadata = {"kernelspec": dict(KERNELSPEC), "language_info": {"name": "python"}}
+    if META_KEY in nb.metadata:
+        out.metadata[META_KEY] = nb.metadata[META_KEY]
+    out.nbformat, out.nbformat_minor = 4, 5
+    return out
