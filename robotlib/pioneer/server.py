@@ -259,6 +259,9 @@ class SimServer:
             if not isinstance(world, World):
                 world = load_world(world)
             sim = Simulator(world, seed)
+            created = True
+        else:
+            created = False
         self.sim = sim
         self.host = host
         self.period = CYCLE / float(speed)
@@ -281,6 +284,9 @@ class SimServer:
         except BaseException:
             self._close_all()
             raise
+        if created:  # compile the simulator's kernels now, not on a client's clock
+            sim.step()
+            sim.reset()
 
     # -- setup ------------------------------------------------------------
     def _listen(self, ep: _Endpoint, port: int) -> None:
