@@ -54,23 +54,44 @@ def min_distance_to_segments(points, segments, out):
 def rasterise_segments(segments, x0, y0, resolution, occupied):
     """Mark every cell of ``occupied`` (rows = y, cols = x) that a segment crosses.
 
-    Walks each segment in steps of a quarter cell, which marks every cell the
-    segment passes through (and possibly a diagonal neighbour).
+    Walks each segment from cell to cell in order (Amanatides and Woo's
+    traversal), so every cell the segment passes through is marked, including
+    a cell whose corner it only clips; cells off the grid are skipped.
     """
     ny, nx = occupied.shape
     for m in range(segments.shape[0]):
-        x1 = segments[m, 0]
-        y1 = segments[m, 1]
-        x2 = segments[m, 2]
-        y2 = segments[m, 3]
-        length = math.hypot(x2 - x1, y2 - y1)
-        steps = int(math.ceil(4.0 * length / resolution)) + 1
-        for s in range(steps + 1):
-            t = s / steps
-            i = int(math.floor((y1 + t * (y2 - y1) - y0) / resolution))
-            j = int(math.floor((x1 + t * (x2 - x1) - x0) / resolution))
+        gx = (segments[m, 0] - x0) / resolution
+        gy = (segments[m, 1] - y0) / resolution
+        ex = (segments[m, 2] - x0) / resolution - gx
+        ey = (segments[m, 3] - y0) / resolution - gy
+        j = int(math.floor(gx))
+        i = int(math.floor(gy))
+        j_end = int(math.floor(gx + ex))
+        i_end = int(math.floor(gy + ey))
+        step_j = 1 if ex > 0 else -1
+        step_i = 1 if ey > 0 else -1
+        # Parameters (0..1 along the segment) of the next x and y cell borders.
+        if ex != 0.0:
+            t_max_x = ((j + 1 - gx) if ex > 0 else (gx - j)) / abs(ex)
+            t_delta_x = 1.0 / abs(ex)
+        else:
+            t_max_x = np.inf
+            t_delta_x = np.inf
+        if ey != 0.0:
+            t_max_y = ((i + 1 - gy) if ey > 0 else (gy - i)) / abs(ey)
+            t_delta_y = 1.0 / abs(ey)
+        else:
+            t_max_y = np.inf
+            t_delta_y = np.inf
+        for _ in range(abs(j_end - j) + abs(i_end - i) + 1):
             if 0 <= i < ny and 0 <= j < nx:
                 occupied[i, j] = True
+            if t_max_x < t_max_y:
+                j += step_j
+                t_max_x += t_delta_x
+            else:
+                i += step_i
+                t_max_y += t_delta_y
 
 
 @nb.njit(**JIT)

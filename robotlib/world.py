@@ -25,6 +25,8 @@ WORLDS_DIR = Path(__file__).resolve().parent.parent / "worlds"
 POINT_SIZE = 0.02
 """Side of the small cross that stands for one map DATA point, m."""
 
+_MAX_REDRAWS = 20
+
 
 @dataclass(frozen=True)
 class Grid:
@@ -329,20 +331,33 @@ class World:
         Returns
         -------
         numpy.ndarray, shape (n, 3)
-            Poses ``(x, y, theta)``, m and rad.
+            Poses ``(x, y, theta)``, m and rad, each free (`is_free`) at
+            ``radius``.
         """
         rng = as_rng(rng)
         grid = self.free_space(resolution, radius)
         cells = np.flatnonzero(grid.data)
         if len(cells) == 0:
             raise ValueError(f"world {self.name!r} has no free space for r={radius}")
-        pick = cells[rng.integers(0, len(cells), size=n)]
-        i, j = np.divmod(pick, grid.shape[1])
-        u = rng.random((n, 3))
         out = np.empty((n, 3))
-        out[:, 0] = grid.origin[0] + (j + u[:, 0]) * grid.resolution
-        out[:, 1] = grid.origin[1] + (i + u[:, 1]) * grid.resolution
-        out[:, 2] = np.pi - 2.0 * np.pi * u[:, 2]
+        todo = np.arange(n)
+        # A cell whose centre is free may have a corner that is not: redraw the
+        # few poses that land there (almost all are free on the first draw).
+        for _ in range(_MAX_REDRAWS):
+            k = len(todo)
+            pick = cells[rng.integers(0, len(cells), size=k)]
+            i, j = np.divmod(pick, grid.shape[1])
+            u = rng.random((k, 3))
+            out[todo, 0] = grid.origin[0] + (j + u[:, 0]) * grid.resolution
+            out[todo, 1] = grid.origin[1] + (i + u[:, 1]) * grid.resolution
+            out[todo, 2] = np.pi - 2.0 * np.pi * u[:, 2]
+            todo = todo[~self.is_free(out[todo, :2], radius)]
+            if len(todo) == 0:
+                return out
+        # Still not free after many draws: put them at free cell centres.
+        pick = cells[rng.integers(0, len(cells), size=len(todo))]
+        centres = grid.centres().reshape(-1, 2)
+        out[todo, :2] = centres[pick]
         return out
 
 

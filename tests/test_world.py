@@ -181,11 +181,6 @@ def _occupancy_checks(seg, res=RES):
     return occ
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="rasterise_segments samples every quarter cell, so it can skip a cell "
-    "whose corner the segment only clips (its docstring promises every cell)",
-)
 def test_occupancy_grid_marks_cells_clipped_at_a_corner():
     seg = [0.33, 0.21, 3.61, 2.74]
     occ = World([seg], bounds=(0, 0, 4, 3)).occupancy_grid(RES)
@@ -257,11 +252,6 @@ def test_sample_free_poses_reproducible_and_in_the_room():
     assert 0.3 < np.mean(a[:, 0] < 2.0) < 0.7
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="sample_free_poses jitters within cells whose centre is free, so a "
-    "pose may lie up to half a cell diagonal closer to a wall than the radius",
-)
 def test_sample_free_poses_are_all_free():
     w = room_world()
     a = w.sample_free_poses(5000, rng=0, resolution=RES)
