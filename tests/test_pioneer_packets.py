@@ -111,8 +111,9 @@ def test_si_scaling_of_each_command():
     }
     for name, (si, wire) in cases.items():
         assert decode_arg(unframe(encode_si(name, si)).data) == wire, name
-    # HEAD is absolute: 270 deg goes out as -90
-    assert decode_arg(unframe(encode_si("HEAD", math.radians(270))).data) == -90
+    # HEAD is absolute, 0-359 deg on the wire
+    assert decode_arg(unframe(encode_si("HEAD", math.radians(-90))).data) == 270
+    assert decode_arg(unframe(encode_si("HEAD", math.radians(359.7))).data) == 0
     for bare in ("STOP", "PULSE", "SETO", "ESTOP", "SIM_RESET"):
         assert unframe(encode_si(bare)).data == b""
     assert decode_arg(unframe(encode_si("SONAR", False)).data) == 0
@@ -153,7 +154,8 @@ def test_scaled_command_round_trip(name, wire):
 @given(deg=st.integers(-179, 180))
 def test_head_round_trip(deg):
     cmd = decode_si(unframe(encode_si("HEAD", math.radians(deg))))
-    assert math.degrees(cmd.value) == pytest.approx(deg)
+    assert 0 <= math.degrees(cmd.value) < 360
+    assert math.remainder(math.degrees(cmd.value) - deg, 360) == pytest.approx(0)
 
 
 @settings(max_examples=100, deadline=None)

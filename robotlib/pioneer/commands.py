@@ -78,7 +78,7 @@ SI_SCALE: dict[str, float] = {
     "VEL": _MM,  # m/s -> mm/s
     "SETV": _MM,  # m/s -> mm/s
     "SETA": _MM,  # m/s^2 -> mm/s^2 (negative: deceleration)
-    "HEAD": _DEG,  # rad -> deg (absolute, odometry frame)
+    "HEAD": _DEG,  # rad -> deg (absolute, odometry frame; sent as 0-359)
     "DHEAD": _DEG,  # rad -> deg
     "RVEL": _DEG,  # rad/s -> deg/s
     "ROTATE": _DEG,  # rad/s -> deg/s
@@ -174,8 +174,8 @@ def encode_si(name: str, value=None, vel2_divisor: float = VEL2_DIVISOR) -> byte
     if name in SI_SCALE:
         if value is None:
             raise ValueError(f"{name} needs a value")
-        if name == "HEAD":
-            value = math.remainder(float(value), 2 * math.pi)
+        if name == "HEAD":  # absolute heading, sent as 0-359 deg as ARCOS documents
+            return command(number, _to_int(name, value, SI_SCALE[name]) % 360)
         return command(number, _to_int(name, value, SI_SCALE[name]))
     if name in _FLAGS:
         return command(number, 1 if value is None else int(bool(value)))

@@ -82,7 +82,10 @@ class Session:
         self.body = body
         self.ident = (name, robot_class, subclass)
         self.factors: ConvFactors = factors_for(subclass)
-        self.config = default_config(name=name, subtype=subclass, **(config or {}))
+        wd = int(watchdog * 1000)
+        self.config = default_config(
+            **{"name": name, "subtype": subclass, "watchdog": wd, **(config or {})}
+        )
         self.watchdog = watchdog
         self.clock = clock
         self.decoder = PacketDecoder()
