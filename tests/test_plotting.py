@@ -1,0 +1,83 @@
+import matplotlib
+
+matplotlib.use("Agg")
+
+import matplotlib.pyplot as plt
+import numpy as np
+import pytest
+
+from robotlib import load_world
+from robotlib import plotting as rp
+from robotlib.sonar import expected_ranges
+
+
+@pytest.fixture
+def ax():
+    fig, ax = plt.subplots()
+    yield ax
+    plt.close(fig)
+
+
+def test_world_is_drawn_in_metres_with_equal_axes(ax):
+    world = load_world("office")
+    walls = rp.plot_world(ax, world)
+    assert len(walls.get_segments()) == len(world.segments)
+    assert ax.get_xlim() == (world.bounds[0], world.bounds[2])
+    assert ax.get_aspect() == 1.0
+    assert ax.get_xlabel() == "x [m]"
+
+
+def test_robot_footprint_is_placed_and_turned(ax):
+    patch = rp.plot_robot(ax, (2.0, 1.0, np.pi / 2))
+    xy = patch.get_xy()
+    # Turned 90 degrees: the 0.425 m width lies along x, the length along y.
+    assert np.ptp(xy[:, 0]) == pytest.approx(0.425)
+    assert np.ptp(xy[:, 1]) == pytest.approx(0.511)
+    assert xy[:, 1].max() == pytest.approx(1.0 + 0.210)
+
+
+def test_sonar_cones_reach_their_readings_and_no_echo_is_faint(ax):
+    world = load_world("corridor")
+    z = expected_ranges(world, world.start)[0]
+    z[3] = 5.0
+    cones = rp.plot_sonar(ax, world.start, z)
+    # Each cone's outline reaches out to its reading from its sonar.
+    x, y, _ = world.start
+    for path, r in zip(cones.get_paths(), z, strict=True):
+        far = np.hypot(path.vertices[:, 0] - x, path.vertices[:, 1] - y).max()
+        assert far == pytest.approx(r, abs=0.2)
+    alphas = cones.get_facecolor()[:, 3]
+    assert len(alphas) == 8
+    assert alphas[3] < alphas[0]
+
+
+def test_trajectories_and_particles(ax):
+    line = rp.plot_trajectory(
+        ax, np.array([[0, 0, 0], [1, 1, 0], [2, 1, 0]]), label="true"
+    )
+    assert line.get_label() == "true"
+    np.testing.assert_array_equal(line.get_xdata(), [0, 1, 2])
+    particles = load_world("arena").sample_free_poses(50, rng=0)
+    dots = rp.plot_particles(ax, particles, weights=np.linspace(0, 1, 50))
+    assert dots.get_offsets().shape == (50, 2)
+    sizes = dots.get_sizes()
+    assert sizes[-1] > sizes[0]
+
+
+def test_grid_shows_in_world_coordinates(ax):
+    grid = load_world("maze").occupancy_grid(0.1)
+    image = rp.plot_grid(ax, grid)
+    assert image.get_extent() == list(grid.extent)
+
+
+def test_animation_is_html_with_a_bounded_frame_count():
+    fig, ax = plt.subplots()
+    drawn = []
+    page = rp.animate(fig, drawn.append, 1000, max_frames=12)
+    assert "<script" in page.data
+    # Thinned to at most 12 frames, first and last kept (each drawn once more
+    # at most by matplotlib's initial draw).
+    assert set(drawn) <= set(range(1000))
+    assert 0 in drawn and 999 in drawn
+    assert len(set(drawn)) <= 12
+    assert not plt.fignum_exists(fig.number)
