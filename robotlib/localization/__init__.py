@@ -1,0 +1,73 @@
+"""Monte Carlo localization: the paper's filter and the standard alternatives.
+
+Procedural pieces (what a lab asks students to write) are in
+`robotlib.localization.paper`; `MCL` composes a motion model
+(`OdometryMotionModel`), a sensor model (`PaperSensorModel`,
+`BeamSensorModel`, `LikelihoodFieldSensorModel`) and a resampling policy
+(`PaperResampling`, `ThresholdResampling`, `KLDResampling`), optionally with
+augmented MCL's `AugmentedInjection`. `History` records a run from outside.
+"""
+
+from . import paper
+from .history import History, localized_step
+from .kld import kld_bound, kld_resample
+from .mcl import (
+    BEST,
+    MCL,
+    AugmentedInjection,
+    KLDResampling,
+    PaperResampling,
+    StepInfo,
+    ThresholdResampling,
+)
+from .motion import OdometryMotionModel, odometry_increment, sample_motion_odometry
+from .resampling import (
+    RESAMPLERS,
+    effective_sample_size,
+    multinomial_resample,
+    residual_resample,
+    stratified_resample,
+    systematic_resample,
+)
+from .sensors import (
+    BeamParameters,
+    BeamSensorModel,
+    ConeTable,
+    LikelihoodFieldSensorModel,
+    PaperSensorModel,
+    cone_table,
+    expected_readings,
+    innovation_loglik,
+)
+
+__all__ = [
+    "BEST",
+    "MCL",
+    "RESAMPLERS",
+    "AugmentedInjection",
+    "BeamParameters",
+    "BeamSensorModel",
+    "ConeTable",
+    "History",
+    "KLDResampling",
+    "LikelihoodFieldSensorModel",
+    "OdometryMotionModel",
+    "PaperResampling",
+    "PaperSensorModel",
+    "StepInfo",
+    "ThresholdResampling",
+    "cone_table",
+    "effective_sample_size",
+    "expected_readings",
+    "innovation_loglik",
+    "kld_bound",
+    "kld_resample",
+    "localized_step",
+    "multinomial_resample",
+    "odometry_increment",
+    "paper",
+    "residual_resample",
+    "sample_motion_odometry",
+    "stratified_resample",
+    "systematic_resample",
+]

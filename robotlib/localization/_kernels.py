@@ -1,0 +1,686 @@
+"""Numba kernels for Monte Carlo localization.
+
+Every kernel takes contiguous arrays and scalars only; random numbers are
+drawn by the caller's ``numpy.random.Generator`` and passed in, so a seed
+reproduces a run bit for bit. Kernels that come in a serial and a parallel
+form share a per-particle body; the parallel loops write only their own slot,
+and every sum is taken serially, so both forms give identical results.
+
+Units: metres, radians; lookup tables hold millimetres (uint16).
+"""
+
+import math
+
+import numba as nb
+import numpy as np
+
+from .._config import JIT, JIT_PARALLEL
+from .._geometry import point_segment_distance
+from .._raycast import sonar_cone
+
+_TWO_PI = 2.0 * math.pi
+_LOG_SQRT_2PI = 0.5 * math.log(2.0 * math.pi)
+
+
+@nb.njit(**JIT)
+def wrap(a):
+    """Wrap an angle to (-pi, pi]."""
+    w = a - _TWO_PI * math.floor((a + math.pi) / _TWO_PI)
+    if w <= -math.pi:
+        w += _TWO_PI
+    elif w > math.pi:
+        w -= _TWO_PI
+    return w
+
+
+# -- motion ---------------------------------------------------------------------
+
+
+@nb.njit(**JIT)
+def _odometry_one(j, particles, rot1, trans, rot2, sd1, sdt, sd2, normals, out):
+    r1 = rot1 + sd1 * normals[j, 0]
+    t = trans + sdt * normals[j, 1]
+    r2 = rot2 + sd2 * normals[j, 2]
+    th = particles[j, 2]
+    out[j, 0] = particles[j, 0] + t * math.cos(th + r1)
+    out[j, 1] = particles[j, 1] + t * math.sin(th + r1)
+    out[j, 2] = wrap(th + r1 + r2)
+
+
+@nb.njit(**JIT)
+def sample_odometry(particles, rot1, trans, rot2, sd1, sdt, sd2, normals, out):
+    """Move particles (N, 3) by ``rot1, trans, rot2`` plus noise into ``out``.
+
+    Each increment gets its standard deviation (``sd1, sdt, sd2``) times the
+    caller's standard normals ``normals`` (N, 3).
+    """
+    for j in range(particles.shape[0]):
+        _odometry_one(j, particles, rot1, trans, rot2, sd1, sdt, sd2, normals, out)
+
+
+@nb.njit(**JIT_PARALLEL)
+def sample_odometry_parallel(particles, rot1, trans, rot2, sd1, sdt, sd2, normals, out):
+    """`sample_odometry` over threads."""
+    for j in nb.prange(particles.shape[0]):
+        _odometry_one(j, particles, rot1, trans, rot2, sd1, sdt, sd2, normals, out)
+
+
+# -- expected sonar readings: exact (cone cast per particle) ------------------
+
+
+@nb.njit(**JIT)
+def _expected_one(
+    j,
+    particles,
+    sensors,
+    segments,
+    n_rays,
+    cone,
+    max_range,
+    min_range,
+    cos_specular,
+    out,
+):
+    c = math.cos(particles[j, 2])
+    s = math.sin(particles[j, 2])
+    for i in range(sensors.shape[0]):
+        sx = particles[j, 0] + c * sensors[i, 0] - s * sensors[i, 1]
+        sy = particles[j, 1] + s * sensors[i, 0] + c * sensors[i, 1]
+        echo, _ = sonar_cone(
+            sx,
+            sy,
+            particles[j, 2] + sensors[i, 2],
+            segments,
+            n_rays,
+            cone,
+            max_range,
+            cos_specular,
+        )
+        z = max_range if echo >= max_range else echo
+        out[j, i] = min(max(z, min_range), max_range)
+
+
+@nb.njit(**JIT)
+def expected_exact(
+    particles, sensors, segments, n_rays, cone, max_range, min_range, cos_specular, out
+):
+    """Noise-free sonar ranges ``out`` (N, S) of particles (N, 3), by cone casts.
+
+    The same model as `robotlib.sonar.expected_ranges` (first echo in the
+    cone, specular misses, clipped to ``[min_range, max_range]``).
+    """
+    for j in range(particles.shape[0]):
+        _expected_one(
+            j,
+            particles,
+            sensors,
+            segments,
+            n_rays,
+            cone,
+            max_range,
+            min_range,
+            cos_specular,
+            out,
+        )
+
+
+@nb.njit(**JIT_PARALLEL)
+def expected_exact_parallel(
+    particles, sensors, segments, n_rays, cone, max_range, min_range, cos_specular, out
+):
+    """`expected_exact` over threads."""
+    for j in nb.prange(particles.shape[0]):
+        _expected_one(
+            j,
+            particles,
+            sensors,
+            segments,
+            n_rays,
+            cone,
+            max_range,
+            min_range,
+            cos_specular,
+            out,
+        )
+
+
+# -- expected sonar readings: fast (cone table lookup) -----------------------
+
+
+@nb.njit(**JIT_PARALLEL)
+def build_cone_table(
+    segments,
+    x0,
+    y0,
+    resolution,
+    n_bins,
+    ray_step,
+    n_rays,
+    cone,
+    max_range,
+    min_range,
+    cos_specular,
+    table,
+):
+    """Fill ``table`` (ny, nx, n_bins) uint16 with cone ranges in mm.
+
+    ``table[i, j, b]`` is the expected range of a sonar at the centre of cell
+    ``(i, j)`` pointing along ``b * 2 pi / n_bins``. When the cone's rays are
+    ``ray_step`` bins apart (``ray_step > 0``) each direction's single ray is
+    cast once and a cone is the nearest echo of its ``n_rays`` rays, which is
+    what `sonar_cone` computes; otherwise (``ray_step == 0``) every cone is
+    cast with `sonar_cone`.
+    """
+    ny, nx, _ = table.shape
+    half = (n_rays - 1) // 2 if n_rays > 1 else 0
+    for i in nb.prange(ny):
+        rays = np.empty(n_bins)
+        cy = y0 + (i + 0.5) * resolution
+        for j in range(nx):
+            cx = x0 + (j + 0.5) * resolution
+            if ray_step > 0:
+                for b in range(n_bins):
+                    echo, _ = sonar_cone(
+                        cx,
+                        cy,
+                        b * _TWO_PI / n_bins,
+                        segments,
+                        1,
+                        0.0,
+                        max_range,
+                        cos_specular,
+                    )
+                    rays[b] = echo
+            for b in range(n_bins):
+                if ray_step > 0:
+                    echo = np.inf
+                    for k in range(-half, half + 1):
+                        r = rays[(b + k * ray_step) % n_bins]
+                        if r < echo:
+                            echo = r
+                else:
+                    echo, _ = sonar_cone(
+                        cx,
+                        cy,
+                        b * _TWO_PI / n_bins,
+                        segments,
+                        n_rays,
+                        cone,
+                        max_range,
+                        cos_specular,
+                    )
+                z = max_range if echo >= max_range else echo
+                z = min(max(z, min_range), max_range)
+                table[i, j, b] = np.uint16(round(z * 1000.0))
+
+
+@nb.njit(**JIT)
+def _lookup_one(j, particles, sensors, table, x0, y0, inv_res, out):
+    ny, nx, n_bins = table.shape
+    c = math.cos(particles[j, 2])
+    s = math.sin(particles[j, 2])
+    bins_per_rad = n_bins / _TWO_PI
+    for i in range(sensors.shape[0]):
+        sx = particles[j, 0] + c * sensors[i, 0] - s * sensors[i, 1]
+        sy = particles[j, 1] + s * sensors[i, 0] + c * sensors[i, 1]
+        col = int(math.floor((sx - x0) * inv_res))
+        row = int(math.floor((sy - y0) * inv_res))
+        col = min(max(col, 0), nx - 1)
+        row = min(max(row, 0), ny - 1)
+        b = int(math.floor((particles[j, 2] + sensors[i, 2]) * bins_per_rad + 0.5))
+        b = b % n_bins
+        out[j, i] = table[row, col, b] * 0.001
+
+
+@nb.njit(**JIT)
+def expected_table(particles, sensors, table, x0, y0, inv_res, out):
+    """Sonar ranges ``out`` (N, S) looked up in a cone table (see `build_cone_table`).
+
+    Each sensor's position selects the cell (clamped to the grid) and its
+    heading the nearest direction bin.
+    """
+    for j in range(particles.shape[0]):
+        _lookup_one(j, particles, sensors, table, x0, y0, inv_res, out)
+
+
+@nb.njit(**JIT_PARALLEL)
+def expected_table_parallel(particles, sensors, table, x0, y0, inv_res, out):
+    """`expected_table` over threads."""
+    for j in nb.prange(particles.shape[0]):
+        _lookup_one(j, particles, sensors, table, x0, y0, inv_res, out)
+
+
+# -- sensor models: log-likelihood per particle from expected readings --------
+
+
+@nb.njit(**JIT)
+def paper_loglik(z, zhat, n, out):
+    """Compute the paper's innovation weight as a log: ``log(exp(-d_j) + 1/n)``.
+
+    ``d_j = mean_i |(z_i - zhat_ji) / z_i|``; ``z`` (S,), ``zhat`` (N, S).
+    """
+    s_count = z.shape[0]
+    for j in range(zhat.shape[0]):
+        d = 0.0
+        for i in range(s_count):
+            d += abs((z[i] - zhat[j, i]) / z[i])
+        out[j] = math.log(math.exp(-d / s_count) + 1.0 / n)
+
+
+@nb.njit(**JIT)
+def _beam_prob(z, zhat, max_range, z_hit, z_short, z_max, z_rand, sigma, lam_short):
+    """Thrun's beam model mixture ``p(z | zhat)`` for one beam."""
+    p = 0.0
+    if z < max_range:
+        # hit: Gaussian around zhat, normalised over [0, max_range]
+        u = (z - zhat) / sigma
+        mass = 0.5 * (
+            math.erf((max_range - zhat) / (sigma * math.sqrt(2.0)))
+            - math.erf(-zhat / (sigma * math.sqrt(2.0)))
+        )
+        if mass > 0.0:
+            p += z_hit * math.exp(-0.5 * u * u - _LOG_SQRT_2PI) / sigma / mass
+        # short: exponential up to zhat, normalised over [0, zhat]
+        if z <= zhat and zhat > 0.0:
+            p += (
+                z_short
+                * lam_short
+                * math.exp(-lam_short * z)
+                / (1.0 - math.exp(-lam_short * zhat))
+            )
+        p += z_rand / max_range
+    else:
+        p += z_max
+    return p
+
+
+@nb.njit(**JIT)
+def beam_loglik(
+    z, zhat, max_range, z_hit, z_short, z_max, z_rand, sigma, lam_short, out
+):
+    """Beam model log-likelihood ``out[j] = sum_i log p(z_i | zhat_ji)``.
+
+    A reading at or beyond ``max_range`` (to 1 mm) is a "max" reading.
+    """
+    zmax_eps = max_range - 1e-3
+    for j in range(zhat.shape[0]):
+        ll = 0.0
+        for i in range(z.shape[0]):
+            zi = z[i] if z[i] < zmax_eps else max_range
+            ll += math.log(
+                _beam_prob(
+                    zi,
+                    zhat[j, i],
+                    max_range,
+                    z_hit,
+                    z_short,
+                    z_max,
+                    z_rand,
+                    sigma,
+                    lam_short,
+                )
+            )
+        out[j] = ll
+
+
+@nb.njit(**JIT)
+def _field_one(
+    j,
+    particles,
+    sensors,
+    z,
+    max_range,
+    z_hit,
+    z_rand,
+    sigma,
+    field,
+    segments,
+    x0,
+    y0,
+    inv_res,
+    far,
+    out,
+):
+    c = math.cos(particles[j, 2])
+    s = math.sin(particles[j, 2])
+    ny, nx = field.shape
+    ll = 0.0
+    for i in range(sensors.shape[0]):
+        if z[i] >= max_range - 1e-3:
+            continue
+        sx = particles[j, 0] + c * sensors[i, 0] - s * sensors[i, 1]
+        sy = particles[j, 1] + s * sensors[i, 0] + c * sensors[i, 1]
+        a = particles[j, 2] + sensors[i, 2]
+        ex = sx + z[i] * math.cos(a)
+        ey = sy + z[i] * math.sin(a)
+        if segments.shape[0] > 0:
+            d = np.inf
+            for m in range(segments.shape[0]):
+                dm = point_segment_distance(
+                    ex,
+                    ey,
+                    segments[m, 0],
+                    segments[m, 1],
+                    segments[m, 2],
+                    segments[m, 3],
+                )
+                if dm < d:
+                    d = dm
+        else:
+            col = int(math.floor((ex - x0) * inv_res))
+            row = int(math.floor((ey - y0) * inv_res))
+            if 0 <= row < ny and 0 <= col < nx:
+                d = field[row, col]
+            else:
+                d = far
+        u = d / sigma
+        ll += math.log(
+            z_hit * math.exp(-0.5 * u * u - _LOG_SQRT_2PI) / sigma + z_rand / max_range
+        )
+    out[j] = ll
+
+
+@nb.njit(**JIT)
+def field_loglik(
+    particles,
+    sensors,
+    z,
+    max_range,
+    z_hit,
+    z_rand,
+    sigma,
+    field,
+    segments,
+    x0,
+    y0,
+    inv_res,
+    far,
+    out,
+):
+    """Likelihood-field log-likelihood of readings ``z`` (S,) for particles (N, 3).
+
+    Each reading below ``max_range`` puts an end point on its sensor's axis;
+    ``p = z_hit N(d; 0, sigma) + z_rand / max_range`` with ``d`` the end
+    point's distance to the nearest obstacle: exact to ``segments`` when
+    there are any (M > 0), else looked up in ``field`` (ny, nx) float32, m
+    (``far`` outside the grid). Max readings are skipped.
+    """
+    for j in range(particles.shape[0]):
+        _field_one(
+            j,
+            particles,
+            sensors,
+            z,
+            max_range,
+            z_hit,
+            z_rand,
+            sigma,
+            field,
+            segments,
+            x0,
+            y0,
+            inv_res,
+            far,
+            out,
+        )
+
+
+@nb.njit(**JIT_PARALLEL)
+def field_loglik_parallel(
+    particles,
+    sensors,
+    z,
+    max_range,
+    z_hit,
+    z_rand,
+    sigma,
+    field,
+    segments,
+    x0,
+    y0,
+    inv_res,
+    far,
+    out,
+):
+    """`field_loglik` over threads."""
+    for j in nb.prange(particles.shape[0]):
+        _field_one(
+            j,
+            particles,
+            sensors,
+            z,
+            max_range,
+            z_hit,
+            z_rand,
+            sigma,
+            field,
+            segments,
+            x0,
+            y0,
+            inv_res,
+            far,
+            out,
+        )
+
+
+# -- weights, estimate ------------------------------------------------------------
+
+
+@nb.njit(**JIT)
+def update_weights(weights, loglik, out):
+    """Bayes update ``out ∝ weights * exp(loglik)``, normalised in place.
+
+    Returns ``(log_mean, ess)``: the log of ``sum_j weights_j exp(loglik_j)``
+    (``weights`` summing to 1, so the mean likelihood) and the effective
+    sample size ``1 / sum out_j^2`` of the result.
+    """
+    n = weights.shape[0]
+    top = -np.inf
+    for j in range(n):
+        if loglik[j] > top:
+            top = loglik[j]
+    total = 0.0
+    for j in range(n):
+        out[j] = weights[j] * math.exp(loglik[j] - top)
+        total += out[j]
+    wsum = 0.0
+    for j in range(n):
+        wsum += weights[j]
+    sq = 0.0
+    for j in range(n):
+        out[j] /= total
+        sq += out[j] * out[j]
+    return top + math.log(total / wsum), 1.0 / sq
+
+
+@nb.njit(**JIT)
+def weighted_pose_mean(particles, weights):
+    """Weighted mean of ``x, y`` and circular mean of ``theta``; returns (3,)."""
+    sx = 0.0
+    sy = 0.0
+    sc = 0.0
+    ss = 0.0
+    sw = 0.0
+    for j in range(particles.shape[0]):
+        w = weights[j]
+        sx += w * particles[j, 0]
+        sy += w * particles[j, 1]
+        sc += w * math.cos(particles[j, 2])
+        ss += w * math.sin(particles[j, 2])
+        sw += w
+    out = np.empty(3)
+    out[0] = sx / sw
+    out[1] = sy / sw
+    out[2] = math.atan2(ss, sc)
+    return out
+
+
+@nb.njit(**JIT)
+def position_spread(particles, idx):
+    """``sqrt(var_x + var_y)`` of the particles ``particles[idx]`` (unweighted)."""
+    n = idx.shape[0]
+    mx = 0.0
+    my = 0.0
+    for k in range(n):
+        mx += particles[idx[k], 0]
+        my += particles[idx[k], 1]
+    mx /= n
+    my /= n
+    v = 0.0
+    for k in range(n):
+        dx = particles[idx[k], 0] - mx
+        dy = particles[idx[k], 1] - my
+        v += dx * dx + dy * dy
+    return math.sqrt(v / n)
+
+
+# -- resampling ---------------------------------------------------------------------
+
+
+@nb.njit(**JIT)
+def cumulative(weights):
+    """Cumulative sum of weights with the last entry forced to exactly 1."""
+    n = weights.shape[0]
+    c = np.empty(n)
+    total = 0.0
+    for j in range(n):
+        total += weights[j]
+        c[j] = total
+    for j in range(n):
+        c[j] /= total
+    c[n - 1] = 1.0
+    return c
+
+
+@nb.njit(**JIT)
+def search_indexes(cum, positions, out):
+    """``out[k]`` = first ``j`` with ``cum[j] > positions[k]`` (binary search)."""
+    n = cum.shape[0]
+    for k in range(positions.shape[0]):
+        u = positions[k]
+        lo = 0
+        hi = n - 1
+        while lo < hi:
+            mid = (lo + hi) // 2
+            if cum[mid] > u:
+                hi = mid
+            else:
+                lo = mid + 1
+        out[k] = lo
+
+
+@nb.njit(**JIT)
+def sorted_indexes(cum, positions, out):
+    """As `search_indexes` for increasing ``positions``, by one merge pass."""
+    n = cum.shape[0]
+    j = 0
+    for k in range(positions.shape[0]):
+        while j < n - 1 and cum[j] <= positions[k]:
+            j += 1
+        out[k] = j
+
+
+@nb.njit(**JIT)
+def kld_bound(k, epsilon, z):
+    """Fox's KLD bound: particles needed for ``k`` occupied bins.
+
+    ``n = (k-1)/(2 eps) * (1 - 2/(9(k-1)) + sqrt(2/(9(k-1))) z)^3``, with
+    ``z`` the upper ``1 - delta`` quantile of the standard normal.
+    """
+    if k <= 1:
+        return 1.0
+    a = 2.0 / (9.0 * (k - 1))
+    b = 1.0 - a + math.sqrt(a) * z
+    return (k - 1) / (2.0 * epsilon) * b * b * b
+
+
+@nb.njit(**JIT)
+def kld_resample(
+    particles,
+    cum,
+    uniforms,
+    x0,
+    y0,
+    bin_xy,
+    bin_theta,
+    nbx,
+    nby,
+    nbt,
+    epsilon,
+    z,
+    n_min,
+    occupied,
+    out,
+):
+    """KLD-sampling: draw by ``uniforms`` until the bound for the bins is met.
+
+    Draws particle indexes one at a time (``uniforms`` (n_max,) in [0, 1),
+    searched in ``cum``), counts the distinct ``(x, y, theta)`` bins of the
+    drawn particles in ``occupied`` (nby * nbx * nbt bools, all False on
+    entry and on exit), and stops at ``n >= max(n_min, kld_bound(k))`` or
+    when the uniforms run out. Writes indexes into ``out`` and returns the
+    count.
+    """
+    n_max = uniforms.shape[0]
+    n_cum = cum.shape[0]
+    k = 0
+    n = 0
+    while n < n_max:
+        u = uniforms[n]
+        lo = 0
+        hi = n_cum - 1
+        while lo < hi:
+            mid = (lo + hi) // 2
+            if cum[mid] > u:
+                hi = mid
+            else:
+                lo = mid + 1
+        out[n] = lo
+        bx = int(math.floor((particles[lo, 0] - x0) / bin_xy))
+        by = int(math.floor((particles[lo, 1] - y0) / bin_xy))
+        bt = int(math.floor((particles[lo, 2] + math.pi) / bin_theta))
+        bx = min(max(bx, 0), nbx - 1)
+        by = min(max(by, 0), nby - 1)
+        bt = min(max(bt, 0), nbt - 1)
+        cell = (by * nbx + bx) * nbt + bt
+        if not occupied[cell]:
+            occupied[cell] = True
+            k += 1
+        n += 1
+        if n >= n_min and n >= kld_bound(k, epsilon, z):
+            break
+    for m in range(n):
+        lo = out[m]
+        bx = int(math.floor((particles[lo, 0] - x0) / bin_xy))
+        by = int(math.floor((particles[lo, 1] - y0) / bin_xy))
+        bt = int(math.floor((particles[lo, 2] + math.pi) / bin_theta))
+        bx = min(max(bx, 0), nbx - 1)
+        by = min(max(by, 0), nby - 1)
+        bt = min(max(bt, 0), nbt - 1)
+        occupied[(by * nbx + bx) * nbt + bt] = False
+    return n
+
+
+@nb.njit(**JIT)
+def gather(particles, idx, out):
+    """``out[k] = particles[idx[k]]`` for (N, 3) particles."""
+    for k in range(idx.shape[0]):
+        j = idx[k]
+        out[k, 0] = particles[j, 0]
+        out[k, 1] = particles[j, 1]
+        out[k, 2] = particles[j, 2]
+
+
+@nb.njit(**JIT)
+def outside(particles, admissible, x0, y0, inv_res, out):
+    """``out[j]`` True where particle ``j`` is not on an admissible cell."""
+    ny, nx = admissible.shape
+    count = 0
+    for j in range(particles.shape[0]):
+        col = int(math.floor((particles[j, 0] - x0) * inv_res))
+        row = int(math.floor((particles[j, 1] - y0) * inv_res))
+        bad = not (0 <= row < ny and 0 <= col < nx and admissible[row, col])
+        out[j] = bad
+        if bad:
+            count += 1
+    return count

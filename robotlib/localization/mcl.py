@@ -1,0 +1,502 @@
+"""The `MCL` object: a particle filter composed of models and a resampler.
+
+A motion model, a sensor model and a resampling policy make the filter.
+
+One `MCL.step` is: predict with the odometry increment, weight by the scan
+(``w <- w * p(z | x)``, normalised), estimate (weighted mean, circular mean
+of the heading), resample when the policy says so (optionally injecting
+random particles, augmented MCL), and replace particles that left the
+admissible area (the paper's step 3). `MCL.paper` builds the paper's filter
+exactly; `MCL.best` the strongest configuration this project offers.
+
+Resampling policies (each a small frozen dataclass):
+
+- `PaperResampling`: every step, multinomial selection, then the paper's
+  resize ``N = int(N exp(-lambda Ip))`` with a floor;
+- `ThresholdResampling`: a resampler from `robotlib.localization.resampling`
+  run only when the effective sample size falls below a share of ``N``;
+- `KLDResampling`: KLD-sampling, every step (or below an ESS threshold).
+
+`AugmentedInjection` adds augmented MCL's random particles (Thrun, table 8.3).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..world import World
+from . import _kernels
+from .kld import kld_resample
+from .motion import OdometryMotionModel, _particles
+from .paper import (
+    ADMISSIBLE_RADIUS,
+    REGEN_WEIGHT,
+    RESIZE_FLOOR,
+    resize,
+)
+from .resampling import RESAMPLERS, multinomial_resample
+
+__all__ = [
+    "MCL",
+    "PaperResampling",
+    "ThresholdResampling",
+    "KLDResampling",
+    "AugmentedInjection",
+    "StepInfo",
+]
+
+
+@dataclass(frozen=True)
+class PaperResampling:
+    """The paper's resampling: select (multinomial) then resize.
+
+    Attributes
+    ----------
+    lam : float
+        The paper's lambda in ``N = int(N exp(-lambda Ip))``; 0 keeps ``N``.
+    floor : int
+        Smallest population the resize leaves (the paper gives none).
+    """
+
+    lam: float = 0.5
+    floor: int = RESIZE_FLOOR
+
+    def indexes(self, mcl: MCL) -> np.ndarray:
+        """Indexes of the new particle set (the resize truncates i.i.d. draws)."""
+        p, w = mcl.particles, mcl.weights
+        idx = multinomial_resample(w, mcl.rng)
+        ip = _kernels.position_spread(p, idx) / mcl.map_diagonal
+        n = resize(len(idx), ip, self.lam, self.floor)
+        return idx[:n]
+
+
+@dataclass(frozen=True)
+class ThresholdResampling:
+    """Resample with a named resampler when ``ESS < threshold * N``.
+
+    Attributes
+    ----------
+    method : str
+        A key of `robotlib.localization.resampling.RESAMPLERS`
+        (``"systematic"`` / ``"low_variance"``, ``"stratified"``,
+        ``"multinomial"``, ``"residual"``).
+    threshold : float
+        Share of ``N``; 1.0 (or more) resamples every step.
+    """
+
+    method: str = "systematic"
+    threshold: float = 0.5
+
+    def __post_init__(self):
+        if self.method not in RESAMPLERS:
+            raise ValueError(f"unknown resampler {self.method!r}")
+
+    def indexes(self, mcl: MCL) -> np.ndarray | None:
+        """Indexes of the new set, or None to keep the weighted set."""
+        n = len(mcl.weights)
+        if mcl.ess >= self.threshold * n and self.threshold < 1.0:
+            return None
+        return RESAMPLERS[self.method](mcl.weights, mcl.rng)
+
+
+@dataclass(frozen=True)
+class KLDResampling:
+    """KLD-sampling (see `robotlib.localization.kld`).
+
+    Attributes
+    ----------
+    n_min, n_max : int
+        Fewest and most particles.
+    epsilon, delta : float
+        KL bound and its confidence.
+    bin_xy, bin_theta : float
+        Bin sizes, m and rad.
+    threshold : float
+        Resample when ``ESS < threshold * N``; 1.0 resamples every step.
+    """
+
+    n_min: int = 300
+    n_max: int = 10_000
+    epsilon: float = 0.05
+    delta: float = 0.01
+    bin_xy: float = 0.5
+    bin_theta: float = math.radians(15.0)
+    threshold: float = 1.0
+
+    def indexes(self, mcl: MCL) -> np.ndarray | None:
+        """Indexes of the new set, or None to keep the weighted set."""
+        n = len(mcl.weights)
+        if self.threshold < 1.0 and mcl.ess >= self.threshold * n:
+            return None
+        return kld_resample(
+            mcl.particles,
+            mcl.weights,
+            mcl.world.bounds,
+            mcl.rng,
+            self.n_min,
+            self.n_max,
+            self.epsilon,
+            self.delta,
+            self.bin_xy,
+            self.bin_theta,
+        )
+
+
+@dataclass
+class AugmentedInjection:
+    """Augmented MCL: inject random particles when the likelihood drops.
+
+    Short- and long-term averages of the mean likelihood ``w_avg`` of each
+    scan, ``w_fast += alpha_fast (w_avg - w_fast)`` and ``w_slow +=
+    alpha_slow (w_avg - w_slow)``, with ``alpha_slow << alpha_fast``; when
+    resampling, each new particle is replaced by a uniformly drawn one with
+    probability ``max(0, 1 - w_fast / w_slow)``. Both averages start at the
+    first scan's ``w_avg``.
+
+    Attributes
+    ----------
+    alpha_slow, alpha_fast : float
+        Smoothing rates, ``0 < alpha_slow < alpha_fast <= 1``.
+    """
+
+    alpha_slow: float = 0.05
+    alpha_fast: float = 0.5
+    w_slow: float = float("nan")
+    w_fast: float = float("nan")
+
+    def __post_init__(self):
+        if not 0 < self.alpha_slow < self.alpha_fast <= 1:
+            raise ValueError("need 0 < alpha_slow < alpha_fast <= 1")
+
+    def update(self, log_mean_likelihood: float) -> None:
+        """Feed one scan's log mean likelihood."""
+        w_avg = math.exp(log_mean_likelihood)
+        if math.isnan(self.w_slow):
+            self.w_slow = self.w_fast = w_avg
+        else:
+            self.w_slow += self.alpha_slow * (w_avg - self.w_slow)
+            self.w_fast += self.alpha_fast * (w_avg - self.w_fast)
+
+    @property
+    def probability(self) -> float:
+        """Probability that a resampled particle is replaced by a random one."""
+        if not self.w_slow > 0:
+            return 0.0
+        return max(0.0, 1.0 - self.w_fast / self.w_slow)
+
+    def reset(self) -> None:
+        """Forget the averages."""
+        self.w_slow = self.w_fast = float("nan")
+
+
+@dataclass(frozen=True)
+class StepInfo:
+    """What one `MCL.step` did.
+
+    Attributes
+    ----------
+    n_particles : int
+        Particles weighted this step.
+    ess : float
+        Effective sample size after weighting.
+    resampled : bool
+        Whether the set was resampled.
+    n_after : int
+        Particles after resampling (the next step's count).
+    injected, regenerated : int
+        Random particles added by augmented MCL, and by the admissibility
+        check.
+    log_mean_likelihood : float
+        Log of the scan's mean likelihood under the prior weights.
+    """
+
+    n_particles: int
+    ess: float
+    resampled: bool
+    n_after: int
+    injected: int
+    regenerated: int
+    log_mean_likelihood: float
+
+
+class MCL:
+    """Monte Carlo localization, by composition.
+
+    Parameters
+    ----------
+    world : World
+        The map (admissible area, random particles, bins).
+    sensor : object
+        A sensor model with ``log_likelihood(particles, z) -> (N,)``
+        (`robotlib.localization.sensors`).
+    motion : object, optional
+        A motion model with ``sample(particles, odo_prev, odo_now, rng)``
+        (default `OdometryMotionModel`).
+    resampling : object, optional
+        A policy with ``indexes(mcl) -> ndarray | None`` (default
+        `ThresholdResampling` with low-variance resampling at ESS < N/2).
+    n : int
+        Initial particle count.
+    injection : AugmentedInjection, optional
+        Random injection (augmented MCL); None for none.
+    check : bool
+        Replace particles off the admissible area after each step (the
+        paper's step 3).
+    regen_weight : float
+        Relative weight of a replaced particle.
+    admissible_radius, resolution : float
+        The admissible area: clearance from walls and cell side, m.
+    rng : numpy.random.Generator, int or None
+        The filter's own randomness (``default_rng(rng)``).
+    init : array_like, shape (3,), optional
+        Start with particles around this pose (tracking) instead of uniform
+        over the admissible area (global localization).
+    init_std : tuple of float
+        Standard deviations ``(x, y, theta)`` around ``init``, m and rad.
+    """
+
+    def __init__(
+        self,
+        world: World,
+        sensor,
+        motion=None,
+        resampling=None,
+        n: int = 300,
+        injection: AugmentedInjection | None = None,
+        check: bool = True,
+        regen_weight: float = REGEN_WEIGHT,
+        admissible_radius: float = ADMISSIBLE_RADIUS,
+        resolution: float = 0.05,
+        rng: np.random.Generator | int | None = None,
+        init=None,
+        init_std=(0.1, 0.1, 0.05),
+    ):
+        if n < 1:
+            raise ValueError("n must be at least 1")
+        self.world = world
+        self.sensor = sensor
+        self.motion = OdometryMotionModel() if motion is None else motion
+        self.resampling = ThresholdResampling() if resampling is None else resampling
+        self.injection = injection
+        self.check = bool(check)
+        self.regen_weight = float(regen_weight)
+        self.admissible_radius = float(admissible_radius)
+        self.resolution = float(resolution)
+        self.rng = np.random.default_rng(rng)
+        self.map_diagonal = math.hypot(*world.size)
+        grid = world.free_space(self.resolution, self.admissible_radius)
+        self._admissible = np.ascontiguousarray(grid.data)
+        self._adm_origin = grid.origin
+        self.n_initial = int(n)
+        self.init_std = tuple(float(s) for s in init_std)
+        self.reset(init)
+
+    # -- set up ---------------------------------------------------------------
+    @classmethod
+    def paper(
+        cls,
+        world: World,
+        n: int = 300,
+        lam: float = 0.5,
+        floor: int = RESIZE_FLOOR,
+        fast: bool = False,
+        rng: np.random.Generator | int | None = None,
+        **kwargs,
+    ) -> MCL:
+        """Build the paper's filter.
+
+        Innovation weights, multinomial selection, resize, admissibility check.
+
+        Parameters
+        ----------
+        world : World
+            The map.
+        n : int
+            Initial particles (the paper: 300).
+        lam : float
+            The resize's lambda.
+        floor : int
+            The resize's floor.
+        fast : bool
+            Expected readings from a `ConeTable` instead of cone casts.
+        rng : numpy.random.Generator, int or None
+            Randomness.
+        **kwargs
+            Passed to `MCL` (e.g. ``init``, ``motion``, ``regen_weight``).
+        """
+        from .sensors import PaperSensorModel
+
+        return cls(
+            world,
+            PaperSensorModel(world, fast=fast),
+            resampling=PaperResampling(lam, floor),
+            n=n,
+            rng=rng,
+            **kwargs,
+        )
+
+    @classmethod
+    def best(
+        cls,
+        world: World,
+        fast: bool = True,
+        rng: np.random.Generator | int | None = None,
+        **kwargs,
+    ) -> MCL:
+        """Build the strongest configuration the project offers (see `BEST`).
+
+        Beam model, KLD-sampling from 10,000 particles down to no fewer than
+        300, augmented MCL's random injection, the admissibility check.
+        """
+        from .sensors import BeamSensorModel
+
+        options = {**BEST, **kwargs}
+        n = options.pop("n")
+        kld = options.pop("kld")
+        aug = options.pop("augmented")
+        return cls(
+            world,
+            BeamSensorModel(world, fast=fast),
+            resampling=KLDResampling(**kld),
+            injection=AugmentedInjection(**aug) if aug is not None else None,
+            n=n,
+            rng=rng,
+            **options,
+        )
+
+    def reset(self, init=None) -> None:
+        """Start again: uniform particles, or around ``init`` (3,) if given."""
+        n = self.n_initial
+        if init is None:
+            self.particles = self.world.sample_free_poses(
+                n, self.rng, self.resolution, self.admissible_radius
+            )
+        else:
+            pose = np.asarray(init, dtype=float)
+            if pose.shape != (3,):
+                raise ValueError(f"init must be a pose (3,), got {pose.shape}")
+            p = pose + self.rng.standard_normal((n, 3)) * np.array(self.init_std)
+            p[:, 2] = (p[:, 2] + np.pi) % (2 * np.pi) - np.pi
+            self.particles = p
+        self.weights = np.full(n, 1.0 / n)
+        self.ess = float(n)
+        self.last_estimate = _kernels.weighted_pose_mean(self.particles, self.weights)
+        self.info: StepInfo | None = None
+        if self.injection is not None:
+            self.injection.reset()
+
+    # -- the three parts of a step -------------------------------------------
+    def predict(self, odo_prev, odo_now) -> None:
+        """Move the particles by the odometry increment plus noise."""
+        self.particles = self.motion.sample(self.particles, odo_prev, odo_now, self.rng)
+
+    def update(self, z) -> float:
+        """Weight the particles by readings ``z`` (S,), m; return the log mean lik."""
+        ll = self.sensor.log_likelihood(self.particles, z)
+        out = np.empty_like(self.weights)
+        log_mean, ess = _kernels.update_weights(self.weights, ll, out)
+        self.weights = out
+        self.ess = float(ess)
+        if self.injection is not None:
+            self.injection.update(log_mean)
+        return float(log_mean)
+
+    def estimate(self) -> np.ndarray:
+        """Weighted mean pose (circular mean of the heading), shape (3,)."""
+        return _kernels.weighted_pose_mean(self.particles, self.weights)
+
+    def resample(self) -> tuple[bool, int, int]:
+        """Resample per the policy, inject, check admissibility.
+
+        Returns
+        -------
+        tuple
+            ``(resampled, injected, regenerated)``.
+        """
+        idx = self.resampling.indexes(self)
+        injected = 0
+        if idx is not None:
+            new = np.empty((len(idx), 3))
+            _kernels.gather(self.particles, np.ascontiguousarray(idx), new)
+            self.particles = new
+            self.weights = np.full(len(idx), 1.0 / len(idx))
+            if self.injection is not None and self.injection.probability > 0:
+                mask = self.rng.random(len(idx)) < self.injection.probability
+                injected = int(mask.sum())
+                if injected:
+                    self.particles[mask] = self.world.sample_free_poses(
+                        injected, self.rng, self.resolution, self.admissible_radius
+                    )
+        regenerated = 0
+        if self.check:
+            bad = np.empty(len(self.particles), dtype=np.bool_)
+            regenerated = _kernels.outside(
+                self.particles,
+                self._admissible,
+                self._adm_origin[0],
+                self._adm_origin[1],
+                1.0 / self.resolution,
+                bad,
+            )
+            if regenerated:
+                self.particles[bad] = self.world.sample_free_poses(
+                    regenerated, self.rng, self.resolution, self.admissible_radius
+                )
+                w = self.weights.copy()
+                w[bad] = self.regen_weight * w.mean()
+                self.weights = w / w.sum()
+        return idx is not None, injected, regenerated
+
+    def step(self, odo_prev, odo_now, z) -> np.ndarray:
+        """One filter step: predict, update, estimate, resample.
+
+        Parameters
+        ----------
+        odo_prev, odo_now : array_like, shape (3,)
+            The robot's odometry before and after its move, m and rad.
+        z : array_like, shape (S,)
+            The sonar scan taken after the move, m.
+
+        Returns
+        -------
+        numpy.ndarray, shape (3,)
+            The estimate after the update (before resampling).
+        """
+        self.predict(odo_prev, odo_now)
+        n = len(self.particles)
+        log_mean = self.update(z)
+        est = self.estimate()
+        self.last_estimate = est
+        resampled, injected, regenerated = self.resample()
+        self.info = StepInfo(
+            n, self.ess, resampled, len(self.particles), injected, regenerated, log_mean
+        )
+        return est
+
+    @property
+    def n(self) -> int:
+        """Current particle count."""
+        return len(self.particles)
+
+    def set_particles(self, particles, weights=None) -> None:
+        """Replace the particle set (weights default to uniform)."""
+        p = _particles(particles).copy()
+        w = (
+            np.full(len(p), 1.0 / len(p))
+            if weights is None
+            else np.asarray(weights, dtype=float) / np.sum(weights)
+        )
+        if w.shape != (len(p),):
+            raise ValueError("weights must have shape (N,)")
+        self.particles, self.weights = p, w
+
+
+BEST = {
+    "n": 10_000,
+    "kld": {"n_min": 300, "n_max": 10_000},
+    "augmented": {"alpha_slow": 0.05, "alpha_fast": 0.5},
+}
+"""Settings of `MCL.best` (tuned on the project's corridor only)."""

@@ -1,0 +1,478 @@
+"""Sensor models for MCL: the paper's innovation, the beam model, the likelihood field.
+
+Each model gives a log-likelihood per particle for one sonar scan
+(`log_likelihood(particles, z)`), which `MCL` turns into weights. Models
+that compare against expected readings (the paper's and the beam model)
+compute them in one of two ways:
+
+- exact (``fast=False``): every particle casts its sonar cones against the
+  walls with `robotlib._raycast.sonar_cone`, the simulator's own model;
+- fast (``fast=True``): a `ConeTable` precomputed once per world holds, per
+  grid cell and per direction bin, the cone range from the cell's centre, in
+  millimetres; a particle's reading is looked up at its sensor's cell and
+  nearest direction. The error is that of the quantisation (half a cell in
+  position, half a bin in direction).
+
+The likelihood field's exact path measures end-point distances to the
+segments; its fast path reads `robotlib.world.World.distance_field`.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+import weakref
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..sonar import SonarModel
+from ..world import World
+from . import _kernels
+from .motion import PARALLEL_MIN, _particles
+
+__all__ = [
+    "ConeTable",
+    "cone_table",
+    "expected_readings",
+    "innovation_loglik",
+    "PaperSensorModel",
+    "BeamSensorModel",
+    "LikelihoodFieldSensorModel",
+]
+
+
+class ConeTable:
+    """Precomputed sonar cone ranges per grid cell and direction bin.
+
+    ``table[i, j, b]`` (uint16, mm) is what a sonar of ``sonar``'s cone
+    model at the centre of cell ``(i, j)``, pointing along
+    ``b * 2 pi / n_bins``, reads without noise. Built in parallel; when the
+    cone's rays are a whole number of bins apart (the default: 7 rays over
+    30 degrees, 72 bins of 5 degrees) each direction's ray is cast once per
+    cell and shared by the cones that contain it.
+
+    Parameters
+    ----------
+    world : World
+        Walls and bounds (the grid covers the bounds).
+    sonar : SonarModel, optional
+        Cone, rays, range limits and specular angle (default: a Pioneer's).
+    resolution : float
+        Cell side, m.
+    n_bins : int
+        Direction bins over the full turn.
+
+    Attributes
+    ----------
+    table : numpy.ndarray, shape (ny, nx, n_bins), uint16
+        Ranges, mm.
+    origin : tuple of float
+        Lower-left corner of cell ``[0, 0]``, m.
+    build_seconds : float
+        Wall time the build took, s.
+    """
+
+    def __init__(
+        self,
+        world: World,
+        sonar: SonarModel | None = None,
+        resolution: float = 0.05,
+        n_bins: int = 72,
+    ):
+        sonar = SonarModel() if sonar is None else sonar
+        if sonar.max_range * 1000 > np.iinfo(np.uint16).max:
+            raise ValueError("max_range too large for a uint16 mm table")
+        if n_bins < 4 or not resolution > 0:
+            raise ValueError("need n_bins >= 4 and resolution > 0")
+        self.sonar = sonar
+        self.resolution = float(resolution)
+        self.n_bins = int(n_bins)
+        xmin, ymin, xmax, ymax = world.bounds
+        nx = max(1, math.ceil((xmax - xmin) / resolution - 1e-9))
+        ny = max(1, math.ceil((ymax - ymin) / resolution - 1e-9))
+        self.origin = (float(xmin), float(ymin))
+        bin_width = 2 * math.pi / n_bins
+        ray_step = 0
+        if sonar.n_rays == 1:
+            ray_step = 1
+        elif sonar.n_rays % 2 == 1:
+            steps = sonar.cone / (sonar.n_rays - 1) / bin_width
+            if abs(steps - round(steps)) < 1e-9 and round(steps) >= 1:
+                ray_step = int(round(steps))
+        self.table = np.empty((ny, nx, n_bins), dtype=np.uint16)
+        t0 = time.perf_counter()
+        _kernels.build_cone_table(
+            np.ascontiguousarray(world.obstacles),
+            self.origin[0],
+            self.origin[1],
+            self.resolution,
+            self.n_bins,
+            ray_step,
+            int(sonar.n_rays),
+            float(sonar.cone),
+            float(sonar.max_range),
+            float(sonar.min_range),
+            sonar.cos_specular,
+            self.table,
+        )
+        self.build_seconds = time.perf_counter() - t0
+        self.table.setflags(write=False)
+
+    @property
+    def nbytes(self) -> int:
+        """Memory the table takes, bytes."""
+        return self.table.nbytes
+
+    def lookup(self, particles) -> np.ndarray:
+        """Look up the expected readings of particles.
+
+        Parameters
+        ----------
+        particles : array_like, shape (N, 3)
+            Poses, m and rad.
+
+        Returns
+        -------
+        numpy.ndarray, shape (N, S)
+            Ranges, m.
+        """
+        p = _particles(particles)
+        out = np.empty((len(p), len(self.sonar.sensors)))
+        kernel = (
+            _kernels.expected_table_parallel
+            if len(p) >= PARALLEL_MIN
+            else _kernels.expected_table
+        )
+        kernel(
+            p,
+            self.sonar.sensors,
+            self.table,
+            self.origin[0],
+            self.origin[1],
+            1.0 / self.resolution,
+            out,
+        )
+        return out
+
+
+_TABLES: dict = {}
+
+
+def cone_table(
+    world: World,
+    sonar: SonarModel | None = None,
+    resolution: float = 0.05,
+    n_bins: int = 72,
+) -> ConeTable:
+    """Return the `ConeTable` for a world, built on first use and then reused.
+
+    Tables are kept while their world is alive, one per sonar geometry,
+    resolution and bin count.
+    """
+    sonar = SonarModel() if sonar is None else sonar
+    key = (
+        id(world),
+        sonar.sensors.tobytes(),
+        sonar.n_rays,
+        sonar.cone,
+        sonar.max_range,
+        sonar.min_range,
+        sonar.cos_specular,
+        float(resolution),
+        int(n_bins),
+    )
+    entry = _TABLES.get(key)
+    if entry is not None and entry[0]() is world:
+        return entry[1]
+    table = ConeTable(world, sonar, resolution, n_bins)
+    _TABLES[key] = (weakref.ref(world, lambda _: _TABLES.pop(key, None)), table)
+    return table
+
+
+def expected_readings(
+    world: World,
+    particles,
+    sonar: SonarModel | None = None,
+    table: ConeTable | None = None,
+) -> np.ndarray:
+    """Noise-free sonar readings of every particle.
+
+    Parameters
+    ----------
+    world : World
+        The map.
+    particles : array_like, shape (N, 3)
+        Poses, m and rad.
+    sonar : SonarModel, optional
+        The sonar ring (default: a Pioneer's eight front sonars).
+    table : ConeTable, optional
+        If given, look the readings up (fast path) instead of casting cones.
+
+    Returns
+    -------
+    numpy.ndarray, shape (N, S)
+        Ranges, m, in ``[min_range, max_range]``.
+    """
+    if table is not None:
+        return table.lookup(particles)
+    sonar = SonarModel() if sonar is None else sonar
+    p = _particles(particles)
+    out = np.empty((len(p), len(sonar.sensors)))
+    kernel = (
+        _kernels.expected_exact_parallel if len(p) >= 64 else _kernels.expected_exact
+    )
+    kernel(
+        p,
+        sonar.sensors,
+        np.ascontiguousarray(world.obstacles),
+        int(sonar.n_rays),
+        float(sonar.cone),
+        float(sonar.max_range),
+        float(sonar.min_range),
+        sonar.cos_specular,
+        out,
+    )
+    return out
+
+
+def _scan(z, n_sensors: int) -> np.ndarray:
+    z = np.ascontiguousarray(z, dtype=np.float64)
+    if z.shape != (n_sensors,):
+        raise ValueError(f"z must have shape ({n_sensors},), got {z.shape}")
+    if not np.all(z > 0):
+        raise ValueError("sonar readings must be positive")
+    return z
+
+
+def innovation_loglik(z, zhat, n: int | None = None) -> np.ndarray:
+    """Log of the paper's innovation weight, per particle (before normalising).
+
+    ``log(exp(-d_j) + 1/n)`` with ``d_j = mean_i |(z_i - zhat_ji) / z_i|``.
+
+    Parameters
+    ----------
+    z : array_like, shape (S,)
+        The robot's readings, m (positive).
+    zhat : array_like, shape (N, S)
+        Expected readings of each particle, m.
+    n : int, optional
+        The ``N`` of the ``1/N`` term (default: ``len(zhat)``).
+
+    Returns
+    -------
+    numpy.ndarray, shape (N,)
+    """
+    zhat = np.ascontiguousarray(zhat, dtype=np.float64)
+    if zhat.ndim != 2:
+        raise ValueError(f"zhat must have shape (N, S), got {zhat.shape}")
+    z = _scan(z, zhat.shape[1])
+    out = np.empty(len(zhat))
+    _kernels.paper_loglik(z, zhat, float(len(zhat) if n is None else n), out)
+    return out
+
+
+class _ExpectedModel:
+    """Shared part of the models that compare with expected readings."""
+
+    def __init__(self, world, sonar, fast, resolution, n_bins):
+        self.world = world
+        self.sonar = SonarModel() if sonar is None else sonar
+        self.fast = bool(fast)
+        self.table = cone_table(world, self.sonar, resolution, n_bins) if fast else None
+
+    def expected(self, particles) -> np.ndarray:
+        """Return expected readings (N, S) of particles (N, 3), m."""
+        return expected_readings(self.world, particles, self.sonar, self.table)
+
+
+class PaperSensorModel(_ExpectedModel):
+    """The paper's innovation weight: ``w_j = exp(-d_j) + 1/N``.
+
+    ``d_j = mean_i |(z_i - zhat_ij) / z_i|``.
+
+    Parameters
+    ----------
+    world : World
+        The map.
+    sonar : SonarModel, optional
+        The sonar ring used for the expected readings.
+    fast : bool
+        Look expected readings up in a `ConeTable` instead of casting cones.
+    resolution, n_bins
+        The table's cell side (m) and direction bins, when ``fast``.
+    """
+
+    name = "paper"
+
+    def __init__(self, world, sonar=None, fast=False, resolution=0.05, n_bins=72):
+        super().__init__(world, sonar, fast, resolution, n_bins)
+
+    def log_likelihood(self, particles, z) -> np.ndarray:
+        """Per-particle ``log w_j`` for readings ``z`` (S,), m."""
+        return innovation_loglik(z, self.expected(particles))
+
+
+@dataclass(frozen=True)
+class BeamParameters:
+    """Mixture weights and shapes of the beam model (Thrun, table 6.1).
+
+    Attributes
+    ----------
+    z_hit, z_short, z_max, z_rand : float
+        Mixture weights of the measurement noise, the unexpected short
+        readings, the max-range readings and the random readings.
+    sigma_hit : float
+        Standard deviation of the hit component, m (covers map, pose and
+        sonar errors, not only the sensor's noise).
+    lambda_short : float
+        Rate of the short-reading exponential, 1/m.
+    """
+
+    z_hit: float = 0.75
+    z_short: float = 0.1
+    z_max: float = 0.05
+    z_rand: float = 0.1
+    sigma_hit: float = 0.15
+    lambda_short: float = 0.5
+
+
+class BeamSensorModel(_ExpectedModel):
+    """Thrun's beam model: each reading is a mixture around its expected range.
+
+    ``p(z_i | x) = z_hit p_hit + z_short p_short + z_max p_max + z_rand p_rand``
+    with ``p_hit`` a Gaussian around the expected range normalised over
+    ``[0, max_range]``, ``p_short`` an exponential up to the expected range,
+    ``p_max`` a point mass at ``max_range`` and ``p_rand`` uniform; the
+    scan's likelihood is the product over sensors.
+
+    Parameters
+    ----------
+    world : World
+        The map.
+    sonar : SonarModel, optional
+        The sonar ring used for the expected readings.
+    fast : bool
+        Look expected readings up in a `ConeTable`.
+    params : BeamParameters, optional
+        Mixture parameters.
+    resolution, n_bins
+        The table's cell side (m) and direction bins, when ``fast``.
+    """
+
+    name = "beam"
+
+    def __init__(
+        self,
+        world,
+        sonar=None,
+        fast=False,
+        params: BeamParameters | None = None,
+        resolution=0.05,
+        n_bins=72,
+    ):
+        super().__init__(world, sonar, fast, resolution, n_bins)
+        self.params = BeamParameters() if params is None else params
+
+    def log_likelihood(self, particles, z) -> np.ndarray:
+        """Per-particle ``sum_i log p(z_i | x_j)`` for readings ``z`` (S,), m."""
+        zhat = self.expected(particles)
+        z = _scan(z, zhat.shape[1])
+        q = self.params
+        out = np.empty(len(zhat))
+        _kernels.beam_loglik(
+            z,
+            zhat,
+            float(self.sonar.max_range),
+            q.z_hit,
+            q.z_short,
+            q.z_max,
+            q.z_rand,
+            q.sigma_hit,
+            q.lambda_short,
+            out,
+        )
+        return out
+
+
+class LikelihoodFieldSensorModel:
+    """Thrun's likelihood field: end points scored by their distance to walls.
+
+    Each reading below ``max_range`` puts an end point on its sonar's axis;
+    ``p = z_hit N(d; 0, sigma_hit) + z_rand / max_range`` with ``d`` the
+    end point's distance to the nearest obstacle; max readings are skipped.
+    It ignores the cone and occlusion, so it suits a sonar less than a laser,
+    but it needs no ray casting.
+
+    Parameters
+    ----------
+    world : World
+        The map.
+    sonar : SonarModel, optional
+        Sensor poses and maximum range.
+    fast : bool
+        Read distances from the world's distance field (a grid) instead of
+        measuring them to the segments.
+    z_hit, z_rand : float
+        Mixture weights.
+    sigma_hit : float
+        Standard deviation of the end point's distance, m.
+    resolution : float
+        The distance field's cell side, m, when ``fast``.
+    """
+
+    name = "likelihood_field"
+
+    def __init__(
+        self,
+        world,
+        sonar=None,
+        fast=False,
+        z_hit=0.9,
+        z_rand=0.1,
+        sigma_hit=0.15,
+        resolution=0.05,
+    ):
+        self.world = world
+        self.sonar = SonarModel() if sonar is None else sonar
+        self.fast = bool(fast)
+        self.z_hit, self.z_rand, self.sigma_hit = z_hit, z_rand, sigma_hit
+        if self.fast:
+            grid = world.distance_field(resolution)
+            self._field = np.ascontiguousarray(grid.data, dtype=np.float32)
+            self._origin = grid.origin
+            self._inv_res = 1.0 / grid.resolution
+            self._segments = np.zeros((0, 4))
+        else:
+            self._field = np.zeros((1, 1), dtype=np.float32)
+            self._origin = (0.0, 0.0)
+            self._inv_res = 1.0
+            self._segments = np.ascontiguousarray(world.obstacles)
+
+    def log_likelihood(self, particles, z) -> np.ndarray:
+        """Per-particle ``sum_i log p(z_i | x_j)`` for readings ``z`` (S,), m."""
+        p = _particles(particles)
+        z = _scan(z, len(self.sonar.sensors))
+        out = np.empty(len(p))
+        kernel = (
+            _kernels.field_loglik_parallel
+            if len(p) >= PARALLEL_MIN or (not self.fast and len(p) >= 64)
+            else _kernels.field_loglik
+        )
+        kernel(
+            p,
+            self.sonar.sensors,
+            z,
+            float(self.sonar.max_range),
+            float(self.z_hit),
+            float(self.z_rand),
+            float(self.sigma_hit),
+            self._field,
+            self._segments,
+            self._origin[0],
+            self._origin[1],
+            self._inv_res,
+            1.0,
+            out,
+        )
+        return out

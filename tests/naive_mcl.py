@@ -1,0 +1,100 @@
+"""Plain NumPy references for the MCL kernels (slow, obvious, loop-free where easy)."""
+
+import math
+
+import numpy as np
+
+
+def wrap(a):
+    return (np.asarray(a) + np.pi) % (2 * np.pi) - np.pi
+
+
+def sample_odometry(particles, rot1, trans, rot2, sd, normals):
+    r1 = rot1 + sd[0] * normals[:, 0]
+    t = trans + sd[1] * normals[:, 1]
+    r2 = rot2 + sd[2] * normals[:, 2]
+    th = particles[:, 2]
+    out = np.empty_like(particles)
+    out[:, 0] = particles[:, 0] + t * np.cos(th + r1)
+    out[:, 1] = particles[:, 1] + t * np.sin(th + r1)
+    out[:, 2] = wrap(th + r1 + r2)
+    return out
+
+
+def paper_weights(z, zhat):
+    d = np.mean(np.abs((z - zhat) / z), axis=1)
+    w = np.exp(-d) + 1.0 / len(zhat)
+    return w / w.sum()
+
+
+def beam_prob(z, zhat, zmax, z_hit, z_short, z_max, z_rand, sigma, lam):
+    if z >= zmax - 1e-3:
+        return z_max
+    mass = 0.5 * (
+        math.erf((zmax - zhat) / (sigma * math.sqrt(2)))
+        - math.erf(-zhat / (sigma * math.sqrt(2)))
+    )
+    p_hit = math.exp(-0.5 * ((z - zhat) / sigma) ** 2) / (
+        sigma * math.sqrt(2 * math.pi)
+    )
+    p = z_hit * p_hit / mass
+    if z <= zhat:
+        p += z_short * lam * math.exp(-lam * z) / (1 - math.exp(-lam * zhat))
+    return p + z_rand / zmax
+
+
+def beam_loglik(z, zhat, zmax, params):
+    out = np.zeros(len(zhat))
+    for j in range(len(zhat)):
+        for i in range(len(z)):
+            out[j] += math.log(beam_prob(z[i], zhat[j, i], zmax, *params))
+    return out
+
+
+def sensor_positions(particles, sensors):
+    """World (x, y, heading) of every sensor of every particle, (N, S, 3)."""
+    c, s = np.cos(particles[:, 2:3]), np.sin(particles[:, 2:3])
+    x = particles[:, 0:1] + c * sensors[:, 0] - s * sensors[:, 1]
+    y = particles[:, 1:2] + s * sensors[:, 0] + c * sensors[:, 1]
+    return np.stack([x, y, particles[:, 2:3] + sensors[:, 2]], axis=-1)
+
+
+def field_loglik(world, particles, sensors, z, zmax, z_hit, z_rand, sigma):
+    sp = sensor_positions(particles, sensors)
+    keep = z < zmax - 1e-3
+    ex = sp[:, keep, 0] + z[keep] * np.cos(sp[:, keep, 2])
+    ey = sp[:, keep, 1] + z[keep] * np.sin(sp[:, keep, 2])
+    d = world.distance_to_walls(np.stack([ex, ey], axis=-1))
+    p = z_hit * np.exp(-0.5 * (d / sigma) ** 2) / (sigma * math.sqrt(2 * math.pi))
+    return np.log(p + z_rand / zmax).sum(axis=1)
+
+
+def update_weights(weights, loglik):
+    w = weights * np.exp(loglik - loglik.max())
+    log_mean = loglik.max() + np.log(w.sum() / weights.sum())
+    w = w / w.sum()
+    return w, log_mean, 1.0 / np.sum(w**2)
+
+
+def pose_mean(particles, weights):
+    w = weights / weights.sum()
+    return np.array(
+        [
+            w @ particles[:, 0],
+            w @ particles[:, 1],
+            math.atan2(w @ np.sin(particles[:, 2]), w @ np.cos(particles[:, 2])),
+        ]
+    )
+
+
+def resample_positions(weights, positions):
+    c = np.cumsum(weights) / np.sum(weights)
+    c[-1] = 1.0
+    return np.searchsorted(c, positions, side="right")
+
+
+def kld_bound(k, epsilon, z):
+    if k <= 1:
+        return 1.0
+    a = 2 / (9 * (k - 1))
+    return (k - 1) / (2 * epsilon) * (1 - a + math.sqrt(a) * z) ** 3
