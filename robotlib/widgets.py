@@ -1,0 +1,431 @@
+"""Notebook panels: Monte Carlo localization and teleoperation.
+
+Each panel is a thin wrapper over plain, tested functions:
+
+- `mcl_filter` builds a filter from the panel's choices, `run_mcl` runs it
+  over a logged route (`robotlib.experiment.drive_route`) and returns its
+  `History`, `plot_mcl_run` draws the paper's Figs. 2-4 from that history;
+  `MCLPanel` adds sliders for lambda and the particle count
+  (``continuous_update=False``: a run starts when a slider is released) and
+  choices of sensor model and resampler.
+- `teleop` moves a robot one step and reads its sonar; `TeleopPanel` adds
+  buttons and a map.
+
+Panels run headless (their callbacks are plain methods), so tests set their
+values programmatically and read the results.
+"""
+
+from __future__ import annotations
+
+import math
+
+import matplotlib.pyplot as plt
+import numpy as np
+
+from .localization import (
+    MCL,
+    AugmentedInjection,
+    BeamSensorModel,
+    History,
+    KLDResampling,
+    LikelihoodFieldSensorModel,
+    PaperResampling,
+    PaperSensorModel,
+    ThresholdResampling,
+)
+from .localization.paper import RESIZE_FLOOR
+from .plotting import plot_robot, plot_sonar, plot_trajectory, plot_world
+
+__all__ = [
+    "SENSORS",
+    "RESAMPLERS",
+    "mcl_filter",
+    "run_mcl",
+    "plot_mcl_run",
+    "MCLPanel",
+    "teleop",
+    "TeleopPanel",
+]
+
+SENSORS = ("paper", "beam", "likelihood field")
+"""Sensor models the MCL panel offers."""
+RESAMPLERS = (
+    "paper (select + resize)",
+    "low variance",
+    "KLD",
+    "low variance + augmented",
+)
+"""Resampling schemes the MCL panel offers."""
+
+
+def mcl_filter(
+    world,
+    n: int = 300,
+    lam: float = 0.5,
+    sensor: str = "paper",
+    resampler: str = RESAMPLERS[0],
+    floor: int = RESIZE_FLOOR,
+    rng=None,
+    init=None,
+) -> MCL:
+    """Build an `MCL` from the MCL panel's choices.
+
+    Parameters
+    ----------
+    world : World
+        The map.
+    n : int
+        Initial particle count.
+    lam : float
+        The paper's resize lambda (used by ``"paper (select + resize)"`` only).
+    sensor : str
+        One of `SENSORS`.
+    resampler : str
+        One of `RESAMPLERS`: the paper's multinomial selection and resize;
+        low-variance (systematic) resampling when the effective sample size
+        falls below N/2; KLD-sampling (at most ``max(n, 2000)`` particles); or
+        low variance with augmented MCL's random injection.
+    floor : int
+        Smallest population of the paper's resize.
+    rng : numpy.random.Generator, int or None
+        The filter's randomness.
+    init : array_like, shape (3,), optional
+        Start around this pose (tracking) instead of uniformly (global).
+
+    Returns
+    -------
+    MCL
+    """
+    if sensor not in SENSORS:
+        raise ValueError(f"unknown sensor {sensor!r}; choose from {SENSORS}")
+    if resampler not in RESAMPLERS:
+        raise ValueError(f"unknown resampler {resampler!r}; choose from {RESAMPLERS}")
+    if n < 1:
+        raise ValueError(f"n must be at least 1, got {n}")
+    if sensor == "paper":
+        model = PaperSensorModel(world)
+    elif sensor == "beam":
+        model = BeamSensorModel(world, fast=True)
+    else:
+        model = LikelihoodFieldSensorModel(world, fast=True)
+    injection = None
+    if resampler == RESAMPLERS[0]:
+        policy = PaperResampling(float(lam), int(min(floor, n)))
+    elif resampler == "KLD":
+        policy = KLDResampling(n_min=min(int(n), 300), n_max=max(int(n), 2000))
+    else:
+        policy = ThresholdResampling("systematic", 0.5)
+        if resampler.endswith("augmented"):
+            injection = AugmentedInjection()
+    return MCL(
+        world,
+        model,
+        resampling=policy,
+        n=int(n),
+        injection=injection,
+        rng=rng,
+        init=init,
+    )
+
+
+def run_mcl(
+    route, n_steps: int | None = None, tracking: bool = False, seed=0, **choices
+):
+    """Run a filter built by `mcl_filter` over a logged route.
+
+    Parameters
+    ----------
+    route : robotlib.experiment.RouteLog
+        Odometry, sonar and truth per step.
+    n_steps : int, optional
+        Use only the first steps.
+    tracking : bool
+        Start at the true start pose instead of uniformly.
+    seed : int or numpy.random.Generator
+        The filter's randomness.
+    **choices
+        ``n``, ``lam``, ``sensor``, ``resampler``, ``floor`` (see `mcl_filter`).
+
+    Returns
+    -------
+    History
+    """
+    init = route.truth[0] if tracking else None
+    mcl = mcl_filter(route.world, rng=seed, init=init, **choices)
+    hist = History()
+    steps = len(route) if n_steps is None else min(int(n_steps), len(route))
+    for k in range(steps):
+        mcl.step(route.odometry[max(k - 1, 0)], route.odometry[k], route.sonar[k])
+        hist.record(route.truth[k], mcl)
+    return hist
+
+
+def plot_mcl_run(history: History, world, fig=None, tolerance: float = 0.5):
+    """Draw the paper's Figs. 2-4 for one run: trajectories, error, particles.
+
+    Parameters
+    ----------
+    history : History
+        The run.
+    world : World
+        Its map.
+    fig : matplotlib.figure.Figure, optional
+        Drawn into (cleared first); a new figure by default.
+    tolerance : float
+        The "localized" error bound drawn on the error plot, m.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    if fig is None:
+        fig = plt.figure(figsize=(10, 5.5))
+    fig.clear()
+    grid = fig.add_gridspec(2, 2, height_ratios=(1.1, 1))
+    ax_map = fig.add_subplot(grid[0, :])
+    ax_err = fig.add_subplot(grid[1, 0])
+    ax_n = fig.add_subplot(grid[1, 1])
+    a = history.arrays()
+    plot_world(ax_map, world, color="0.4", linewidth=1)
+    plot_trajectory(ax_map, a["true_pose"], label="true", color="k")
+    plot_trajectory(
+        ax_map, a["estimate"], label="estimated", color="tab:red", marker="."
+    )
+    ax_map.legend(loc="upper right", ncols=2)
+    ax_map.set_title("true and estimated trajectory (Fig. 2)")
+    ax_err.plot(a["step"], a["error"], color="tab:red")
+    ax_err.axhline(tolerance, color="0.5", ls=":", lw=1)
+    ax_err.set_xlabel("step")
+    ax_err.set_ylabel("position error [m]")
+    loc = history.localized_step(tolerance)
+    ax_err.set_title(f"error per step (Fig. 3); localized from {loc or '-'}")
+    ax_n.plot(a["step"], a["n_particles"], color="tab:blue")
+    ax_n.set_xlabel("step")
+    ax_n.set_ylabel("particles")
+    ax_n.set_ylim(0, None)
+    ax_n.set_title("particles per step (Fig. 4)")
+    fig.tight_layout()
+    return fig
+
+
+class MCLPanel:
+    """Sliders and choices that re-run MCL on a route and redraw Figs. 2-4.
+
+    Parameters
+    ----------
+    route : robotlib.experiment.RouteLog
+        The logged drive to localize on.
+    n_steps : int, optional
+        Steps to run (default: the whole route).
+    seed : int
+        The filter's seed (fixed, so a change of result comes from a setting).
+    **initial
+        Initial ``lam``, ``n``, ``sensor``, ``resampler``, ``tracking``.
+
+    Attributes
+    ----------
+    history : History
+        The last run.
+    figure : matplotlib.figure.Figure
+        The last drawing.
+    widget : ipywidgets.VBox
+        The panel (displaying the object displays it).
+    """
+
+    def __init__(self, route, n_steps=None, seed=0, **initial):
+        import ipywidgets as w
+
+        self.route, self.n_steps, self.seed = route, n_steps, seed
+        self.lam = w.FloatSlider(
+            value=initial.get("lam", 0.5), min=0.0, max=5.0, step=0.1,
+            description="lambda", continuous_update=False,
+        )  # fmt: skip
+        self.n = w.IntSlider(
+            value=initial.get("n", 300), min=50, max=5000, step=50,
+            description="particles", continuous_update=False,
+        )  # fmt: skip
+        self.sensor = w.Dropdown(
+            options=SENSORS, value=initial.get("sensor", "paper"), description="sensor"
+        )
+        self.resampler = w.Dropdown(
+            options=RESAMPLERS,
+            value=initial.get("resampler", RESAMPLERS[0]),
+            description="resampler",
+        )
+        self.tracking = w.Checkbox(
+            value=initial.get("tracking", False), description="tracking"
+        )
+        self.status = w.Label()
+        self.output = w.Output()
+        for control in (self.lam, self.n, self.sensor, self.resampler, self.tracking):
+            control.observe(self._changed, names="value")
+        self.widget = w.VBox(
+            [
+                w.HBox([self.lam, self.n, self.tracking]),
+                w.HBox([self.sensor, self.resampler]),
+                self.status,
+                self.output,
+            ]
+        )
+        self.figure = plt.figure(figsize=(10, 5.5))
+        plt.close(self.figure)  # shown through the output widget only
+        self.history: History | None = None
+        self.refresh()
+
+    def settings(self) -> dict:
+        """Return the current choices, as `run_mcl` keywords."""
+        return {
+            "lam": float(self.lam.value),
+            "n": int(self.n.value),
+            "sensor": self.sensor.value,
+            "resampler": self.resampler.value,
+            "tracking": bool(self.tracking.value),
+        }
+
+    def _changed(self, change) -> None:
+        self.refresh()
+
+    def refresh(self) -> History:
+        """Run the filter with the current settings and redraw."""
+        from IPython.display import display
+
+        self.history = run_mcl(
+            self.route, self.n_steps, seed=self.seed, **self.settings()
+        )
+        plot_mcl_run(self.history, self.route.world, self.figure)
+        loc = self.history.localized_step()
+        err = self.history.error
+        self.status.value = (
+            f"localized from step {loc}; mean error then: {err[loc - 1 :].mean():.2f} m"
+            if loc
+            else f"not localized (final error {err[-1]:.2f} m)"
+        )
+        self.output.clear_output(wait=True)
+        with self.output:
+            display(self.figure)
+        return self.history
+
+    def _ipython_display_(self):
+        from IPython.display import display
+
+        display(self.widget)
+
+
+def teleop(r, command: str, distance: float = 0.5, angle: float = math.pi / 4):
+    """Move a robot one step and read its sonar.
+
+    Parameters
+    ----------
+    r : robotlib.Robot
+        The robot.
+    command : str
+        ``"forward"``, ``"back"``, ``"left"``, ``"right"`` or ``"stop"``.
+    distance : float
+        Length of a forward or backward step, m.
+    angle : float
+        Angle of a turn, rad.
+
+    Returns
+    -------
+    pose : numpy.ndarray, shape (3,)
+        Odometry pose after the step, m and rad.
+    sonar : numpy.ndarray, shape (8,)
+        Sonar ranges after the step, m.
+    """
+    if command == "forward":
+        r.move(distance)
+        r.wait_move_done()
+    elif command == "back":
+        r.move(-distance)
+        r.wait_move_done()
+    elif command in ("left", "right"):
+        r.setdeltaheading(angle if command == "left" else -angle)
+        r.wait_heading_done()
+    elif command == "stop":
+        r.stop()
+    else:
+        raise ValueError(f"unknown command {command!r}")
+    return r.pose(), r.readsonar()
+
+
+class TeleopPanel:
+    """Buttons that drive a robot step by step, with a map of its surroundings.
+
+    Parameters
+    ----------
+    r : robotlib.Robot
+        The robot; a simulated one (``robot("sim:...")``) also shows its
+        world and true pose.
+
+    Attributes
+    ----------
+    pose, sonar : numpy.ndarray
+        After the last command.
+    log : list of str
+        The commands sent.
+    """
+
+    COMMANDS = ("forward", "back", "left", "right", "stop")
+
+    def __init__(self, r, distance: float = 0.5, angle_deg: float = 45.0):
+        import ipywidgets as w
+
+        self.robot = r
+        self.log: list[str] = []
+        self.distance = w.FloatSlider(
+            value=distance, min=0.1, max=2.0, step=0.1, description="step [m]",
+            continuous_update=False,
+        )  # fmt: skip
+        self.angle = w.FloatSlider(
+            value=angle_deg, min=5.0, max=180.0, step=5.0, description="turn [deg]",
+            continuous_update=False,
+        )  # fmt: skip
+        self.buttons = {c: w.Button(description=c) for c in self.COMMANDS}
+        for c, b in self.buttons.items():
+            b.on_click(lambda _b, c=c: self.send(c))
+        self.output = w.Output()
+        self.widget = w.VBox(
+            [
+                w.HBox(list(self.buttons.values())),
+                w.HBox([self.distance, self.angle]),
+                self.output,
+            ]
+        )
+        self.figure = plt.figure(figsize=(7, 3))
+        plt.close(self.figure)
+        self.pose, self.sonar = r.pose(), r.readsonar()
+        self.draw()
+
+    def send(self, command: str):
+        """Run one command (what a button does); return ``(pose, sonar)``."""
+        self.pose, self.sonar = teleop(
+            self.robot, command, self.distance.value, math.radians(self.angle.value)
+        )
+        self.log.append(command)
+        self.draw()
+        return self.pose, self.sonar
+
+    def draw(self) -> None:
+        """Redraw the map, the robot and its sonar."""
+        from IPython.display import display
+
+        self.figure.clear()
+        ax = self.figure.add_subplot()
+        true_pose = getattr(self.robot, "true_pose", None)
+        shown = np.asarray(true_pose() if true_pose else self.pose)
+        sim = getattr(self.robot, "simulator", None)
+        if sim is not None:
+            plot_world(ax, sim.world)
+        plot_sonar(ax, shown, self.sonar)
+        plot_robot(ax, shown)
+        ax.set_xlim(shown[0] - 6, shown[0] + 6)
+        ax.set_ylim(shown[1] - 3, shown[1] + 3)
+        ax.set_title(f"odometry ({self.pose[0]:.2f}, {self.pose[1]:.2f}) m")
+        self.output.clear_output(wait=True)
+        with self.output:
+            display(self.figure)
+
+    def _ipython_display_(self):
+        from IPython.display import display
+
+        display(self.widget)
