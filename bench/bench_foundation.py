@@ -49,7 +49,9 @@ def main():
     for name in ("corridor", "office"):
         world = load_world(name)
         poses = world.sample_free_poses(2000, rng, radius=0.0)
-        rate = rays_per_second(lambda p, a: cast_rays(world, p, a, 5.0), poses, angles)
+        rate = rays_per_second(
+            lambda p, a, w=world: cast_rays(w, p, a, 5.0), poses, angles
+        )
         print(
             f"segment rays/s   {name:9s} ({len(world.obstacles):4d} segs): {rate:12,.0f}"
         )
@@ -60,9 +62,7 @@ def main():
     rate = rays_per_second(
         lambda p, a: cast_rays_grid(grid, p, a, 5.0, field), poses, angles
     )
-    print(
-        f"grid rays/s      {grid.shape[0]}x{grid.shape[1]} grid, 5 m range: {rate:12,.0f}"
-    )
+    print(f"grid rays/s      {grid.shape[0]}x{grid.shape[1]} grid, 5 m: {rate:12,.0f}")
     rate = rays_per_second(
         lambda p, a: cast_rays(world, p, a, 5.0), poses[:2000], angles
     )
