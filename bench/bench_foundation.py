@@ -52,9 +52,8 @@ def main():
         rate = rays_per_second(
             lambda p, a, w=world: cast_rays(w, p, a, 5.0), poses, angles
         )
-        print(
-            f"segment rays/s   {name:9s} ({len(world.obstacles):4d} segs): {rate:12,.0f}"
-        )
+        segs = len(world.obstacles)
+        print(f"segment rays/s   {name:9s} ({segs:4d} segs): {rate:12,.0f}")
     world = grid_world_400(rng)
     grid = world.occupancy_grid(0.05)
     poses = world.sample_free_poses(20000, rng, radius=0.0)
