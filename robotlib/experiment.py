@@ -206,8 +206,8 @@ class FilterConfig:
             out.setdefault("resampling", "multinomial + resize + admissibility")
         else:
             out = {**BEST, **out}
-            out.setdefault("sensor", "beam")
-            out.setdefault("resampling", "KLD-sampling + augmented MCL")
+            out.setdefault("sensor", "beam (tempered), cone table")
+            out.setdefault("resampling", "KLD-sampling when ESS < N/2")
         return out
 
 

@@ -1,0 +1,225 @@
+"""``robotlib bench WHAT``: timings of robotlib's hot paths.
+
+``robotlib bench mcl [--json FILE]`` times one MCL step (predict, weight,
+estimate, systematic resampling) per particle count for the fast path (cone
+table lookup), the exact path (cone casting) and a plain NumPy implementation
+of the paper's model on the same table, in the same run, and prints milliseconds and
+ratios; ``--json`` writes ``{"results": [{"path", "model", "n",
+"ms_per_step"}, ...]}``. It also measures the cone table's build time and
+memory for a world (``--table-world``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import time
+from pathlib import Path
+
+import numpy as np
+
+__all__ = ["add_arguments", "run", "bench_mcl", "BENCHES"]
+
+
+def _numpy_step(state, odo_prev, odo_now, z, rng):
+    """One MCL step in plain NumPy (the paper's model on the table), to compare."""
+    from .localization.motion import _noise_std, odometry_increment
+
+    p, table, sensors, origin, inv_res = state
+    rot1, trans, rot2 = odometry_increment(odo_prev, odo_now)
+    sd = _noise_std((0.002, 0.005, 0.01, 0.0005), rot1, trans, rot2)
+    nrm = rng.standard_normal((len(p), 3))
+    r1 = rot1 + sd[0] * nrm[:, 0]
+    t = trans + sd[1] * nrm[:, 1]
+    th = p[:, 2]
+    p = np.column_stack(
+        [
+            p[:, 0] + t * np.cos(th + r1),
+            p[:, 1] + t * np.sin(th + r1),
+            (th + r1 + rot2 + sd[2] * nrm[:, 2] + np.pi) % (2 * np.pi) - np.pi,
+        ]
+    )
+    c, s = np.cos(p[:, 2:3]), np.sin(p[:, 2:3])
+    sx = p[:, 0:1] + c * sensors[:, 0] - s * sensors[:, 1]
+    sy = p[:, 1:2] + s * sensors[:, 0] + c * sensors[:, 1]
+    ny, nx, nb = table.shape
+    col = np.clip(np.floor((sx - origin[0]) * inv_res).astype(np.int64), 0, nx - 1)
+    row = np.clip(np.floor((sy - origin[1]) * inv_res).astype(np.int64), 0, ny - 1)
+    b = np.floor((p[:, 2:3] + sensors[:, 2]) * nb / (2 * np.pi) + 0.5).astype(np.int64)
+    zhat = table[row, col, b % nb] * 0.001
+    d = np.mean(np.abs((z - zhat) / z), axis=1)
+    w = np.exp(-d) + 1.0 / len(p)
+    w = w / w.sum()
+    est = np.array(
+        [
+            w @ p[:, 0],
+            w @ p[:, 1],
+            math.atan2(w @ np.sin(p[:, 2]), w @ np.cos(p[:, 2])),
+        ]
+    )
+    cum = np.cumsum(w)
+    cum[-1] = 1.0
+    idx = np.searchsorted(cum, (np.arange(len(p)) + rng.random()) / len(p), "right")
+    return p[idx], est
+
+
+def _time(fn, reps: int) -> float:
+    times = []
+    for _ in range(reps):
+        t0 = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - t0)
+    return 1000.0 * float(np.median(times))
+
+
+def bench_mcl(
+    world_name: str = "corridor",
+    counts=(300, 1000, 10_000, 100_000),
+    models=("paper", "beam"),
+    paths=("fast", "exact", "numpy"),
+    reps: int = 20,
+) -> list[dict]:
+    """Time one MCL step per path, model and particle count.
+
+    Each timed step starts from the same particles spread uniformly over the
+    world's free space (the global-localization case, the slowest for the
+    table's cache), with one sonar scan from the start pose.
+
+    Returns
+    -------
+    list of dict
+        ``{"path", "model", "n", "ms_per_step"}``.
+    """
+    from .localization import (
+        MCL,
+        BeamParameters,
+        BeamSensorModel,
+        PaperSensorModel,
+        ThresholdResampling,
+        cone_table,
+        expected_readings,
+    )
+    from .world import load_world
+
+    world = load_world(world_name)
+    z = expected_readings(world, np.array([world.start]))[0]
+    odo0 = np.array(world.start)
+    odo1 = odo0 + [0.5, 0.0, 0.05]
+    table = cone_table(world)
+    results = []
+    for n in counts:
+        start = world.sample_free_poses(n, 0)
+        for model in models:
+            for path in paths:
+                if path == "numpy" and model != "paper":
+                    continue  # the NumPy reference implements the paper's model
+                r = reps if (path != "exact" or n <= 10_000) else max(2, reps // 10)
+                if path == "numpy":
+                    state = (
+                        start,
+                        np.asarray(table.table),
+                        table.sonar.sensors,
+                        table.origin,
+                        1.0 / table.resolution,
+                    )
+                    rng = np.random.default_rng(0)
+                    _numpy_step(state, odo0, odo1, z, rng)
+                    ms = _time(
+                        lambda s=state, g=rng: _numpy_step(s, odo0, odo1, z, g), r
+                    )
+                else:
+                    fast = path == "fast"
+                    sensor = (
+                        PaperSensorModel(world, fast=fast)
+                        if model == "paper"
+                        else BeamSensorModel(
+                            world, fast=fast, params=BeamParameters(exponent=0.2)
+                        )
+                    )
+                    mcl = MCL(
+                        world,
+                        sensor,
+                        resampling=ThresholdResampling("systematic", 1.0),
+                        n=n,
+                        rng=0,
+                        check=False,
+                    )
+
+                    def step(mcl=mcl, start=start):
+                        mcl.set_particles(start)
+                        mcl.step(odo0, odo1, z)
+
+                    step()
+                    ms = _time(step, r)
+                results.append(
+                    {"path": path, "model": model, "n": n, "ms_per_step": ms}
+                )
+    return results
+
+
+def bench_table(world_name: str) -> dict:
+    """Build a fresh cone table for a world; return its time (s) and size (MB)."""
+    from .localization import ConeTable
+    from .world import load_world
+
+    world = load_world(world_name)
+    t = ConeTable(world)
+    w, h = world.size
+    return {
+        "world": world_name,
+        "size_m": [w, h],
+        "cells": int(t.table.shape[0] * t.table.shape[1]),
+        "build_s": t.build_seconds,
+        "memory_mb": t.nbytes / 1e6,
+    }
+
+
+def _print_mcl(results: list[dict]) -> None:
+    by = {(r["path"], r["model"], r["n"]): r["ms_per_step"] for r in results}
+    head = f"{'model':8s}{'n':>8s}{'fast ms':>10s}{'exact ms':>10s}{'numpy ms':>10s}"
+    print(head + f"{'numpy/fast':>12s}{'exact/fast':>12s}")  # noqa: T201
+    for model, n in sorted({(r["model"], r["n"]) for r in results}):
+        f, e, p = (
+            by.get((k, model, n), float("nan")) for k in ("fast", "exact", "numpy")
+        )
+        print(f"{model:8s}{n:8d}{f:10.3f}{e:10.3f}{p:10.3f}{p / f:12.1f}{e / f:12.1f}")  # noqa: T201
+
+
+def _run_mcl(args) -> int:
+    results = bench_mcl(args.world, tuple(args.n), tuple(args.model), reps=args.reps)
+    _print_mcl(results)
+    out = {"results": results}
+    if args.table_world:
+        out["table"] = bench_table(args.table_world)
+        print(  # noqa: T201
+            "cone table {world}: {cells} cells, {build_s:.2f} s, "
+            "{memory_mb:.1f} MB".format(**out["table"])
+        )
+    if args.json is not None:
+        Path(args.json).write_text(json.dumps(out, indent=2))
+    return 0
+
+
+BENCHES = {"mcl": _run_mcl}
+"""Benchmark name to runner; others (``raycast``, ``sim``) register here."""
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """Options of ``robotlib bench``."""
+    parser.add_argument("what", choices=sorted(BENCHES), help="what to measure")
+    parser.add_argument("--json", type=Path, default=None, help="write results here")
+    parser.add_argument("--world", default="corridor", help="world for the MCL step")
+    parser.add_argument(
+        "--n", type=int, nargs="+", default=[300, 1000, 10_000, 100_000]
+    )
+    parser.add_argument("--model", nargs="+", default=["paper", "beam"])
+    parser.add_argument("--reps", type=int, default=20)
+    parser.add_argument(
+        "--table-world", default="office", help="world for the table build ('' off)"
+    )
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run ``robotlib bench``; return the exit status."""
+    return BENCHES[args.what](args)

@@ -1,0 +1,136 @@
+"""The MCL object, the history, the experiment runner and its CLI (few steps)."""
+
+import json
+
+import matplotlib
+import numpy as np
+import pytest
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+from robotlib import experiment  # noqa: E402
+from robotlib.cli import main  # noqa: E402
+from robotlib.localization import (  # noqa: E402
+    MCL,
+    BeamSensorModel,
+    History,
+    KLDResampling,
+    localized_step,
+)
+from robotlib.plotting_mcl import (  # noqa: E402
+    plot_error,
+    plot_particle_count,
+    plot_trajectories,
+)
+from robotlib.world import load_world  # noqa: E402
+
+
+@pytest.fixture(scope="module")
+def corridor():
+    return load_world("corridor")
+
+
+@pytest.fixture(scope="module")
+def route(corridor):
+    return experiment.drive_route(corridor, seed=0, n_steps=12)
+
+
+def test_route_is_seeded_and_moves_along(corridor, route):
+    again = experiment.drive_route(corridor, seed=0, n_steps=12)
+    np.testing.assert_array_equal(route.odometry, again.odometry)
+    np.testing.assert_array_equal(route.sonar, again.sonar)
+    assert route.truth[-1, 0] - route.truth[0, 0] > 3.0  # east along the corridor
+    assert route.sonar.shape == (12, 8)
+
+
+def test_localized_step():
+    assert localized_step([1, 1, 0.2, 0.3]) == 3
+    assert localized_step([0.1, 0.6, 0.1]) == 3
+    assert localized_step([0.1, 0.2]) == 1
+    assert localized_step([0.1, 0.9]) is None
+
+
+@pytest.mark.parametrize("fast", [False, True])
+def test_paper_filter_is_reproducible_bit_for_bit(route, fast):
+    config = experiment.FilterConfig("p", "paper", {"n": 200, "fast": fast})
+    a = experiment.run_filter(route, config, seed=3).arrays()
+    b = experiment.run_filter(route, config, seed=3).arrays()
+    for key in ("true_pose", "estimate", "error", "n_particles", "ess"):
+        np.testing.assert_array_equal(a[key], b[key])
+    c = experiment.run_filter(route, config, seed=4).arrays()
+    assert not np.array_equal(a["estimate"], c["estimate"])
+
+
+def test_paper_resize_shrinks_population(route):
+    config = experiment.FilterConfig("p", "paper", {"n": 300, "lam": 2.0, "floor": 80})
+    hist = experiment.run_filter(route, config, seed=0)
+    n = hist.arrays()["n_particles"]
+    assert n[0] == 300 and np.all(np.diff(n) <= 0) and n[-1] >= 80 and n[-1] < 300
+
+
+def test_tracking_from_start_stays_close(route):
+    for config in (experiment.PAPER, experiment.BEST_CONFIG):
+        hist = experiment.run_filter(route, config, seed=1, tracking=True)
+        assert hist.error.mean() < 0.25
+
+
+def test_kld_population_falls_when_tracking(corridor, route):
+    mcl = MCL(
+        corridor,
+        BeamSensorModel(corridor, fast=True),
+        resampling=KLDResampling(n_min=100, n_max=3000),
+        n=3000,
+        rng=0,
+        init=route.truth[0],
+    )
+    for k in range(1, 6):
+        mcl.step(route.odometry[k - 1], route.odometry[k], route.sonar[k])
+    assert 100 <= mcl.n < 3000
+
+
+def test_summary_and_plots(route):
+    runs = [experiment.run_filter(route, experiment.PAPER, seed=s) for s in (0, 1)]
+    track = [experiment.run_filter(route, experiment.PAPER, 0, tracking=True)]
+    summary = experiment.summarize(runs, track, experiment.PAPER)
+    for key in (
+        "success_rate",
+        "success_rate_75",
+        "localized_step_median",
+        "tracking_error_mean_m",
+        "tracking_error_std_m",
+        "tracking_from_start_error_mean_m",
+        "particles_final_median",
+        "ms_per_step_median",
+        "settings",
+    ):
+        assert key in summary
+    assert 0 <= summary["success_rate"] <= summary["success_rate_75"] <= 1
+    fig, axes = plt.subplots(1, 3)
+    plot_trajectories(axes[0], runs[0], route.world)
+    plot_error(axes[1], track[0])
+    plot_particle_count(axes[2], runs[0])
+    assert len(axes[1].lines) >= 2 and axes[2].get_ylabel() == "particles"
+    plt.close(fig)
+
+
+def test_history_record_and_dict(route):
+    mcl = MCL.paper(route.world, n=50, rng=0)
+    hist = History()
+    for k in range(3):
+        mcl.step(route.odometry[max(k - 1, 0)], route.odometry[k], route.sonar[k])
+        hist.record(route.truth[k], mcl, 1.0)
+    d = hist.to_dict()
+    assert d["step"] == [1, 2, 3] and len(d["estimate"]) == 3
+    json.dumps(d)
+
+
+def test_reproduce_cli_writes_json(tmp_path, monkeypatch):
+    small = experiment.FilterConfig("best", "best", {"n": 500, "kld": {"n_max": 500}})
+    monkeypatch.setattr(experiment, "BEST_CONFIG", small)
+    out = tmp_path / "r.json"
+    assert main(["reproduce", "--seeds", "1", "--steps", "4", "--json", str(out)]) == 0
+    result = json.loads(out.read_text())
+    assert set(result) >= {"paper", "best"}
+    assert result["paper"]["settings"]["n"] == 300
+    assert "success_rate" in result["best"]
