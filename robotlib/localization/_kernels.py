@@ -295,6 +295,19 @@ def _beam_prob(z, zhat, max_range, z_hit, z_short, z_max, z_rand, sigma, lam_sho
 
 
 @nb.njit(**JIT)
+def _beam_one(j, z, zhat, max_range, z_hit, z_short, z_max, z_rand, sigma, lam, out):
+    ll = 0.0
+    for i in range(z.shape[0]):
+        zi = z[i] if z[i] < max_range - 1e-3 else max_range
+        ll += math.log(
+            _beam_prob(
+                zi, zhat[j, i], max_range, z_hit, z_short, z_max, z_rand, sigma, lam
+            )
+        )
+    out[j] = ll
+
+
+@nb.njit(**JIT)
 def beam_loglik(
     z, zhat, max_range, z_hit, z_short, z_max, z_rand, sigma, lam_short, out
 ):
@@ -302,25 +315,21 @@ def beam_loglik(
 
     A reading at or beyond ``max_range`` (to 1 mm) is a "max" reading.
     """
-    zmax_eps = max_range - 1e-3
     for j in range(zhat.shape[0]):
-        ll = 0.0
-        for i in range(z.shape[0]):
-            zi = z[i] if z[i] < zmax_eps else max_range
-            ll += math.log(
-                _beam_prob(
-                    zi,
-                    zhat[j, i],
-                    max_range,
-                    z_hit,
-                    z_short,
-                    z_max,
-                    z_rand,
-                    sigma,
-                    lam_short,
-                )
-            )
-        out[j] = ll
+        _beam_one(
+            j, z, zhat, max_range, z_hit, z_short, z_max, z_rand, sigma, lam_short, out
+        )
+
+
+@nb.njit(**JIT_PARALLEL)
+def beam_loglik_parallel(
+    z, zhat, max_range, z_hit, z_short, z_max, z_rand, sigma, lam_short, out
+):
+    """`beam_loglik` over threads."""
+    for j in nb.prange(zhat.shape[0]):
+        _beam_one(
+            j, z, zhat, max_range, z_hit, z_short, z_max, z_rand, sigma, lam_short, out
+        )
 
 
 @nb.njit(**JIT)

@@ -387,7 +387,12 @@ class BeamSensorModel(_ExpectedModel):
         z = _scan(z, zhat.shape[1])
         q = self.params
         out = np.empty(len(zhat))
-        _kernels.beam_loglik(
+        kernel = (
+            _kernels.beam_loglik_parallel
+            if len(zhat) >= PARALLEL_MIN
+            else _kernels.beam_loglik
+        )
+        kernel(
             z,
             zhat,
             float(self.sonar.max_range),
