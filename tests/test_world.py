@@ -330,7 +330,7 @@ def test_compose_examples_and_broadcasting():
 # --------------------------------------------------------------------------
 # the shipped worlds
 
-SHIPPED = ["arena", "corridor", "corridor2", "maze", "office"]
+SHIPPED = ["arena", "corridor", "corridor2", "corridor_periodic", "maze", "office"]
 
 
 def test_world_names_lists_the_shipped_worlds():
@@ -376,7 +376,7 @@ def _wall_samples(w, step=0.05):
     return np.concatenate(out)
 
 
-@pytest.mark.parametrize("name", ["corridor", "corridor2"])
+@pytest.mark.parametrize("name", ["corridor", "corridor2", "corridor_periodic"])
 def test_corridor_is_not_symmetric(name):
     w = load_world(name)
     pts = _wall_samples(w)
@@ -399,8 +399,11 @@ def test_corridor_is_not_symmetric(name):
             assert off.sum() * 0.05 > 2.0, (cx, cy, sx, sy)
 
 
-def test_corridor_shape_and_aliasing():
-    w = load_world("corridor")
+@pytest.mark.parametrize(
+    "name, middle", [("corridor", 10.1), ("corridor_periodic", 4.5)]
+)
+def test_corridor_shape_and_aliasing(name, middle):
+    w = load_world(name)
     x, y, th = w.start
     assert th == 0.0
     # a ~2 m wide corridor along x: clear 0.9 m to either side, walls within 1.1 m
@@ -418,8 +421,9 @@ def test_corridor_shape_and_aliasing():
         gap = w.distance_to_walls(probe) > 0.3
         starts = np.flatnonzero(np.diff(gap.astype(int)) == 1)
         assert len(starts) >= 5  # several doors on each side
-    # aliasing: a pose 4 m along (one door period) sees the same nearby walls
-    a = np.array([x + 4.5, y])
+    # aliasing: in the periodic part, a pose one door period (4 m) along sees
+    # the same walls around it
+    a = np.array([x + middle, y])
     b = a + [4.0, 0.0]
     ring = np.column_stack(
         [
@@ -427,12 +431,52 @@ def test_corridor_shape_and_aliasing():
             np.sin(np.linspace(0, 2 * np.pi, 16, endpoint=False)),
         ]
     )
-    for r in (0.8, 1.2):
+    for r in (0.8, 1.2, 2.0):
         np.testing.assert_allclose(
             w.distance_to_walls(b + r * ring),
             w.distance_to_walls(a + r * ring),
             atol=1e-9,
         )
+
+
+def _drive_east_mismatch(w, steps):
+    """How well the best other straight drive explains the start's first scans.
+
+    Noise-free scans every 0.5 m along the centre line from the start, heading
+    east, against the same drive from every other start 5 cm apart on the
+    centre line, heading east (at least 1 m away) or west. Returns, per scan
+    count ``k`` (1..steps), the smallest summed mean |dz| (m) of the first
+    ``k`` scans over all those other drives.
+    """
+    from robotlib.sonar import expected_ranges
+
+    x0, y0, _ = w.start
+    k = np.arange(steps) * 0.5
+    truth = expected_ranges(w, np.column_stack([x0 + k, np.full(steps, y0), 0 * k]))
+    best = np.full(steps, np.inf)
+    xmax = w.segments[:, [0, 2]].max()
+    for heading, sign in ((0.0, 1.0), (math.pi, -1.0)):
+        starts = np.arange(w.segments[:, [0, 2]].min() + 0.3, xmax - 0.3, 0.05)
+        if heading == 0.0:
+            starts = starts[np.abs(starts - x0) >= 1.0]
+        xs = starts[:, None] + sign * k[None, :]
+        poses = np.column_stack(
+            [xs.ravel(), np.full(xs.size, y0), np.full(xs.size, heading)]
+        )
+        z = expected_ranges(w, poses).reshape(len(starts), steps, -1)
+        d = np.abs(z - truth[None]).mean(axis=2)
+        d[(xs < w.segments[:, [0, 2]].min() + 0.3) | (xs > xmax - 0.3)] = 5.0
+        best = np.minimum(best, np.cumsum(d, axis=1).min(axis=0))
+    return best
+
+
+def test_corridor_start_is_unique_and_periodic_one_is_not():
+    """Corridor: the first scan is aliased, the first ~8 m of scans are not."""
+    new = _drive_east_mismatch(load_world("corridor"), 17)
+    assert new[0] < 0.05  # one scan near the west end looks like another place
+    assert new[-1] > 1.0  # 17 scans (8 m) fit no other drive, either way round
+    old = _drive_east_mismatch(load_world("corridor_periodic"), 12)
+    assert old[-1] < 0.05  # the periodic corridor: 5.5 m on, still ambiguous
 
 
 def test_corridor2_bends():

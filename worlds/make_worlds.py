@@ -1,18 +1,29 @@
 """Generate the shipped worlds in this folder.
 
 Run ``python worlds/make_worlds.py`` from the repository root to rewrite
-``corridor.wld``, ``corridor2.wld``, ``maze.wld``, ``arena.wld`` and
-``office.map``. The files themselves are committed; this script documents how
-they were made and regenerates them identically (the maze uses a fixed seed).
+``corridor.wld``, ``corridor_periodic.wld``, ``corridor2.wld``, ``maze.wld``,
+``arena.wld`` and ``office.map``. The files themselves are committed; this
+script documents how they were made and regenerates them identically (the maze
+uses a fixed seed).
 
 All coordinates here are whole millimetres, as in the files.
 
 - ``corridor``: the paper's aliased corridor. A 28 m x 2 m corridor with seven
-  1 m doors on each side into closed rooms, spaced every 4 m, so that places
-  near either end look alike to eight sonars. It is deliberately not
-  symmetric: the last south door and one north door break the spacing, the
-  north-west corner is chamfered, and an alcove opens off the north wall near
-  the east end.
+  1 m doors on each side into closed rooms. In the middle (16 m) the doors
+  face each other every 4 m, so places there look alike to eight sonars, and
+  a single scan near either end looks like one near the other end turned
+  round. It is not symmetric (no half turn or mirror maps it onto itself),
+  and the door sequence a robot meets driving east from the start (a south
+  door, a north door 2 m on, the first facing pair 3 m further) is found
+  nowhere else in the corridor, either way round: a filter can tell where it
+  is after about 8 m. The north-west corner is chamfered, and an alcove opens
+  off the north wall near the east end.
+- ``corridor_periodic``: the teaching counter-example, the corridor as first
+  drawn: doors every 4 m on both sides from the west end for 14 m. Driving
+  east from the start, every scan for the first ~12 m is repeated exactly
+  4 m further on (and by the half-turned corridor), so no filter can localize
+  there by step 25; the first differences (a north door shifted by 0.5 m at
+  15 m, the east end's alcove) come later.
 - ``corridor2``: a second aliased corridor, 1.8 m wide, 19 m long with 0.9 m
   doors every 3 m (3.5 m on the north side), then an L bend north for 10 m
   with three more rooms; for testing MCL on a corridor it was not tuned on.
@@ -96,7 +107,63 @@ def to_world(
 
 
 def corridor() -> World:
-    """Build the paper's long aliased corridor (28 m x 2 m)."""
+    """Build the paper's long aliased corridor (28 m x 2 m).
+
+    Door centres (m): south 2.6, 7.6, 11.6, 15.6, 19.6, 23.6, 27.0; north 4.6,
+    7.6, 11.6, 15.6, 19.6, 23.6, 25.7. From 7.6 to 23.6 the doors face each
+    other every 4 m (rooms 4 m wide, centred on their doors): a stretch where
+    every scan repeats 4 m along, and 2.2 m along the other way round. The
+    west end opens a south door, 2 m later a north one, 3 m later the first
+    pair; the east end, the other way round, a north door then a south door
+    1.3 m apart and an alcove. Those two door sequences, met from either end,
+    are found nowhere else.
+    """
+    south = rooms(
+        3000,
+        [500, 5600, 9600, 13600, 17600, 21600, 25600, 28500],
+        [
+            (2100, 3100),
+            (7100, 8100),
+            (11100, 12100),
+            (15100, 16100),
+            (19100, 20100),
+            (23100, 24100),
+            (26500, 27500),
+        ],
+        -2500,
+    )
+    north = rooms(
+        5000,
+        [500, 5600, 9600, 13600, 17600, 21600, 24600, 27000],
+        [
+            (4100, 5100),
+            (7100, 8100),
+            (11100, 12100),
+            (15100, 16100),
+            (19100, 20100),
+            (23100, 24100),
+            (25200, 26200),
+        ],
+        2500,
+    )
+    ends = [
+        (500, 3000, 500, 4500),  # west end, chamfered at the north corner
+        (500, 4500, 1000, 5000),
+        (28500, 3000, 28500, 5000),  # east end, flat
+        # the north wall beyond the last room, with an alcove 1 m x 0.6 m
+        (27000, 5000, 27300, 5000),
+        (27300, 5000, 27300, 5600),
+        (27300, 5600, 28300, 5600),
+        (28300, 5600, 28300, 5000),
+        (28300, 5000, 28500, 5000),
+        (27000, 7500, 28500, 7500),  # close the solid block behind the alcove
+        (28500, 5000, 28500, 7500),
+    ]
+    return to_world(south + north + ends, (29000, 8000), (1500, 4000, 0.0))
+
+
+def corridor_periodic() -> World:
+    """Build the teaching corridor whose doors repeat every 4 m (28 m x 2 m)."""
     south = rooms(
         3000,
         [500, 5000, 9000, 13000, 17000, 21000, 25000, 28500],
@@ -308,12 +375,16 @@ def main() -> None:
     """Write every world into this folder."""
     notes = {
         "corridor": "The paper's aliased corridor: 28 m x 2 m, doors on both sides.",
+        "corridor_periodic": (
+            "A 28 m x 2 m corridor whose doors repeat every 4 m from the west end."
+        ),
         "corridor2": "A second aliased corridor with an L bend.",
         "maze": "An 8 x 6 maze of 1.5 m cells.",
         "arena": "An open 10 m x 10 m arena with six boxes.",
     }
     makers = {
         "corridor": corridor,
+        "corridor_periodic": corridor_periodic,
         "corridor2": corridor2,
         "maze": maze,
         "arena": arena,
