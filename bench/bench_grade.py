@@ -1,0 +1,54 @@
+"""Grade a folder of N copies of a lab's solution and print the wall time.
+
+python bench/bench_grade.py [--lab lab3_mcl] [--copies 30] [--jobs 2]
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import shutil
+import tempfile
+import time
+from pathlib import Path
+
+from robotlib.course import grade as g
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--lab", default="lab3_mcl")
+    parser.add_argument("--copies", type=int, default=30)
+    parser.add_argument("--jobs", type=int, default=os.cpu_count())
+    args = parser.parse_args()
+    solution = ROOT / "solutions" / f"{args.lab}.ipynb"
+    with tempfile.TemporaryDirectory() as tmp:
+        subs = Path(tmp) / "submissions"
+        for i in range(args.copies):
+            (subs / f"student{i:02d}").mkdir(parents=True)
+            shutil.copy(solution, subs / f"student{i:02d}" / f"{args.lab}.ipynb")
+        t0 = time.monotonic()
+        results, checks = g.grade(subs, args.lab, jobs=args.jobs, progress=False)
+        wall = time.monotonic() - t0
+        g.write_gradebook(Path(tmp) / "gradebook.csv", results, checks)
+    full = sum(r.total == r.max_points for r in results)
+    secs = sorted(r.seconds for r in results)
+    print(
+        f"lab {args.lab}: {args.copies} copies, {args.jobs} jobs, "
+        f"{os.cpu_count()} cores"
+    )
+    print(
+        f"wall time {wall:.1f} s (reference run included), "
+        f"{full}/{len(results)} full marks"
+    )
+    print(
+        f"per submission: median {secs[len(secs) // 2]:.1f} s, "
+        f"min {secs[0]:.1f} s, max {secs[-1]:.1f} s"
+    )
+    print(f"throughput {args.copies / wall * 60:.1f} submissions per minute")
+
+
+if __name__ == "__main__":
+    main()
