@@ -175,16 +175,19 @@ def graded(tmp_path_factory):
         "2",
         "--quiet",
     ]
-    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=300)
+    work = folder.parent / "work"  # the grader's temporary folders go here
+    work.mkdir()
+    env = {**os.environ, "TMPDIR": str(work)}
+    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=300, env=env)
     elapsed = time.monotonic() - t0
     assert proc.returncode == 0, proc.stderr
     with open(out, newline="") as f:
         rows = {r["student"]: r for r in csv.DictReader(f)}
-    return rows, expected, out, elapsed
+    return rows, expected, out, elapsed, work
 
 
 def test_gradebook_columns(graded):
-    rows, expected, out, _ = graded
+    rows, expected, out, *_ = graded
     header = out.read_text().splitlines()[0].split(",")
     assert header == [
         "student", "add", "mean", "scale", "total", "max",
@@ -213,7 +216,7 @@ def test_gradebook_columns(graded):
     ],
 )
 def test_points(graded, student):
-    rows, expected, _, _ = graded
+    rows, expected, *_ = graded
     total, points = expected[student]
     row = rows[student]
     got = {k: float(row[k]) for k in points}
@@ -252,18 +255,21 @@ def test_feedback_files(graded):
 
 
 def test_no_process_left_behind(graded):
-    """No process of any grading job survives the run."""
+    """No process of this run's grading jobs survives it."""
+    work = str(graded[4]).encode()
     left = []
     for entry in os.listdir("/proc"):
         if not entry.isdigit():
             continue
         try:
             with open(f"/proc/{entry}/environ", "rb") as f:
-                if g.JOB_ENV.encode() in f.read():
-                    left.append(int(entry))
+                environ = f.read()
         except OSError:
             continue
+        if g.JOB_ENV.encode() in environ and work in environ:
+            left.append(int(entry))
     assert left == []
+    assert list(graded[4].iterdir()) == []  # working folders removed
 
 
 def test_report_time(graded, capsys):
