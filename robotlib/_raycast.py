@@ -265,6 +265,23 @@ def sonar_cone(sx, sy, sth, segments, n_rays, cone, max_range, cos_specular):
 
 
 @nb.njit(**JIT)
+def _sensor_cone(k, i, poses, sensors, segments, n_rays, cone, max_range, cos_specular):
+    """`sonar_cone` of sensor ``i`` (robot frame) on robot pose ``k``."""
+    c = math.cos(poses[k, 2])
+    s = math.sin(poses[k, 2])
+    return sonar_cone(
+        poses[k, 0] + c * sensors[i, 0] - s * sensors[i, 1],
+        poses[k, 1] + s * sensors[i, 0] + c * sensors[i, 1],
+        poses[k, 2] + sensors[i, 2],
+        segments,
+        n_rays,
+        cone,
+        max_range,
+        cos_specular,
+    )
+
+
+@nb.njit(**JIT)
 def _scan_pose(
     k,
     poses,
@@ -282,20 +299,9 @@ def _scan_pose(
     normals,
     out,
 ):
-    c = math.cos(poses[k, 2])
-    s = math.sin(poses[k, 2])
     for i in range(sensors.shape[0]):
-        sx = poses[k, 0] + c * sensors[i, 0] - s * sensors[i, 1]
-        sy = poses[k, 1] + s * sensors[i, 0] + c * sensors[i, 1]
-        echo, multipath = sonar_cone(
-            sx,
-            sy,
-            poses[k, 2] + sensors[i, 2],
-            segments,
-            n_rays,
-            cone,
-            max_range,
-            cos_specular,
+        echo, multipath = _sensor_cone(
+            k, i, poses, sensors, segments, n_rays, cone, max_range, cos_specular
         )
         z = max_range
         if echo < max_range:
@@ -305,6 +311,63 @@ def _scan_pose(
         if uniforms[k, i, 1] < dropout_prob:
             z = max_range
         out[k, i] = min(max(z, min_range), max_range)
+
+
+@nb.njit(**JIT)
+def _expected_pose(
+    k, poses, sensors, segments, n_rays, cone, max_range, min_range, cos_specular, out
+):
+    for i in range(sensors.shape[0]):
+        echo, _ = _sensor_cone(
+            k, i, poses, sensors, segments, n_rays, cone, max_range, cos_specular
+        )
+        z = echo if echo < max_range else max_range
+        out[k, i] = min(max(z, min_range), max_range)
+
+
+@nb.njit(**JIT)
+def expected_scan(
+    poses, sensors, segments, n_rays, cone, max_range, min_range, cos_specular, out
+):
+    """Noise-free sonar readings ``out`` (K, S) for poses (K, 3), sensors (S, 3).
+
+    Each reading is the cone's first echo (`sonar_cone`), ``max_range`` when
+    nothing echoes, clipped to ``[min_range, max_range]``: `sonar_scan` with
+    no noise, multipath or dropouts.
+    """
+    for k in range(poses.shape[0]):
+        _expected_pose(
+            k,
+            poses,
+            sensors,
+            segments,
+            n_rays,
+            cone,
+            max_range,
+            min_range,
+            cos_specular,
+            out,
+        )
+
+
+@nb.njit(**JIT_PARALLEL)
+def expected_scan_parallel(
+    poses, sensors, segments, n_rays, cone, max_range, min_range, cos_specular, out
+):
+    """`expected_scan` with the poses spread over threads (for many poses)."""
+    for k in nb.prange(poses.shape[0]):
+        _expected_pose(
+            k,
+            poses,
+            sensors,
+            segments,
+            n_rays,
+            cone,
+            max_range,
+            min_range,
+            cos_specular,
+            out,
+        )
 
 
 @nb.njit(**JIT)

@@ -140,8 +140,21 @@ def expected_ranges(walls, poses, model: SonarModel | None = None) -> np.ndarray
         Ranges in m, in ``[min_range, max_range]``.
     """
     model = SonarModel() if model is None else model
-    k, s = len(_poses(poses)), len(model.sensors)
-    return _scan(walls, poses, model, np.ones((k, s, 2)), np.zeros((k, s)))
+    p = _poses(poses)
+    out = np.empty((len(p), len(model.sensors)))
+    kernel = _raycast.expected_scan_parallel if len(p) > 64 else _raycast.expected_scan
+    kernel(
+        p,
+        model.sensors,
+        _segments(walls),
+        int(model.n_rays),
+        float(model.cone),
+        float(model.max_range),
+        float(model.min_range),
+        model.cos_specular,
+        out,
+    )
+    return out
 
 
 def simulate_ranges(

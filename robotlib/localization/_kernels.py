@@ -65,83 +65,8 @@ def sample_odometry_parallel(particles, rot1, trans, rot2, sd1, sdt, sd2, normal
         _odometry_one(j, particles, rot1, trans, rot2, sd1, sdt, sd2, normals, out)
 
 
-# -- expected sonar readings: exact (cone cast per particle) ------------------
-
-
-@nb.njit(**JIT)
-def _expected_one(
-    j,
-    particles,
-    sensors,
-    segments,
-    n_rays,
-    cone,
-    max_range,
-    min_range,
-    cos_specular,
-    out,
-):
-    c = math.cos(particles[j, 2])
-    s = math.sin(particles[j, 2])
-    for i in range(sensors.shape[0]):
-        sx = particles[j, 0] + c * sensors[i, 0] - s * sensors[i, 1]
-        sy = particles[j, 1] + s * sensors[i, 0] + c * sensors[i, 1]
-        echo, _ = sonar_cone(
-            sx,
-            sy,
-            particles[j, 2] + sensors[i, 2],
-            segments,
-            n_rays,
-            cone,
-            max_range,
-            cos_specular,
-        )
-        z = max_range if echo >= max_range else echo
-        out[j, i] = min(max(z, min_range), max_range)
-
-
-@nb.njit(**JIT)
-def expected_exact(
-    particles, sensors, segments, n_rays, cone, max_range, min_range, cos_specular, out
-):
-    """Noise-free sonar ranges ``out`` (N, S) of particles (N, 3), by cone casts.
-
-    The same model as `robotlib.sonar.expected_ranges` (first echo in the
-    cone, specular misses, clipped to ``[min_range, max_range]``).
-    """
-    for j in range(particles.shape[0]):
-        _expected_one(
-            j,
-            particles,
-            sensors,
-            segments,
-            n_rays,
-            cone,
-            max_range,
-            min_range,
-            cos_specular,
-            out,
-        )
-
-
-@nb.njit(**JIT_PARALLEL)
-def expected_exact_parallel(
-    particles, sensors, segments, n_rays, cone, max_range, min_range, cos_specular, out
-):
-    """`expected_exact` over threads."""
-    for j in nb.prange(particles.shape[0]):
-        _expected_one(
-            j,
-            particles,
-            sensors,
-            segments,
-            n_rays,
-            cone,
-            max_range,
-            min_range,
-            cos_specular,
-            out,
-        )
+# Expected readings by cone casts (the exact path) are `robotlib._raycast`'s
+# `expected_scan` and `expected_scan_parallel`, shared with `robotlib.sonar`.
 
 
 # -- expected sonar readings: fast (cone table lookup) -----------------------

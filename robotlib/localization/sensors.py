@@ -26,6 +26,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .. import _raycast
 from ..sonar import SonarModel
 from ..world import World
 from . import _kernels
@@ -219,9 +220,7 @@ def expected_readings(
     sonar = SonarModel() if sonar is None else sonar
     p = _particles(particles)
     out = np.empty((len(p), len(sonar.sensors)))
-    kernel = (
-        _kernels.expected_exact_parallel if len(p) >= 64 else _kernels.expected_exact
-    )
+    kernel = _raycast.expected_scan_parallel if len(p) >= 64 else _raycast.expected_scan
     kernel(
         p,
         sonar.sensors,
