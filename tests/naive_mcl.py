@@ -98,3 +98,8 @@ def kld_bound(k, epsilon, z):
         return 1.0
     a = 2 / (9 * (k - 1))
     return (k - 1) / (2 * epsilon) * (1 - a + math.sqrt(a) * z) ** 3
+
+
+def paper_weights_unnormalised(z, zhat):
+    d = np.mean(np.abs((z - zhat) / z), axis=1)
+    return np.exp(-d) + 1.0 / len(zhat)

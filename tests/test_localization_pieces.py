@@ -9,6 +9,7 @@ from robotlib.localization import (
     BeamParameters,
     BeamSensorModel,
     LikelihoodFieldSensorModel,
+    PaperSensorModel,
     _kernels,
     cone_table,
     expected_readings,
@@ -294,3 +295,74 @@ def test_uniform_particles_cover_free_space(world):
     assert np.all(paper.admissible(world, p))
     assert w.sum() == pytest.approx(1)
     assert p[:, 0].min() < 1.0 and p[:, 0].max() > 5.0
+
+
+def test_cone_table_by_blocks_equals_one_block(world):
+    """Pruning walls per block of cells leaves the table unchanged."""
+    table = cone_table(world)
+    s = table.sonar
+    whole = np.empty_like(table.table)
+    _kernels.build_cone_table(
+        np.ascontiguousarray(world.obstacles),
+        table.origin[0],
+        table.origin[1],
+        table.resolution,
+        table.n_bins,
+        1,
+        int(s.n_rays),
+        float(s.cone),
+        float(s.max_range),
+        float(s.min_range),
+        s.cos_specular,
+        1 << 20,
+        whole,
+    )
+    np.testing.assert_array_equal(whole, table.table)
+    # and small blocks (walls pruned hard: 3 m range) agree with one block too
+    short = SonarModel(max_range=3.0)
+    a = np.empty((30, 60, 72), dtype=np.uint16)
+    b = np.empty_like(a)
+    for block, out in ((4, a), (1 << 20, b)):
+        _kernels.build_cone_table(
+            np.ascontiguousarray(world.obstacles), 0.0, 0.0, 0.1, 72, 1, 7,
+            float(short.cone), 3.0, 0.1, short.cos_specular, block, out,
+        )  # fmt: skip
+    np.testing.assert_array_equal(a, b)
+
+
+@pytest.mark.parametrize("exponent", [1.0, 0.2])
+def test_fused_table_models_match_lookup_then_model(world, exponent):
+    poses = world.sample_free_poses(300, 11)
+    z = expected_readings(world, poses[:1])[0]
+    z[3] = 5.0  # a max reading
+    beam = BeamSensorModel(world, fast=True, params=BeamParameters(exponent=exponent))
+    q = beam.params
+    zhat = beam.expected(poses)
+    ref = np.empty(len(poses))
+    _kernels.beam_loglik(
+        z, zhat, 5.0, q.z_hit, q.z_short, q.z_max, q.z_rand, q.sigma_hit,
+        q.lambda_short, ref,
+    )  # fmt: skip
+    np.testing.assert_allclose(
+        beam.log_likelihood(poses, z), exponent * ref, atol=1e-12
+    )
+    t = beam.table
+    for kernel in (_kernels.beam_table_loglik, _kernels.beam_table_loglik_parallel):
+        out = np.empty(len(poses))
+        kernel(
+            poses, t.sonar.sensors, t.table, t.origin[0], t.origin[1],
+            1 / t.resolution, z, np.exp(-q.lambda_short * z), z >= 5.0 - 1e-3,
+            *beam._norms, q.z_max, q.z_rand / 5.0, 1 / q.sigma_hit, exponent, out,
+        )  # fmt: skip
+        np.testing.assert_allclose(out, exponent * ref, atol=1e-12)
+    paper_model = PaperSensorModel(world, fast=True)
+    for kernel in (_kernels.paper_table_loglik, _kernels.paper_table_loglik_parallel):
+        out = np.empty(len(poses))
+        kernel(
+            poses, t.sonar.sensors, t.table, t.origin[0], t.origin[1],
+            1 / t.resolution, z, 1 / len(poses), out,
+        )  # fmt: skip
+        np.testing.assert_allclose(
+            out, np.log(naive.paper_weights_unnormalised(z, zhat)), atol=1e-12
+        )
+    np.testing.assert_array_equal(paper_model.log_likelihood(poses, z), out)

@@ -72,6 +72,54 @@ def sample_odometry_parallel(particles, rot1, trans, rot2, sd1, sdt, sd2, normal
 # -- expected sonar readings: fast (cone table lookup) -----------------------
 
 
+@nb.njit(**JIT)
+def _cone_cell(
+    cx,
+    cy,
+    segments,
+    n_bins,
+    ray_step,
+    n_rays,
+    cone,
+    max_range,
+    min_range,
+    cos_specular,
+    rays,
+    table,
+    i,
+    j,
+):
+    """Fill ``table[i, j, :]`` for a sonar at ``(cx, cy)`` (see `build_cone_table`)."""
+    half = (n_rays - 1) // 2 if n_rays > 1 else 0
+    if ray_step > 0:
+        for b in range(n_bins):
+            echo, _ = sonar_cone(
+                cx, cy, b * _TWO_PI / n_bins, segments, 1, 0.0, max_range, cos_specular
+            )
+            rays[b] = echo
+    for b in range(n_bins):
+        if ray_step > 0:
+            echo = np.inf
+            for k in range(-half, half + 1):
+                r = rays[(b + k * ray_step) % n_bins]
+                if r < echo:
+                    echo = r
+        else:
+            echo, _ = sonar_cone(
+                cx,
+                cy,
+                b * _TWO_PI / n_bins,
+                segments,
+                n_rays,
+                cone,
+                max_range,
+                cos_specular,
+            )
+        z = max_range if echo >= max_range else echo
+        z = min(max(z, min_range), max_range)
+        table[i, j, b] = np.uint16(round(z * 1000.0))
+
+
 @nb.njit(**JIT_PARALLEL)
 def build_cone_table(
     segments,
@@ -85,6 +133,7 @@ def build_cone_table(
     max_range,
     min_range,
     cos_specular,
+    block,
     table,
 ):
     """Fill ``table`` (ny, nx, n_bins) uint16 with cone ranges in mm.
@@ -95,66 +144,82 @@ def build_cone_table(
     cast once and a cone is the nearest echo of its ``n_rays`` rays, which is
     what `sonar_cone` computes; otherwise (``ray_step == 0``) every cone is
     cast with `sonar_cone`.
+
+    Cells are filled in square blocks of ``block`` cells (in parallel), each
+    against only the walls that come within ``max_range`` of the block: a
+    wall further away cannot echo, so the table is the same as with all
+    walls.
     """
     ny, nx, _ = table.shape
-    half = (n_rays - 1) // 2 if n_rays > 1 else 0
-    for i in nb.prange(ny):
+    nbx = (nx + block - 1) // block
+    nby = (ny + block - 1) // block
+    reach = max_range + 0.75 * block * resolution  # > max_range + half diagonal
+    for q in nb.prange(nbx * nby):
+        bi = q // nbx
+        bj = q % nbx
+        bx = x0 + (bj + 0.5) * block * resolution
+        by = y0 + (bi + 0.5) * block * resolution
+        keep = np.zeros(segments.shape[0], dtype=np.bool_)
+        count = 0
+        for m in range(segments.shape[0]):
+            d = point_segment_distance(
+                bx, by, segments[m, 0], segments[m, 1], segments[m, 2], segments[m, 3]
+            )
+            if d <= reach:
+                keep[m] = True
+                count += 1
+        near = np.empty((count, 4))
+        c = 0
+        for m in range(segments.shape[0]):
+            if keep[m]:
+                for t in range(4):
+                    near[c, t] = segments[m, t]
+                c += 1
         rays = np.empty(n_bins)
-        cy = y0 + (i + 0.5) * resolution
-        for j in range(nx):
-            cx = x0 + (j + 0.5) * resolution
-            if ray_step > 0:
-                for b in range(n_bins):
-                    echo, _ = sonar_cone(
-                        cx,
-                        cy,
-                        b * _TWO_PI / n_bins,
-                        segments,
-                        1,
-                        0.0,
-                        max_range,
-                        cos_specular,
-                    )
-                    rays[b] = echo
-            for b in range(n_bins):
-                if ray_step > 0:
-                    echo = np.inf
-                    for k in range(-half, half + 1):
-                        r = rays[(b + k * ray_step) % n_bins]
-                        if r < echo:
-                            echo = r
-                else:
-                    echo, _ = sonar_cone(
-                        cx,
-                        cy,
-                        b * _TWO_PI / n_bins,
-                        segments,
-                        n_rays,
-                        cone,
-                        max_range,
-                        cos_specular,
-                    )
-                z = max_range if echo >= max_range else echo
-                z = min(max(z, min_range), max_range)
-                table[i, j, b] = np.uint16(round(z * 1000.0))
+        for i in range(bi * block, min((bi + 1) * block, ny)):
+            cy = y0 + (i + 0.5) * resolution
+            for j in range(bj * block, min((bj + 1) * block, nx)):
+                cx = x0 + (j + 0.5) * resolution
+                _cone_cell(
+                    cx,
+                    cy,
+                    near,
+                    n_bins,
+                    ray_step,
+                    n_rays,
+                    cone,
+                    max_range,
+                    min_range,
+                    cos_specular,
+                    rays,
+                    table,
+                    i,
+                    j,
+                )
+
+
+@nb.njit(**JIT)
+def _table_mm(particles, j, c, s, sensors, i, table, x0, y0, inv_res):
+    """Table entry (mm) for sensor ``i`` of particle ``j`` (heading cos, sin)."""
+    ny, nx, n_bins = table.shape
+    sx = particles[j, 0] + c * sensors[i, 0] - s * sensors[i, 1]
+    sy = particles[j, 1] + s * sensors[i, 0] + c * sensors[i, 1]
+    col = int(math.floor((sx - x0) * inv_res))
+    row = int(math.floor((sy - y0) * inv_res))
+    col = min(max(col, 0), nx - 1)
+    row = min(max(row, 0), ny - 1)
+    b = int(math.floor((particles[j, 2] + sensors[i, 2]) * (n_bins / _TWO_PI) + 0.5))
+    return table[row, col, b % n_bins]
 
 
 @nb.njit(**JIT)
 def _lookup_one(j, particles, sensors, table, x0, y0, inv_res, out):
-    ny, nx, n_bins = table.shape
     c = math.cos(particles[j, 2])
     s = math.sin(particles[j, 2])
-    bins_per_rad = n_bins / _TWO_PI
     for i in range(sensors.shape[0]):
-        sx = particles[j, 0] + c * sensors[i, 0] - s * sensors[i, 1]
-        sy = particles[j, 1] + s * sensors[i, 0] + c * sensors[i, 1]
-        col = int(math.floor((sx - x0) * inv_res))
-        row = int(math.floor((sy - y0) * inv_res))
-        col = min(max(col, 0), nx - 1)
-        row = min(max(row, 0), ny - 1)
-        b = int(math.floor((particles[j, 2] + sensors[i, 2]) * bins_per_rad + 0.5))
-        b = b % n_bins
-        out[j, i] = table[row, col, b] * 0.001
+        out[j, i] = (
+            _table_mm(particles, j, c, s, sensors, i, table, x0, y0, inv_res) * 0.001
+        )
 
 
 @nb.njit(**JIT)
@@ -255,6 +320,188 @@ def beam_loglik_parallel(
         _beam_one(
             j, z, zhat, max_range, z_hit, z_short, z_max, z_rand, sigma, lam_short, out
         )
+
+
+# -- fused fast path: table lookup and sensor model in one pass -----------------
+
+
+@nb.njit(**JIT)
+def beam_norms(max_range, z_hit, z_short, sigma, lam_short, n):
+    """Per expected range ``k`` mm (``k < n``): the beam model's hit and short factors.
+
+    Returns ``(hit, short)`` (n,): ``z_hit / (sigma sqrt(2 pi) mass(zhat))``
+    (``mass``: the hit Gaussian's share of ``[0, max_range]``; 0 if none) and
+    ``z_short lambda / (1 - exp(-lambda zhat))`` (0 at ``zhat = 0``), so that
+    `_beam_prob` is ``hit exp(-u^2 / 2) + short exp(-lambda z) [z <= zhat] +
+    z_rand / max_range``.
+    """
+    hit = np.zeros(n)
+    short = np.zeros(n)
+    for k in range(n):
+        zhat = k * 0.001
+        mass = 0.5 * (
+            math.erf((max_range - zhat) / (sigma * math.sqrt(2.0)))
+            - math.erf(-zhat / (sigma * math.sqrt(2.0)))
+        )
+        if mass > 0.0:
+            hit[k] = z_hit * math.exp(-_LOG_SQRT_2PI) / sigma / mass
+        if zhat > 0.0:
+            short[k] = z_short * lam_short / (1.0 - math.exp(-lam_short * zhat))
+    return hit, short
+
+
+@nb.njit(**JIT)
+def _beam_table_one(
+    j,
+    particles,
+    sensors,
+    table,
+    x0,
+    y0,
+    inv_res,
+    z,
+    e_short,
+    is_max,
+    hit,
+    short,
+    z_max,
+    p_rand,
+    inv_sigma,
+    exponent,
+    out,
+):
+    c = math.cos(particles[j, 2])
+    s = math.sin(particles[j, 2])
+    ll = 0.0
+    for i in range(sensors.shape[0]):
+        if is_max[i]:
+            ll += math.log(z_max)
+            continue
+        mm = _table_mm(particles, j, c, s, sensors, i, table, x0, y0, inv_res)
+        zhat = mm * 0.001
+        u = (z[i] - zhat) * inv_sigma
+        p = hit[mm] * math.exp(-0.5 * u * u) + p_rand
+        if z[i] <= zhat:
+            p += short[mm] * e_short[i]
+        ll += math.log(p)
+    out[j] = ll * exponent
+
+
+@nb.njit(**JIT)
+def beam_table_loglik(
+    particles,
+    sensors,
+    table,
+    x0,
+    y0,
+    inv_res,
+    z,
+    e_short,
+    is_max,
+    hit,
+    short,
+    z_max,
+    p_rand,
+    inv_sigma,
+    exponent,
+    out,
+):
+    """Beam log-likelihood of particles (N, 3), expected ranges from a cone table.
+
+    The same as `expected_table` then `beam_loglik` (times ``exponent``), in
+    one pass with no (N, S) array: ``hit``, ``short`` from `beam_norms`;
+    per reading ``e_short[i] = exp(-lambda z_i)`` and ``is_max[i]`` (a max
+    reading); ``p_rand = z_rand / max_range``.
+    """
+    for j in range(particles.shape[0]):
+        _beam_table_one(
+            j,
+            particles,
+            sensors,
+            table,
+            x0,
+            y0,
+            inv_res,
+            z,
+            e_short,
+            is_max,
+            hit,
+            short,
+            z_max,
+            p_rand,
+            inv_sigma,
+            exponent,
+            out,
+        )
+
+
+@nb.njit(**JIT_PARALLEL)
+def beam_table_loglik_parallel(
+    particles,
+    sensors,
+    table,
+    x0,
+    y0,
+    inv_res,
+    z,
+    e_short,
+    is_max,
+    hit,
+    short,
+    z_max,
+    p_rand,
+    inv_sigma,
+    exponent,
+    out,
+):
+    """`beam_table_loglik` over threads."""
+    for j in nb.prange(particles.shape[0]):
+        _beam_table_one(
+            j,
+            particles,
+            sensors,
+            table,
+            x0,
+            y0,
+            inv_res,
+            z,
+            e_short,
+            is_max,
+            hit,
+            short,
+            z_max,
+            p_rand,
+            inv_sigma,
+            exponent,
+            out,
+        )
+
+
+@nb.njit(**JIT)
+def _paper_table_one(j, particles, sensors, table, x0, y0, inv_res, z, inv_n, out):
+    c = math.cos(particles[j, 2])
+    s = math.sin(particles[j, 2])
+    d = 0.0
+    for i in range(sensors.shape[0]):
+        mm = _table_mm(particles, j, c, s, sensors, i, table, x0, y0, inv_res)
+        d += abs((z[i] - mm * 0.001) / z[i])
+    out[j] = math.log(math.exp(-d / sensors.shape[0]) + inv_n)
+
+
+@nb.njit(**JIT)
+def paper_table_loglik(particles, sensors, table, x0, y0, inv_res, z, inv_n, out):
+    """`expected_table` then `paper_loglik` (``inv_n = 1/n``) in one pass."""
+    for j in range(particles.shape[0]):
+        _paper_table_one(j, particles, sensors, table, x0, y0, inv_res, z, inv_n, out)
+
+
+@nb.njit(**JIT_PARALLEL)
+def paper_table_loglik_parallel(
+    particles, sensors, table, x0, y0, inv_res, z, inv_n, out
+):
+    """`paper_table_loglik` over threads."""
+    for j in nb.prange(particles.shape[0]):
+        _paper_table_one(j, particles, sensors, table, x0, y0, inv_res, z, inv_n, out)
 
 
 @nb.njit(**JIT)

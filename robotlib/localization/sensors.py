@@ -115,6 +115,7 @@ class ConeTable:
             float(sonar.max_range),
             float(sonar.min_range),
             sonar.cos_specular,
+            16,
             self.table,
         )
         self.build_seconds = time.perf_counter() - t0
@@ -309,7 +310,29 @@ class PaperSensorModel(_ExpectedModel):
 
     def log_likelihood(self, particles, z) -> np.ndarray:
         """Per-particle ``log w_j`` for readings ``z`` (S,), m."""
-        return innovation_loglik(z, self.expected(particles))
+        if self.table is None:
+            return innovation_loglik(z, self.expected(particles))
+        p = _particles(particles)
+        z = _scan(z, len(self.sonar.sensors))
+        out = np.empty(len(p))
+        t = self.table
+        kernel = (
+            _kernels.paper_table_loglik_parallel
+            if len(p) >= PARALLEL_MIN
+            else _kernels.paper_table_loglik
+        )
+        kernel(
+            p,
+            self.sonar.sensors,
+            t.table,
+            t.origin[0],
+            t.origin[1],
+            1.0 / t.resolution,
+            z,
+            1.0 / len(p),
+            out,
+        )
+        return out
 
 
 @dataclass(frozen=True)
@@ -379,9 +402,24 @@ class BeamSensorModel(_ExpectedModel):
     ):
         super().__init__(world, sonar, fast, resolution, n_bins)
         self.params = BeamParameters() if params is None else params
+        if self.table is not None:
+            q = self.params
+            self._norms = _kernels.beam_norms(
+                float(self.sonar.max_range),
+                q.z_hit,
+                q.z_short,
+                q.sigma_hit,
+                q.lambda_short,
+                int(round(self.sonar.max_range * 1000)) + 1,
+            )
 
     def log_likelihood(self, particles, z) -> np.ndarray:
-        """Per-particle ``sum_i log p(z_i | x_j)`` for readings ``z`` (S,), m."""
+        """Per-particle ``sum_i log p(z_i | x_j)`` for readings ``z`` (S,), m.
+
+        Times `BeamParameters.exponent`.
+        """
+        if self.table is not None:
+            return self._table_log_likelihood(particles, z)
         zhat = self.expected(particles)
         z = _scan(z, zhat.shape[1])
         q = self.params
@@ -405,6 +443,37 @@ class BeamSensorModel(_ExpectedModel):
         )
         if q.exponent != 1.0:
             out *= q.exponent
+        return out
+
+    def _table_log_likelihood(self, particles, z) -> np.ndarray:
+        p = _particles(particles)
+        z = _scan(z, len(self.sonar.sensors))
+        q, t = self.params, self.table
+        max_range = float(self.sonar.max_range)
+        out = np.empty(len(p))
+        kernel = (
+            _kernels.beam_table_loglik_parallel
+            if len(p) >= PARALLEL_MIN
+            else _kernels.beam_table_loglik
+        )
+        kernel(
+            p,
+            self.sonar.sensors,
+            t.table,
+            t.origin[0],
+            t.origin[1],
+            1.0 / t.resolution,
+            z,
+            np.exp(-q.lambda_short * z),
+            z >= max_range - 1e-3,
+            self._norms[0],
+            self._norms[1],
+            q.z_max,
+            q.z_rand / max_range,
+            1.0 / q.sigma_hit,
+            float(q.exponent),
+            out,
+        )
         return out
 
 
