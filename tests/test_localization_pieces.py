@@ -189,6 +189,10 @@ def test_update_weights_matches_reference():
     np.testing.assert_allclose(out, ref_w)
     assert log_mean == pytest.approx(ref_mean)
     assert ess == pytest.approx(ref_ess)
+    # the parallel form gives the same bits (its sums are serial)
+    out2 = np.empty(100)
+    assert _kernels.update_weights_parallel(w0, ll, out2) == (log_mean, ess)
+    np.testing.assert_array_equal(out2, out)
 
 
 def test_estimate_uses_circular_mean():
@@ -198,6 +202,11 @@ def test_estimate_uses_circular_mean():
     assert abs(abs(est[2]) - math.pi) < 1e-9
     est = paper.estimate(p, np.array([3.0, 1.0]))
     np.testing.assert_allclose(est, naive.pose_mean(p, np.array([3.0, 1.0])))
+    rng = np.random.default_rng(12)
+    p, w = rng.uniform(-3, 3, (1000, 3)), rng.random(1000)
+    serial = _kernels.weighted_pose_mean(p, w)
+    np.testing.assert_allclose(serial, naive.pose_mean(p, w), atol=1e-12)
+    np.testing.assert_array_equal(_kernels.weighted_pose_mean_parallel(p, w), serial)
 
 
 def test_dispersion_index_and_resize_hand_computed():

@@ -373,9 +373,13 @@ def _beam_table_one(
     c = math.cos(particles[j, 2])
     s = math.sin(particles[j, 2])
     ll = 0.0
+    prod = 1.0  # factors in (1e-3, 10): one log per 16 sensors, not one each
     for i in range(sensors.shape[0]):
+        if i % 16 == 15:
+            ll += math.log(prod)
+            prod = 1.0
         if is_max[i]:
-            ll += math.log(z_max)
+            prod *= z_max
             continue
         mm = _table_mm(particles, j, c, s, sensors, i, table, x0, y0, inv_res)
         zhat = mm * 0.001
@@ -383,8 +387,8 @@ def _beam_table_one(
         p = hit[mm] * math.exp(-0.5 * u * u) + p_rand
         if z[i] <= zhat:
             p += short[mm] * e_short[i]
-        ll += math.log(p)
-    out[j] = ll * exponent
+        prod *= p
+    out[j] = (ll + math.log(prod)) * exponent
 
 
 @nb.njit(**JIT)
@@ -648,21 +652,10 @@ def field_loglik_parallel(
 
 
 @nb.njit(**JIT)
-def update_weights(weights, loglik, out):
-    """Bayes update ``out ∝ weights * exp(loglik)``, normalised in place.
-
-    Returns ``(log_mean, ess)``: the log of ``sum_j weights_j exp(loglik_j)``
-    (``weights`` summing to 1, so the mean likelihood) and the effective
-    sample size ``1 / sum out_j^2`` of the result.
-    """
+def _finish_weights(weights, top, out):
     n = weights.shape[0]
-    top = -np.inf
-    for j in range(n):
-        if loglik[j] > top:
-            top = loglik[j]
     total = 0.0
     for j in range(n):
-        out[j] = weights[j] * math.exp(loglik[j] - top)
         total += out[j]
     wsum = 0.0
     for j in range(n):
@@ -675,8 +668,38 @@ def update_weights(weights, loglik, out):
 
 
 @nb.njit(**JIT)
-def weighted_pose_mean(particles, weights):
-    """Weighted mean of ``x, y`` and circular mean of ``theta``; returns (3,)."""
+def update_weights(weights, loglik, out):
+    """Bayes update ``out ∝ weights * exp(loglik)``, normalised in place.
+
+    Returns ``(log_mean, ess)``: the log of ``sum_j weights_j exp(loglik_j)``
+    (``weights`` summing to 1, so the mean likelihood) and the effective
+    sample size ``1 / sum out_j^2`` of the result.
+    """
+    n = weights.shape[0]
+    top = -np.inf
+    for j in range(n):
+        if loglik[j] > top:
+            top = loglik[j]
+    for j in range(n):
+        out[j] = weights[j] * math.exp(loglik[j] - top)
+    return _finish_weights(weights, top, out)
+
+
+@nb.njit(**JIT_PARALLEL)
+def update_weights_parallel(weights, loglik, out):
+    """`update_weights`, exponentials over threads (sums serial: same result)."""
+    n = weights.shape[0]
+    top = -np.inf
+    for j in range(n):
+        if loglik[j] > top:
+            top = loglik[j]
+    for j in nb.prange(n):
+        out[j] = weights[j] * math.exp(loglik[j] - top)
+    return _finish_weights(weights, top, out)
+
+
+@nb.njit(**JIT)
+def _pose_mean(particles, weights, cs):
     sx = 0.0
     sy = 0.0
     sc = 0.0
@@ -686,14 +709,34 @@ def weighted_pose_mean(particles, weights):
         w = weights[j]
         sx += w * particles[j, 0]
         sy += w * particles[j, 1]
-        sc += w * math.cos(particles[j, 2])
-        ss += w * math.sin(particles[j, 2])
+        sc += w * cs[j, 0]
+        ss += w * cs[j, 1]
         sw += w
     out = np.empty(3)
     out[0] = sx / sw
     out[1] = sy / sw
     out[2] = math.atan2(ss, sc)
     return out
+
+
+@nb.njit(**JIT)
+def weighted_pose_mean(particles, weights):
+    """Weighted mean of ``x, y`` and circular mean of ``theta``; returns (3,)."""
+    cs = np.empty((particles.shape[0], 2))
+    for j in range(particles.shape[0]):
+        cs[j, 0] = math.cos(particles[j, 2])
+        cs[j, 1] = math.sin(particles[j, 2])
+    return _pose_mean(particles, weights, cs)
+
+
+@nb.njit(**JIT_PARALLEL)
+def weighted_pose_mean_parallel(particles, weights):
+    """`weighted_pose_mean` with the cosines and sines over threads (same result)."""
+    cs = np.empty((particles.shape[0], 2))
+    for j in nb.prange(particles.shape[0]):
+        cs[j, 0] = math.cos(particles[j, 2])
+        cs[j, 1] = math.sin(particles[j, 2])
+    return _pose_mean(particles, weights, cs)
 
 
 @nb.njit(**JIT)
