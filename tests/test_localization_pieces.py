@@ -364,6 +364,19 @@ def test_fused_table_models_match_lookup_then_model(world, exponent):
             *beam._norms, q.z_max, q.z_rand / 5.0, 1 / q.sigma_hit, exponent, out,
         )  # fmt: skip
         np.testing.assert_allclose(out, exponent * ref, atol=1e-12)
+    # many particles: one model table per scan, then lookups; the same numbers
+    model = (
+        z, np.exp(-q.lambda_short * z), z >= 5.0 - 1e-3, *beam._norms, q.z_max,
+        q.z_rand / 5.0, 1 / q.sigma_hit,
+    )  # fmt: skip
+    lut = np.empty((8, len(beam._norms[0])))
+    _kernels.beam_scan_lut(*model, lut)
+    via_lut = np.empty(len(poses))
+    _kernels.lut_table_loglik_parallel(
+        poses, t.sonar.sensors, t.table, t.origin[0], t.origin[1],
+        1 / t.resolution, lut, exponent, via_lut,
+    )  # fmt: skip
+    np.testing.assert_array_equal(via_lut, out)
     paper_model = PaperSensorModel(world, fast=True)
     for kernel in (_kernels.paper_table_loglik, _kernels.paper_table_loglik_parallel):
         out = np.empty(len(poses))

@@ -198,7 +198,7 @@ def build_cone_table(
                 )
 
 
-@nb.njit(**JIT)
+@nb.njit(**JIT, inline="always")
 def _table_mm(particles, j, c, s, sensors, i, table, x0, y0, inv_res):
     """Table entry (mm) for sensor ``i`` of particle ``j`` (heading cos, sin)."""
     ny, nx, n_bins = table.shape
@@ -351,25 +351,24 @@ def beam_norms(max_range, z_hit, z_short, sigma, lam_short, n):
 
 
 @nb.njit(**JIT)
+def _beam_mm(i, mm, z, e_short, is_max, hit, short, z_max, p_rand, inv_sigma):
+    """Beam model ``p(z_i | zhat)`` for an expected range of ``mm`` millimetres."""
+    if is_max[i]:
+        return z_max
+    zhat = mm * 0.001
+    u = (z[i] - zhat) * inv_sigma
+    p = hit[mm] * math.exp(-0.5 * u * u) + p_rand
+    if z[i] <= zhat:
+        p += short[mm] * e_short[i]
+    return p
+
+
+@nb.njit(**JIT)
 def _beam_table_one(
-    j,
-    particles,
-    sensors,
-    table,
-    x0,
-    y0,
-    inv_res,
-    z,
-    e_short,
-    is_max,
-    hit,
-    short,
-    z_max,
-    p_rand,
-    inv_sigma,
-    exponent,
-    out,
-):
+    j, particles, sensors, table, x0, y0, inv_res, z, e_short, is_max, hit, short,
+    z_max, p_rand, inv_sigma, exponent, out,
+):  # fmt: skip
+    # `_beam_mm` written out: as a call it runs twice as slow
     c = math.cos(particles[j, 2])
     s = math.sin(particles[j, 2])
     ll = 0.0
@@ -479,6 +478,48 @@ def beam_table_loglik_parallel(
             exponent,
             out,
         )
+
+
+@nb.njit(**JIT_PARALLEL)
+def beam_scan_lut(z, e_short, is_max, hit, short, z_max, p_rand, inv_sigma, lut):
+    """``lut[i, mm]``: the beam model's ``p(z_i | zhat = mm / 1000)``, (S, n).
+
+    The same numbers `beam_table_loglik` computes per beam; with many
+    particles, one table per scan is cheaper than a model per beam.
+    """
+    for i in range(lut.shape[0]):
+        for mm in nb.prange(lut.shape[1]):
+            lut[i, mm] = _beam_mm(
+                i, mm, z, e_short, is_max, hit, short, z_max, p_rand, inv_sigma
+            )
+
+
+@nb.njit(**JIT)
+def _lut_one(j, particles, sensors, table, x0, y0, inv_res, lut, exponent, out):
+    c = math.cos(particles[j, 2])
+    s = math.sin(particles[j, 2])
+    ll = 0.0
+    prod = 1.0
+    for i in range(sensors.shape[0]):
+        if i % 16 == 15:
+            ll += math.log(prod)
+            prod = 1.0
+        prod *= lut[
+            i, _table_mm(particles, j, c, s, sensors, i, table, x0, y0, inv_res)
+        ]
+    out[j] = (ll + math.log(prod)) * exponent
+
+
+@nb.njit(**JIT_PARALLEL)
+def lut_table_loglik_parallel(
+    particles, sensors, table, x0, y0, inv_res, lut, exponent, out
+):
+    """`beam_table_loglik` over threads, the model read from `beam_scan_lut`'s table.
+
+    Gives the same numbers as `beam_table_loglik`.
+    """
+    for j in nb.prange(particles.shape[0]):
+        _lut_one(j, particles, sensors, table, x0, y0, inv_res, lut, exponent, out)
 
 
 @nb.njit(**JIT)

@@ -451,18 +451,7 @@ class BeamSensorModel(_ExpectedModel):
         q, t = self.params, self.table
         max_range = float(self.sonar.max_range)
         out = np.empty(len(p))
-        kernel = (
-            _kernels.beam_table_loglik_parallel
-            if len(p) >= PARALLEL_MIN
-            else _kernels.beam_table_loglik
-        )
-        kernel(
-            p,
-            self.sonar.sensors,
-            t.table,
-            t.origin[0],
-            t.origin[1],
-            1.0 / t.resolution,
+        model = (
             z,
             np.exp(-q.lambda_short * z),
             z >= max_range - 1e-3,
@@ -471,9 +460,18 @@ class BeamSensorModel(_ExpectedModel):
             q.z_max,
             q.z_rand / max_range,
             1.0 / q.sigma_hit,
-            float(q.exponent),
-            out,
         )
+        where = (t.table, t.origin[0], t.origin[1], 1.0 / t.resolution)
+        if len(p) >= PARALLEL_MIN:  # one model table per scan, then lookups
+            lut = np.empty((len(z), len(self._norms[0])))
+            _kernels.beam_scan_lut(*model, lut)
+            _kernels.lut_table_loglik_parallel(
+                p, self.sonar.sensors, *where, lut, float(q.exponent), out
+            )
+        else:
+            _kernels.beam_table_loglik(
+                p, self.sonar.sensors, *where, *model, float(q.exponent), out
+            )
         return out
 
 
