@@ -54,6 +54,16 @@ def main():
         )
         segs = len(world.obstacles)
         print(f"segment rays/s   {name:9s} ({segs:4d} segs): {rate:12,.0f}")
+    for name in ("office", "maze"):
+        world = load_world(name)
+        grid = world.occupancy_grid(0.05)
+        field = grid_field(grid)
+        poses = world.sample_free_poses(20000, rng, radius=0.0)
+        rate = rays_per_second(
+            lambda p, a, g=grid, f=field: cast_rays_grid(g, p, a, 5.0, f), poses, angles
+        )
+        shape = f"{grid.shape[0]}x{grid.shape[1]}"
+        print(f"grid rays/s      {name:9s} ({shape} at 5 cm):  {rate:12,.0f}")
     world = grid_world_400(rng)
     grid = world.occupancy_grid(0.05)
     poses = world.sample_free_poses(20000, rng, radius=0.0)

@@ -140,8 +140,8 @@ def clearance_field(occupied, out):
 
 
 @nb.njit(**JIT)
-def ray_grid(field, x0, y0, resolution, ox, oy, angle, max_range):
-    """Distance from ``(ox, oy)`` along ``angle`` to the first occupied cell.
+def ray_grid(field, x0, y0, resolution, ox, oy, dx, dy, max_range):
+    """Distance from ``(ox, oy)`` along unit vector ``(dx, dy)`` to an occupied cell.
 
     ``field`` comes from `clearance_field`. Returns the distance to the
     boundary where the ray enters the first occupied cell: 0 if it starts in
@@ -157,8 +157,6 @@ def ray_grid(field, x0, y0, resolution, ox, oy, angle, max_range):
     nx = field.shape[1] - 2
     if not (1.0 <= gx < nx + 1.0 and 1.0 <= gy < ny + 1.0):
         return 0.0
-    dx = math.cos(angle)
-    dy = math.sin(angle)
     step_j = 1 if dx > 0 else -1
     step_i = 1 if dy > 0 else -1
     t_delta_x = 1.0 / abs(dx) if abs(dx) > _EPS else np.inf
@@ -203,7 +201,11 @@ def ray_grid(field, x0, y0, resolution, ox, oy, angle, max_range):
 @nb.njit(**JIT_PARALLEL)
 def cast_grid(poses, angles, max_range, field, x0, y0, resolution, out):
     """Grid version of `cast_segments`: ``out[k, r]`` via `ray_grid`."""
+    ca = np.cos(angles)
+    sa = np.sin(angles)
     for k in nb.prange(poses.shape[0]):
+        c = math.cos(poses[k, 2])
+        s = math.sin(poses[k, 2])
         for r in range(angles.shape[0]):
             out[k, r] = ray_grid(
                 field,
@@ -212,7 +214,8 @@ def cast_grid(poses, angles, max_range, field, x0, y0, resolution, out):
                 resolution,
                 poses[k, 0],
                 poses[k, 1],
-                poses[k, 2] + angles[r],
+                c * ca[r] - s * sa[r],
+                s * ca[r] + c * sa[r],
                 max_range,
             )
 

@@ -69,12 +69,12 @@ def grid_field(grid: Grid) -> np.ndarray:
 
     Returns
     -------
-    numpy.ndarray, shape (ny + 2, nx + 2)
+    numpy.ndarray of float32, shape (ny + 2, nx + 2)
         The grid padded with a ring of occupied cells: -1 where occupied,
         elsewhere a lower bound on the free distance around the cell, in cells.
     """
     occ = np.ascontiguousarray(grid.data, dtype=np.bool_)
-    out = np.empty((occ.shape[0] + 2, occ.shape[1] + 2))
+    out = np.empty((occ.shape[0] + 2, occ.shape[1] + 2), dtype=np.float32)
     _raycast.clearance_field(occ, out)
     return out
 
@@ -116,7 +116,7 @@ def cast_rays_grid(
         p,
         a,
         float(max_range),
-        np.ascontiguousarray(field, dtype=np.float64),
+        np.ascontiguousarray(field, dtype=np.float32),
         x0,
         y0,
         grid.resolution,
