@@ -8,7 +8,8 @@ import pytest
 import robotlib
 from robotlib import widgets
 from robotlib.experiment import drive_route
-from robotlib.world import load_world
+from robotlib.localization import MCL
+from robotlib.world import load_world, world_names
 
 
 @pytest.fixture(scope="module")
@@ -28,6 +29,25 @@ def test_mcl_filter_choices():
         widgets.mcl_filter(world, sensor="laser")
     with pytest.raises(ValueError, match="resampler"):
         widgets.mcl_filter(world, resampler="magic")
+    with pytest.raises(ValueError, match="preset"):
+        widgets.mcl_filter(world, preset="oracle")
+
+
+def test_best_preset_is_mcl_best(route):
+    """The panel's "best" choices build the very filter `MCL.best` builds."""
+    world = route.world
+    ours = widgets.mcl_filter(world, preset="best (beam + KLD)", rng=3)
+    best = MCL.best(world, rng=3)
+    assert ours.n == best.n == widgets.PRESETS["best (beam + KLD)"]["n"]
+    for k in range(8):
+        args = (route.odometry[max(k - 1, 0)], route.odometry[k], route.sonar[k])
+        np.testing.assert_array_equal(ours.step(*args), best.step(*args))
+        assert ours.n == best.n
+    assert best.n < 50_000  # KLD has shrunk the set: the comparison meant something
+    # explicit choices override the preset's
+    assert widgets.mcl_filter(world, preset="best (beam + KLD)", n=500, rng=0).n == 500
+    paper = widgets.mcl_filter(world, preset="paper", rng=0)
+    assert paper.n == 300 and paper.resampling.lam == 0.5
 
 
 def test_run_mcl_is_deterministic_and_tracks(route):
@@ -58,6 +78,38 @@ def test_mcl_panel_callbacks(route):
     assert panel.settings()["sensor"] == "beam"
     assert len(panel.figure.axes) == 3
     assert "localized" in panel.status.value
+
+
+def test_mcl_panel_presets_and_worlds(route):
+    panel = widgets.MCLPanel(route, n_steps=6, n=300, lam=0.5)
+    assert panel.preset.value == "paper"  # the choices make the paper's filter
+    assert "corridor_periodic" in panel.world.options
+    assert set(world_names()) <= set(panel.world.options)
+    runs = []
+    run = panel.refresh
+    panel.refresh = lambda: runs.append(1) or run()
+    panel.preset.value = "best (beam + KLD)"
+    assert len(runs) == 1  # one run for the preset, not one per control it set
+    best = widgets.PRESETS["best (beam + KLD)"]
+    assert {k: panel.settings()[k] for k in best} == best
+    assert panel.history.n_particles[0] == best["n"]
+    panel.n.value = 2000  # a hand-made change leaves the preset
+    assert panel.preset.value == panel.CUSTOM
+    assert panel.history.n_particles[0] == 2000
+    panel.world.value = "corridor_periodic"
+    assert panel.route.world.name == "corridor_periodic"
+    assert len(panel.route) == len(route) and panel.route.seed == route.seed
+    assert len(panel.history) == 6
+    assert panel.status.value.startswith("corridor_periodic")
+    np.testing.assert_allclose(
+        panel.history.true_pose[0], load_world("corridor_periodic").start, atol=1e-6
+    )
+    panel.preset.value = "paper"
+    assert panel.settings()["sensor"] == "paper" and panel.settings()["n"] == 300
+    assert panel.history.n_particles[0] == 300
+    assert len(runs) == 4
+    with pytest.raises(ValueError, match="preset"):
+        widgets.MCLPanel(route, n_steps=2, preset="oracle")
 
 
 def test_teleop_moves_the_robot():
