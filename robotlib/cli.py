@@ -30,7 +30,7 @@ def main(argv: list[str] | None = None) -> int:
     """Run the ``robotlib`` command line; return the exit status."""
     argv = sys.argv[1:] if argv is None else argv
     parser = argparse.ArgumentParser(
-        prog="robotlib", description=__doc__.splitlines()[0]
+        prog="robotlib", description="robotlib: mobile-robotics courseware tools."
     )
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     for name, (_, help_) in COMMANDS.items():
