@@ -455,3 +455,69 @@ def sonar_scan_parallel(
             normals,
             out,
         )
+
+
+@nb.njit(**JIT)
+def cone_walls(sx, sy, ux, uy, cos_half, sin_half, segments, max_range, out):
+    """Copy into ``out`` (M, 4) the walls a sonar cone may echo from; return the count.
+
+    The cone has its apex at ``(sx, sy)``, its axis along the unit vector
+    ``(ux, uy)`` and the half-width whose cosine and sine are given (widen
+    it a little: the axis and the edges are rotated, not exact). A wall is
+    dropped when both its end points lie outside the same edge of the cone's
+    wedge, or when its bounding box lies further than ``max_range`` from
+    ``(sx, sy)`` along x or y. No ray of the cone can meet a dropped wall
+    within ``max_range``, and the kept walls keep their order, so
+    `sonar_cone` on the kept walls gives the same echo as on all of them (its
+    multipath range, which the bounce may find on a dropped wall, can
+    differ). With ``cos_half <= 0`` (half-width of ``pi / 2`` or more) walls
+    are culled by range only.
+    """
+    by_angle = cos_half > 0.0
+    lx = ux * cos_half - uy * sin_half  # left edge
+    ly = uy * cos_half + ux * sin_half
+    rx = ux * cos_half + uy * sin_half  # right edge
+    ry = uy * cos_half - ux * sin_half
+    k = 0
+    for m in range(segments.shape[0]):
+        ax = segments[m, 0] - sx
+        ay = segments[m, 1] - sy
+        bx = segments[m, 2] - sx
+        by = segments[m, 3] - sy
+        if (ax > max_range and bx > max_range) or (ax < -max_range and bx < -max_range):
+            continue
+        if (ay > max_range and by > max_range) or (ay < -max_range and by < -max_range):
+            continue
+        if by_angle:
+            if lx * ay - ly * ax > 1e-9 and lx * by - ly * bx > 1e-9:
+                continue  # left of the left edge
+            if rx * ay - ry * ax < -1e-9 and rx * by - ry * bx < -1e-9:
+                continue  # right of the right edge
+        for t in range(4):
+            out[k, t] = segments[m, t]
+        k += 1
+    return k
+
+
+@nb.njit(**JIT)
+def cone_echo(sx, sy, sth, segments, n_rays, cone, max_range, cos_specular):
+    """`sonar_cone`'s first echo alone (no multipath bounce): the same number."""
+    echo = np.inf
+    for r in range(n_rays):
+        if n_rays == 1:
+            a = sth
+        else:
+            a = sth - 0.5 * cone + cone * r / (n_rays - 1)
+        dx = math.cos(a)
+        dy = math.sin(a)
+        t, m = ray_segments(sx, sy, dx, dy, segments)
+        if m < 0 or t >= max_range or t >= echo:
+            continue
+        ex = segments[m, 2] - segments[m, 0]
+        ey = segments[m, 3] - segments[m, 1]
+        length = math.sqrt(ex * ex + ey * ey)
+        nxn = -ey / length
+        nyn = ex / length
+        if abs(dx * nxn + dy * nyn) >= cos_specular:
+            echo = t
+    return echo

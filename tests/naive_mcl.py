@@ -103,3 +103,26 @@ def kld_bound(k, epsilon, z):
 def paper_weights_unnormalised(z, zhat):
     d = np.mean(np.abs((z - zhat) / z), axis=1)
     return np.exp(-d) + 1.0 / len(zhat)
+
+
+def fused_step(particles, weights, motion, normals, loglik):
+    """Predict, weigh, normalise, estimate; ``loglik(moved) -> (N,)``."""
+    rot1, trans, rot2, *sd = motion
+    moved = sample_odometry(particles, rot1, trans, rot2, sd, normals)
+    w, log_mean, ess = update_weights(weights, loglik(moved))
+    return moved, w, log_mean, ess, pose_mean(moved, w)
+
+
+def systematic_gather(particles, weights, u, n):
+    return particles[resample_positions(weights, (np.arange(n) + u) / n)]
+
+
+def ray_hit(ox, oy, a, seg):
+    """Distance along the ray at angle ``a`` to segment ``seg`` (inf if none)."""
+    d = np.array([math.cos(a), math.sin(a)])
+    p, e = np.array(seg[:2]), np.array(seg[2:]) - np.array(seg[:2])
+    m = np.column_stack([d, -e])
+    if abs(np.linalg.det(m)) < 1e-12:
+        return math.inf
+    t, s = np.linalg.solve(m, p - [ox, oy])
+    return t if t >= 0 and 0 <= s <= 1 else math.inf

@@ -16,7 +16,7 @@ import numpy as np
 
 from .._config import JIT, JIT_PARALLEL
 from .._geometry import point_segment_distance
-from .._raycast import sonar_cone
+from .._raycast import cone_echo, cone_walls, sonar_cone
 
 _TWO_PI = 2.0 * math.pi
 _LOG_SQRT_2PI = 0.5 * math.log(2.0 * math.pi)
@@ -209,7 +209,16 @@ def _table_mm(particles, j, c, s, sensors, i, table, x0, y0, inv_res):
     col = min(max(col, 0), nx - 1)
     row = min(max(row, 0), ny - 1)
     b = int(math.floor((particles[j, 2] + sensors[i, 2]) * (n_bins / _TWO_PI) + 0.5))
-    return table[row, col, b % n_bins]
+    # b % n_bins, without an integer division for headings in (-2 pi, 4 pi)
+    if b < 0:
+        b += n_bins
+        if b < 0:
+            b %= n_bins
+    elif b >= n_bins:
+        b -= n_bins
+        if b >= n_bins:
+            b %= n_bins
+    return table[row, col, b]
 
 
 @nb.njit(**JIT)
@@ -368,9 +377,24 @@ def _beam_table_one(
     j, particles, sensors, table, x0, y0, inv_res, z, e_short, is_max, hit, short,
     z_max, p_rand, inv_sigma, exponent, out,
 ):  # fmt: skip
+    _beam_table_cs(
+        j, particles, math.cos(particles[j, 2]), math.sin(particles[j, 2]), sensors,
+        table, x0, y0, inv_res, z, e_short, is_max, hit, short, z_max, p_rand,
+        inv_sigma, exponent, np.inf, out,
+    )  # fmt: skip
+
+
+@nb.njit(**JIT)
+def _beam_table_cs(
+    j, particles, c, s, sensors, table, x0, y0, inv_res, z, e_short, is_max, hit,
+    short, z_max, p_rand, inv_sigma, exponent, u2_skip, out,
+):  # fmt: skip
+    """`_beam_table_one` given the heading's cosine ``c`` and sine ``s``.
+
+    Where ``u^2 >= u2_skip`` the hit term is left out: `beam_skip` makes it
+    too small to change ``p_rand`` plus it, so the result is the same.
+    """
     # `_beam_mm` written out: as a call it runs twice as slow
-    c = math.cos(particles[j, 2])
-    s = math.sin(particles[j, 2])
     ll = 0.0
     prod = 1.0  # factors in (1e-3, 10): one log per 16 sensors, not one each
     for i in range(sensors.shape[0]):
@@ -383,11 +407,26 @@ def _beam_table_one(
         mm = _table_mm(particles, j, c, s, sensors, i, table, x0, y0, inv_res)
         zhat = mm * 0.001
         u = (z[i] - zhat) * inv_sigma
-        p = hit[mm] * math.exp(-0.5 * u * u) + p_rand
+        if u * u < u2_skip:
+            p = hit[mm] * math.exp(-0.5 * u * u) + p_rand
+        else:
+            p = p_rand
         if z[i] <= zhat:
             p += short[mm] * e_short[i]
         prod *= p
     out[j] = (ll + math.log(prod)) * exponent
+
+
+def beam_skip(hit_max: float, p_rand: float) -> float:
+    """Smallest ``u^2`` from which ``hit_max exp(-u^2 / 2) + p_rand == p_rand``.
+
+    There the hit term is below ``2^-60 p_rand``, under half a unit in the
+    last place of ``p_rand``, so the sum rounds to ``p_rand`` exactly; inf
+    (never skip) when ``p_rand`` is 0.
+    """
+    if not (p_rand > 0.0 and hit_max > 0.0):
+        return math.inf
+    return 2.0 * (math.log(hit_max / p_rand) + 60.0 * math.log(2.0))
 
 
 @nb.njit(**JIT)
@@ -498,6 +537,11 @@ def beam_scan_lut(z, e_short, is_max, hit, short, z_max, p_rand, inv_sigma, lut)
 def _lut_one(j, particles, sensors, table, x0, y0, inv_res, lut, exponent, out):
     c = math.cos(particles[j, 2])
     s = math.sin(particles[j, 2])
+    _lut_cs(j, particles, c, s, sensors, table, x0, y0, inv_res, lut, exponent, out)
+
+
+@nb.njit(**JIT)
+def _lut_cs(j, particles, c, s, sensors, table, x0, y0, inv_res, lut, exponent, out):
     ll = 0.0
     prod = 1.0
     for i in range(sensors.shape[0]):
@@ -526,6 +570,11 @@ def lut_table_loglik_parallel(
 def _paper_table_one(j, particles, sensors, table, x0, y0, inv_res, z, inv_n, out):
     c = math.cos(particles[j, 2])
     s = math.sin(particles[j, 2])
+    _paper_cs(j, particles, c, s, sensors, table, x0, y0, inv_res, z, inv_n, out)
+
+
+@nb.njit(**JIT)
+def _paper_cs(j, particles, c, s, sensors, table, x0, y0, inv_res, z, inv_n, out):
     d = 0.0
     for i in range(sensors.shape[0]):
         mm = _table_mm(particles, j, c, s, sensors, i, table, x0, y0, inv_res)
@@ -949,3 +998,251 @@ def outside(particles, admissible, x0, y0, inv_res, out):
         if bad:
             count += 1
     return count
+
+
+# -- one fused step: predict, weigh, normalise, estimate ---------------------------
+#
+# `MCL.step` on a cone table in one call: each particle is moved
+# (`sample_odometry`), weighed by the table model from the cosine and sine of
+# its new heading, which the estimate reuses; then the weights are updated
+# and normalised (`update_weights`) and the pose estimated
+# (`weighted_pose_mean`). Same numbers as those kernels one after the other.
+# ``motion`` is ``(rot1, trans, rot2, sd1, sdt, sd2)``, ``where`` the table's
+# ``(x0, y0, inv_res)``; ``out_p`` (N, 3) receives the moved particles and
+# ``out_w`` (N,) their weights. Each returns ``(log_mean, ess, estimate)``.
+
+
+@nb.njit(**JIT)
+def _move(j, particles, motion, normals, out, cs):
+    """Move particle ``j`` into ``out``; return (and keep) its heading's cos, sin."""
+    rot1, trans, rot2, sd1, sdt, sd2 = motion
+    _odometry_one(j, particles, rot1, trans, rot2, sd1, sdt, sd2, normals, out)
+    c = math.cos(out[j, 2])
+    s = math.sin(out[j, 2])
+    cs[j, 0] = c
+    cs[j, 1] = s
+    return c, s
+
+
+@nb.njit(**JIT)
+def _top(loglik):
+    top = -np.inf
+    for j in range(loglik.shape[0]):
+        if loglik[j] > top:
+            top = loglik[j]
+    return top
+
+
+@nb.njit(**JIT)
+def _weigh_estimate(weights, particles, cs, out_w):
+    """`update_weights` with ``out_w`` holding log-likelihoods, then the estimate."""
+    top = _top(out_w)
+    for j in range(out_w.shape[0]):
+        out_w[j] = weights[j] * math.exp(out_w[j] - top)
+    log_mean, ess = _finish_weights(weights, top, out_w)
+    return log_mean, ess, _pose_mean(particles, out_w, cs)
+
+
+@nb.njit(**JIT_PARALLEL)
+def _weigh_estimate_parallel(weights, particles, cs, out_w):
+    """`_weigh_estimate`, exponentials over threads (sums serial: same result)."""
+    top = _top(out_w)
+    for j in nb.prange(out_w.shape[0]):
+        out_w[j] = weights[j] * math.exp(out_w[j] - top)
+    log_mean, ess = _finish_weights(weights, top, out_w)
+    return log_mean, ess, _pose_mean(particles, out_w, cs)
+
+
+@nb.njit(**JIT)
+def paper_table_step(
+    particles, normals, motion, sensors, table, where, z, inv_n, weights, out_p, out_w
+):
+    """Fused step with the paper's model (`paper_table_loglik`)."""
+    x0, y0, inv_res = where
+    cs = np.empty((particles.shape[0], 2))
+    for j in range(particles.shape[0]):
+        c, s = _move(j, particles, motion, normals, out_p, cs)
+        _paper_cs(j, out_p, c, s, sensors, table, x0, y0, inv_res, z, inv_n, out_w)
+    return _weigh_estimate(weights, out_p, cs, out_w)
+
+
+@nb.njit(**JIT_PARALLEL)
+def paper_table_step_parallel(
+    particles, normals, motion, sensors, table, where, z, inv_n, weights, out_p, out_w
+):
+    """`paper_table_step` over threads (sums serial: same result)."""
+    x0, y0, inv_res = where
+    cs = np.empty((particles.shape[0], 2))
+    for j in nb.prange(particles.shape[0]):
+        c, s = _move(j, particles, motion, normals, out_p, cs)
+        _paper_cs(j, out_p, c, s, sensors, table, x0, y0, inv_res, z, inv_n, out_w)
+    return _weigh_estimate_parallel(weights, out_p, cs, out_w)
+
+
+@nb.njit(**JIT)
+def beam_table_step(
+    particles, normals, motion, sensors, table, where, z, e_short, is_max, hit,
+    short, beam, weights, out_p, out_w,
+):  # fmt: skip
+    """Fused step with the beam model (`beam_table_loglik`).
+
+    ``beam`` is ``(z_max, p_rand, inv_sigma, exponent, u2_skip)`` (`beam_skip`).
+    """
+    x0, y0, inv_res = where
+    z_max, p_rand, inv_sigma, exponent, u2_skip = beam
+    cs = np.empty((particles.shape[0], 2))
+    for j in range(particles.shape[0]):
+        c, s = _move(j, particles, motion, normals, out_p, cs)
+        _beam_table_cs(
+            j, out_p, c, s, sensors, table, x0, y0, inv_res, z, e_short, is_max,
+            hit, short, z_max, p_rand, inv_sigma, exponent, u2_skip, out_w,
+        )  # fmt: skip
+    return _weigh_estimate(weights, out_p, cs, out_w)
+
+
+@nb.njit(**JIT_PARALLEL)
+def lut_table_step_parallel(
+    particles, normals, motion, sensors, table, where, lut, exponent, weights,
+    out_p, out_w,
+):  # fmt: skip
+    """Fused step with the beam model read from `beam_scan_lut`'s table, over threads.
+
+    The same numbers as `beam_table_step`.
+    """
+    x0, y0, inv_res = where
+    cs = np.empty((particles.shape[0], 2))
+    for j in nb.prange(particles.shape[0]):
+        c, s = _move(j, particles, motion, normals, out_p, cs)
+        _lut_cs(j, out_p, c, s, sensors, table, x0, y0, inv_res, lut, exponent, out_w)
+    return _weigh_estimate_parallel(weights, out_p, cs, out_w)
+
+
+@nb.njit(**JIT)
+def systematic_gather(particles, weights, u, out):
+    """Low-variance resampling of ``particles`` (N, 3) into ``out`` (n, 3).
+
+    Positions ``(k + u) / n`` in the cumulative weights, as
+    `robotlib.localization.resampling.systematic_resample` then `gather`.
+    """
+    cum = cumulative(weights)
+    n_cum = cum.shape[0]
+    n = out.shape[0]
+    j = 0
+    for k in range(n):
+        position = (k + u) / n
+        while j < n_cum - 1 and cum[j] <= position:
+            j += 1
+        out[k, 0] = particles[j, 0]
+        out[k, 1] = particles[j, 1]
+        out[k, 2] = particles[j, 2]
+
+
+# -- expected sonar readings: exact, against the walls near each sensor ---------------
+
+_CULL_MARGIN = 1e-6
+"""Widening of each cone for `robotlib._raycast.cone_walls`, rad."""
+
+
+@nb.njit(**JIT)
+def _expected_pose_blocks(
+    k, poses, sensors, segments, start, block_segs, grid, n_rays, cone, max_range,
+    min_range, cos_specular, near, out,
+):  # fmt: skip
+    x0, y0, inv_block, nbx, nby = grid
+    half = 0.5 * cone + _CULL_MARGIN
+    ch = math.cos(half) if half < 0.5 * math.pi else 0.0
+    sh = math.sin(half)
+    c = math.cos(poses[k, 2])
+    s = math.sin(poses[k, 2])
+    for i in range(sensors.shape[0]):
+        sx = poses[k, 0] + c * sensors[i, 0] - s * sensors[i, 1]
+        sy = poses[k, 1] + s * sensors[i, 0] + c * sensors[i, 1]
+        bx = math.floor((sx - x0) * inv_block)
+        by = math.floor((sy - y0) * inv_block)
+        if 0 <= bx < nbx and 0 <= by < nby:
+            b = int(by) * int(nbx) + int(bx)
+            walls = block_segs[start[b] : start[b + 1]]
+        else:
+            walls = segments
+        ci = math.cos(sensors[i, 2])
+        si = math.sin(sensors[i, 2])
+        count = cone_walls(
+            sx, sy, c * ci - s * si, s * ci + c * si, ch, sh, walls, max_range, near
+        )
+        echo = cone_echo(
+            sx, sy, poses[k, 2] + sensors[i, 2], near[:count], n_rays, cone,
+            max_range, cos_specular,
+        )  # fmt: skip
+        z = echo if echo < max_range else max_range
+        out[k, i] = min(max(z, min_range), max_range)
+
+
+@nb.njit(**JIT)
+def expected_scan_blocks(
+    poses, sensors, segments, start, block_segs, grid, n_rays, cone, max_range,
+    min_range, cos_specular, out,
+):  # fmt: skip
+    """`robotlib._raycast.expected_scan` with each cone cast against nearby walls.
+
+    ``grid`` ``(x0, y0, 1 / side, nbx, nby)`` cuts the plane into square
+    blocks; the walls a sensor in block ``b`` may reach within ``max_range``
+    are ``block_segs[start[b]:start[b + 1]]`` (`wall_blocks`), and of those
+    the ones in its cone (`robotlib._raycast.cone_walls`). A sensor outside
+    the blocks tests all ``segments``. The same readings as `expected_scan`.
+    """
+    near = np.empty_like(segments)
+    for k in range(poses.shape[0]):
+        _expected_pose_blocks(
+            k, poses, sensors, segments, start, block_segs, grid, n_rays, cone,
+            max_range, min_range, cos_specular, near, out,
+        )  # fmt: skip
+
+
+@nb.njit(**JIT_PARALLEL)
+def expected_scan_blocks_parallel(
+    poses, sensors, segments, start, block_segs, grid, n_rays, cone, max_range,
+    min_range, cos_specular, out,
+):  # fmt: skip
+    """`expected_scan_blocks` with the poses spread over threads."""
+    for k in nb.prange(poses.shape[0]):
+        near = np.empty_like(segments)
+        _expected_pose_blocks(
+            k, poses, sensors, segments, start, block_segs, grid, n_rays, cone,
+            max_range, min_range, cos_specular, near, out,
+        )  # fmt: skip
+
+
+def wall_blocks(segments, bounds, max_range, side=1.0):
+    """List the walls each block of ``side`` m may reach (`expected_scan_blocks`).
+
+    A wall is listed for a block when its bounding box, grown by
+    ``max_range`` (and 1e-6 m), overlaps the block: then and only then can a
+    sensor in the block pass `robotlib._raycast.cone_walls`'s range test for
+    it. Walls keep their order.
+
+    Returns
+    -------
+    tuple
+        ``(start, block_segs, grid)``: offsets (nby * nbx + 1,) int64, the
+        walls of each block in turn (K, 4), and ``(x0, y0, 1 / side, nbx, nby)``.
+    """
+    seg = np.ascontiguousarray(segments, dtype=np.float64).reshape(-1, 4)
+    xmin, ymin, xmax, ymax = (float(v) for v in bounds)
+    nbx = max(1, math.ceil((xmax - xmin) / side))
+    nby = max(1, math.ceil((ymax - ymin) / side))
+    grow = float(max_range) + 1e-6
+    lo_x = np.minimum(seg[:, 0], seg[:, 2]) - grow
+    hi_x = np.maximum(seg[:, 0], seg[:, 2]) + grow
+    lo_y = np.minimum(seg[:, 1], seg[:, 3]) - grow
+    hi_y = np.maximum(seg[:, 1], seg[:, 3]) + grow
+    bx0 = xmin + side * np.arange(nbx)
+    by0 = ymin + side * np.arange(nby)
+    in_x = (lo_x[None, :] <= bx0[:, None] + side) & (hi_x[None, :] >= bx0[:, None])
+    in_y = (lo_y[None, :] <= by0[:, None] + side) & (hi_y[None, :] >= by0[:, None])
+    keep = in_y[:, None, :] & in_x[None, :, :]  # (nby, nbx, M)
+    counts = keep.reshape(nby * nbx, -1).sum(axis=1)
+    start = np.zeros(nby * nbx + 1, dtype=np.int64)
+    np.cumsum(counts, out=start[1:])
+    idx = np.nonzero(keep.reshape(nby * nbx, -1))[1]
+    block_segs = np.ascontiguousarray(seg[idx]).reshape(-1, 4)
+    return start, block_segs, (xmin, ymin, 1.0 / side, nbx, nby)

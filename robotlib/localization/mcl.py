@@ -30,7 +30,14 @@ import numpy as np
 from ..world import World
 from . import _kernels
 from .kld import kld_resample
-from .motion import PARALLEL_MIN, OdometryMotionModel, _particles
+from .motion import (
+    PARALLEL_MIN,
+    OdometryMotionModel,
+    _noise_std,
+    _particles,
+    odometry_increment,
+    standard_normals,
+)
 from .paper import (
     ADMISSIBLE_RADIUS,
     REGEN_WEIGHT,
@@ -100,6 +107,18 @@ class ThresholdResampling:
         if mcl.ess >= self.threshold * n and self.threshold < 1.0:
             return None
         return RESAMPLERS[self.method](mcl.weights, mcl.rng)
+
+    def _resample(self, mcl: MCL) -> np.ndarray | None:
+        """Return the new particles (`indexes`, gathered), or None to keep them."""
+        if self.method not in ("systematic", "low_variance"):
+            idx = self.indexes(mcl)
+            return None if idx is None else _gather(mcl.particles, idx)
+        n = len(mcl.weights)
+        if mcl.ess >= self.threshold * n and self.threshold < 1.0:
+            return None
+        out = np.empty((n, 3))  # the same draw as `systematic_resample`
+        _kernels.systematic_gather(mcl.particles, mcl.weights, mcl.rng.random(), out)
+        return out
 
 
 @dataclass(frozen=True)
@@ -190,6 +209,12 @@ class AugmentedInjection:
     def reset(self) -> None:
         """Forget the averages."""
         self.w_slow = self.w_fast = float("nan")
+
+
+def _gather(particles: np.ndarray, idx) -> np.ndarray:
+    new = np.empty((len(idx), 3))
+    _kernels.gather(particles, np.ascontiguousarray(idx), new)
+    return new
 
 
 @dataclass(frozen=True)
@@ -384,6 +409,7 @@ class MCL:
             self.particles = p
         self.weights = np.full(n, 1.0 / n)
         self.ess = float(n)
+        self._log_mean = float("nan")
         self.last_estimate = _kernels.weighted_pose_mean(self.particles, self.weights)
         self.info: StepInfo | None = None
         if self.injection is not None:
@@ -404,11 +430,38 @@ class MCL:
             else _kernels.update_weights
         )
         log_mean, ess = kernel(self.weights, ll, out)
-        self.weights = out
+        self._weighed(out, log_mean, ess)
+        return self._log_mean
+
+    def _weighed(self, weights, log_mean, ess) -> None:
+        self.weights = weights
         self.ess = float(ess)
+        self._log_mean = float(log_mean)
         if self.injection is not None:
-            self.injection.update(log_mean)
-        return float(log_mean)
+            self.injection.update(self._log_mean)
+
+    def _fused_step(self, odo_prev, odo_now, z) -> bool:
+        """Predict, update and estimate in one kernel when the models allow it.
+
+        The same numbers as `predict`, `update`, `estimate` in turn (the same
+        draws from the rng); False (nothing done) for other models.
+        """
+        sensor = self.sensor
+        if not (
+            getattr(sensor, "fast", False)
+            and hasattr(sensor, "_step")
+            and type(self.motion).sample is OdometryMotionModel.sample
+        ):
+            return False
+        rot1, trans, rot2 = odometry_increment(odo_prev, odo_now)
+        motion = (rot1, trans, rot2, *_noise_std(self.motion.alphas, rot1, trans, rot2))
+        p = self.particles
+        noise = standard_normals(self.rng, len(p))
+        self.particles, weights, log_mean, ess, self.last_estimate = sensor._step(
+            p, self.weights, motion, noise, z
+        )
+        self._weighed(weights, log_mean, ess)
+        return True
 
     def estimate(self) -> np.ndarray:
         """Weighted mean pose (circular mean of the heading), shape (3,)."""
@@ -427,15 +480,19 @@ class MCL:
         tuple
             ``(resampled, injected, regenerated)``.
         """
-        idx = self.resampling.indexes(self)
+        policy = self.resampling
+        if hasattr(policy, "_resample"):
+            new = policy._resample(self)
+        else:
+            idx = policy.indexes(self)
+            new = None if idx is None else _gather(self.particles, idx)
         injected = 0
-        if idx is not None:
-            new = np.empty((len(idx), 3))
-            _kernels.gather(self.particles, np.ascontiguousarray(idx), new)
+        if new is not None:
+            n = len(new)
             self.particles = new
-            self.weights = np.full(len(idx), 1.0 / len(idx))
+            self.weights = np.full(n, 1.0 / n)
             if self.injection is not None and self.injection.probability > 0:
-                mask = self.rng.random(len(idx)) < self.injection.probability
+                mask = self.rng.random(n) < self.injection.probability
                 injected = int(mask.sum())
                 if injected:
                     self.particles[mask] = self.world.sample_free_poses(
@@ -459,7 +516,7 @@ class MCL:
                 w = self.weights.copy()
                 w[bad] = self.regen_weight * w.mean()
                 self.weights = w / w.sum()
-        return idx is not None, injected, regenerated
+        return new is not None, injected, regenerated
 
     def step(self, odo_prev, odo_now, z) -> np.ndarray:
         """One filter step: predict, update, estimate, resample.
@@ -476,11 +533,12 @@ class MCL:
         numpy.ndarray, shape (3,)
             The estimate after the update (before resampling).
         """
-        self.predict(odo_prev, odo_now)
         n = len(self.particles)
-        log_mean = self.update(z)
-        est = self.estimate()
-        self.last_estimate = est
+        if not self._fused_step(odo_prev, odo_now, z):
+            self.predict(odo_prev, odo_now)
+            self.update(z)
+            self.last_estimate = self.estimate()
+        est, log_mean = self.last_estimate, self._log_mean
         resampled, injected, regenerated = self.resample()
         self.info = StepInfo(
             n, self.ess, resampled, len(self.particles), injected, regenerated, log_mean

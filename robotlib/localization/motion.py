@@ -17,8 +17,11 @@ half turn.
 from __future__ import annotations
 
 import math
+import os
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 
 from ..geometry import as_rng
@@ -28,6 +31,62 @@ __all__ = ["odometry_increment", "sample_motion_odometry", "OdometryMotionModel"
 
 PARALLEL_MIN = 4096
 """Particle count from which kernels run over threads."""
+
+NORMALS_CHUNK = 8192
+"""Rows of motion noise drawn by one generator, beyond (see `standard_normals`)."""
+
+_pool: tuple[int, int, ThreadPoolExecutor] | None = None
+
+
+def _executor(threads: int) -> ThreadPoolExecutor:
+    """Return this process's pool of ``threads`` threads, made on first use."""
+    global _pool
+    if _pool is None or _pool[0] != os.getpid() or _pool[1] != threads:
+        _pool = (os.getpid(), threads, ThreadPoolExecutor(threads, "robotlib-normals"))
+    return _pool[2]
+
+
+def _fill(key: int, chunk: int, out: np.ndarray) -> None:
+    gen = np.random.Generator(np.random.SFC64(np.random.SeedSequence([key, chunk])))
+    gen.standard_normal(out=out)
+
+
+def standard_normals(rng: np.random.Generator, n: int) -> np.ndarray:
+    """Draw standard normals (n, 3) for the motion noise of ``n`` particles.
+
+    Up to `NORMALS_CHUNK` rows: ``rng.standard_normal((n, 3))``. Beyond, one
+    draw from ``rng`` keys a generator per chunk of `NORMALS_CHUNK` rows
+    (chunk ``c`` from ``SeedSequence([key, c])``), and the chunks are filled
+    over threads (NumPy draws without the GIL): the numbers depend on ``rng``
+    and ``n`` only, not on the number of threads.
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        The randomness.
+    n : int
+        Particles.
+
+    Returns
+    -------
+    numpy.ndarray, shape (n, 3)
+    """
+    if n <= NORMALS_CHUNK:
+        return rng.standard_normal((n, 3))
+    key = int(rng.integers(np.iinfo(np.int64).max))
+    out = np.empty((n, 3))
+    chunks = [
+        (key, c, out[lo : lo + NORMALS_CHUNK])
+        for c, lo in enumerate(range(0, n, NORMALS_CHUNK))
+    ]
+    threads = min(numba.get_num_threads(), len(chunks))
+    if threads <= 1:
+        for chunk in chunks:
+            _fill(*chunk)
+    else:
+        for future in [_executor(threads).submit(_fill, *c) for c in chunks]:
+            future.result(timeout=60)
+    return out
 
 
 def odometry_increment(odo_prev, odo_now, min_trans: float = 1e-4) -> tuple:
@@ -95,7 +154,7 @@ def sample_motion_odometry(
     alphas : sequence of 4 float
         Noise parameters ``alpha1..alpha4`` (see the module docstring).
     rng : numpy.random.Generator, int or None
-        Draws the (N, 3) standard normals.
+        Draws the (N, 3) standard normals (`standard_normals`).
 
     Returns
     -------
@@ -105,14 +164,14 @@ def sample_motion_odometry(
     p = _particles(particles)
     rot1, trans, rot2 = odometry_increment(odo_prev, odo_now)
     sd = _noise_std(alphas, rot1, trans, rot2)
-    normals = as_rng(rng).standard_normal((len(p), 3))
+    noise = standard_normals(as_rng(rng), len(p))
     out = np.empty_like(p)
     kernel = (
         _kernels.sample_odometry_parallel
         if len(p) >= PARALLEL_MIN
         else _kernels.sample_odometry
     )
-    kernel(p, rot1, trans, rot2, *sd, normals, out)
+    kernel(p, rot1, trans, rot2, *sd, noise, out)
     return out
 
 

@@ -6,7 +6,9 @@ that compare against expected readings (the paper's and the beam model)
 compute them in one of two ways:
 
 - exact (``fast=False``): every particle casts its sonar cones against the
-  walls with `robotlib._raycast.sonar_cone`, the simulator's own model;
+  walls as `robotlib._raycast.sonar_cone` does, the simulator's own model
+  (the same numbers; each cone is cast only against the walls it may reach,
+  see `robotlib._raycast.cone_walls`);
 - fast (``fast=True``): a `ConeTable` precomputed once per world holds, per
   grid cell and per direction bin, the cone range from the cell's centre, in
   millimetres; a particle's reading is looked up at its sensor's cell and
@@ -26,7 +28,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import _raycast
 from ..sonar import SonarModel
 from ..world import World
 from . import _kernels
@@ -221,11 +222,15 @@ def expected_readings(
     sonar = SonarModel() if sonar is None else sonar
     p = _particles(particles)
     out = np.empty((len(p), len(sonar.sensors)))
-    kernel = _raycast.expected_scan_parallel if len(p) >= 64 else _raycast.expected_scan
+    kernel = (
+        _kernels.expected_scan_blocks_parallel
+        if len(p) >= 64
+        else _kernels.expected_scan_blocks
+    )
     kernel(
         p,
         sonar.sensors,
-        np.ascontiguousarray(world.obstacles),
+        *_wall_blocks(world, float(sonar.max_range)),
         int(sonar.n_rays),
         float(sonar.cone),
         float(sonar.max_range),
@@ -234,6 +239,21 @@ def expected_readings(
         out,
     )
     return out
+
+
+_BLOCKS: dict = {}
+
+
+def _wall_blocks(world: World, max_range: float) -> tuple:
+    """Walls, and the walls near each 1 m block (`_kernels.wall_blocks`), cached."""
+    key = (id(world), max_range)
+    entry = _BLOCKS.get(key)
+    if entry is not None and entry[0]() is world:
+        return entry[1]
+    segments = np.ascontiguousarray(world.obstacles, dtype=np.float64).reshape(-1, 4)
+    blocks = (segments, *_kernels.wall_blocks(segments, world.bounds, max_range))
+    _BLOCKS[key] = (weakref.ref(world, lambda _: _BLOCKS.pop(key, None)), blocks)
+    return blocks
 
 
 def _scan(z, n_sensors: int) -> np.ndarray:
@@ -285,6 +305,10 @@ class _ExpectedModel:
         """Return expected readings (N, S) of particles (N, 3), m."""
         return expected_readings(self.world, particles, self.sonar, self.table)
 
+    def _where(self):
+        t = self.table
+        return t.table, (t.origin[0], t.origin[1], 1.0 / t.resolution)
+
 
 class PaperSensorModel(_ExpectedModel):
     """The paper's innovation weight: ``w_j = exp(-d_j) + 1/N``.
@@ -333,6 +357,23 @@ class PaperSensorModel(_ExpectedModel):
             out,
         )
         return out
+
+    def _step(self, particles, weights, motion, normals, z):
+        """Move, weigh, estimate in one kernel (see `MCL.step`; fast path only)."""
+        z = _scan(z, len(self.sonar.sensors))
+        n = len(particles)
+        out_p, out_w = np.empty((n, 3)), np.empty(n)
+        kernel = (
+            _kernels.paper_table_step_parallel
+            if n >= PARALLEL_MIN
+            else _kernels.paper_table_step
+        )
+        table, where = self._where()
+        log_mean, ess, est = kernel(
+            particles, normals, motion, self.sonar.sensors, table, where, z, 1.0 / n,
+            weights, out_p, out_w,
+        )  # fmt: skip
+        return out_p, out_w, log_mean, ess, est
 
 
 @dataclass(frozen=True)
@@ -412,6 +453,9 @@ class BeamSensorModel(_ExpectedModel):
                 q.lambda_short,
                 int(round(self.sonar.max_range * 1000)) + 1,
             )
+            self._u2_skip = _kernels.beam_skip(
+                float(self._norms[0].max()), q.z_rand / self.sonar.max_range
+            )
 
     def log_likelihood(self, particles, z) -> np.ndarray:
         """Per-particle ``sum_i log p(z_i | x_j)`` for readings ``z`` (S,), m.
@@ -445,13 +489,11 @@ class BeamSensorModel(_ExpectedModel):
             out *= q.exponent
         return out
 
-    def _table_log_likelihood(self, particles, z) -> np.ndarray:
-        p = _particles(particles)
-        z = _scan(z, len(self.sonar.sensors))
-        q, t = self.params, self.table
+    def _model(self, z) -> tuple:
+        """Return the per-scan arguments of the fused beam kernels."""
+        q = self.params
         max_range = float(self.sonar.max_range)
-        out = np.empty(len(p))
-        model = (
+        return (
             z,
             np.exp(-q.lambda_short * z),
             z >= max_range - 1e-3,
@@ -461,12 +503,42 @@ class BeamSensorModel(_ExpectedModel):
             q.z_rand / max_range,
             1.0 / q.sigma_hit,
         )
+
+    def _lut(self, model) -> np.ndarray:
+        lut = np.empty((len(model[0]), len(self._norms[0])))
+        _kernels.beam_scan_lut(*model, lut)
+        return lut
+
+    def _step(self, particles, weights, motion, normals, z):
+        """Move, weigh, estimate in one kernel (see `MCL.step`; fast path only)."""
+        z = _scan(z, len(self.sonar.sensors))
+        n = len(particles)
+        out_p, out_w = np.empty((n, 3)), np.empty(n)
+        model = self._model(z)
+        table, where = self._where()
+        sensors, exponent = self.sonar.sensors, float(self.params.exponent)
+        if n >= PARALLEL_MIN:  # one model table per scan, then lookups
+            log_mean, ess, est = _kernels.lut_table_step_parallel(
+                particles, normals, motion, sensors, table, where, self._lut(model),
+                exponent, weights, out_p, out_w,
+            )  # fmt: skip
+        else:
+            log_mean, ess, est = _kernels.beam_table_step(
+                particles, normals, motion, sensors, table, where, *model[:5],
+                (*model[5:], exponent, self._u2_skip), weights, out_p, out_w,
+            )  # fmt: skip
+        return out_p, out_w, log_mean, ess, est
+
+    def _table_log_likelihood(self, particles, z) -> np.ndarray:
+        p = _particles(particles)
+        z = _scan(z, len(self.sonar.sensors))
+        q, t = self.params, self.table
+        out = np.empty(len(p))
+        model = self._model(z)
         where = (t.table, t.origin[0], t.origin[1], 1.0 / t.resolution)
         if len(p) >= PARALLEL_MIN:  # one model table per scan, then lookups
-            lut = np.empty((len(z), len(self._norms[0])))
-            _kernels.beam_scan_lut(*model, lut)
             _kernels.lut_table_loglik_parallel(
-                p, self.sonar.sensors, *where, lut, float(q.exponent), out
+                p, self.sonar.sensors, *where, self._lut(model), float(q.exponent), out
             )
         else:
             _kernels.beam_table_loglik(

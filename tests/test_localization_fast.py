@@ -1,0 +1,267 @@
+"""The fast MCL step: fused kernels, culled cone casts, chunked noise (same numbers)."""
+
+import math
+
+import numba
+import numpy as np
+import pytest
+
+from robotlib import _raycast
+from robotlib.localization import (
+    MCL,
+    BeamParameters,
+    BeamSensorModel,
+    KLDResampling,
+    PaperSensorModel,
+    ThresholdResampling,
+    _kernels,
+    expected_readings,
+    systematic_resample,
+)
+from robotlib.localization.motion import NORMALS_CHUNK, standard_normals
+from robotlib.sonar import SonarModel
+from robotlib.world import World, load_world
+
+from . import naive_mcl as naive
+
+
+@pytest.fixture(scope="module")
+def world():
+    """A 6 m x 2 m corridor with a door, a box and a slanted wall."""
+    segs = [
+        (0, 0, 6, 0),
+        (0, 2, 2.5, 2),
+        (3.5, 2, 6, 2),
+        (2.5, 2, 2.5, 3),
+        (3.5, 2, 3.5, 3),
+        (2.5, 3, 3.5, 3),
+        (0, 0, 0, 2),
+        (6, 0, 6, 2),
+        (4.5, 0.0, 4.5, 0.5),
+        (1.0, 1.6, 1.8, 1.9),
+    ]
+    return World(segs, bounds=(-0.2, -0.2, 6.2, 3.2), start=(1.0, 1.0, 0.0))
+
+
+def _full_cast(world, poses, sonar):
+    out = np.empty((len(poses), len(sonar.sensors)))
+    _raycast.expected_scan(
+        poses, sonar.sensors, np.ascontiguousarray(world.obstacles),
+        int(sonar.n_rays), float(sonar.cone), float(sonar.max_range),
+        float(sonar.min_range), sonar.cos_specular, out,
+    )  # fmt: skip
+    return out
+
+
+@pytest.mark.parametrize("name", ["corridor", "office"])
+def test_block_cast_equals_full_cast(name):
+    """Casting each cone against its nearby walls gives the very same readings."""
+    world = load_world(name)
+    poses = world.sample_free_poses(150, 1)
+    xmin, ymin, xmax, ymax = world.bounds
+    outside = [[xmin - 0.5, ymin + 1, 0.3], [xmax + 0.1, ymax - 1, 2.5]]
+    poses = np.vstack([poses, outside])  # sensors off the block grid
+    sonar = SonarModel()
+    full = _full_cast(world, poses, sonar)
+    np.testing.assert_array_equal(
+        expected_readings(world, poses[:40], sonar), full[:40]
+    )
+    np.testing.assert_array_equal(expected_readings(world, poses, sonar), full)
+
+
+@pytest.mark.parametrize(
+    "sonar",
+    [SonarModel(n_rays=1), SonarModel(cone=math.radians(200.0), n_rays=9),
+     SonarModel(max_range=1.5, min_range=0.05)],
+)  # fmt: skip
+def test_block_cast_equals_full_cast_other_sonars(world, sonar):
+    poses = world.sample_free_poses(100, 2)
+    np.testing.assert_array_equal(
+        expected_readings(world, poses, sonar), _full_cast(world, poses, sonar)
+    )
+
+
+def test_cone_walls_keeps_every_wall_a_ray_meets(world):
+    """No wall that a ray of the cone meets within range is culled."""
+    segs = np.ascontiguousarray(world.obstacles)
+    rng = np.random.default_rng(3)
+    cone, max_range, margin = math.radians(30.0), 2.5, 1e-6
+    near = np.empty_like(segs)
+    h = cone / 2 + margin
+    for _ in range(300):
+        sx, sy = rng.uniform(-0.2, 6.2), rng.uniform(-0.2, 3.2)
+        sth = rng.uniform(-math.pi, math.pi)
+        k = _raycast.cone_walls(
+            sx, sy, math.cos(sth), math.sin(sth), math.cos(h), math.sin(h), segs,
+            max_range, near,
+        )  # fmt: skip
+        kept = {tuple(w) for w in near[:k]}
+        for a in sth + np.linspace(-cone / 2, cone / 2, 9):
+            for seg in segs:
+                if naive.ray_hit(sx, sy, a, seg) < max_range:
+                    assert tuple(seg) in kept
+        assert [tuple(w) for w in near[:k]] == [
+            w for w in map(tuple, segs) if w in kept
+        ]
+
+
+def _models(world):
+    return {
+        "paper": PaperSensorModel(world, fast=True),
+        "beam": BeamSensorModel(world, fast=True, params=BeamParameters(exponent=0.2)),
+    }
+
+
+@pytest.mark.parametrize("n", [300, 5000])
+@pytest.mark.parametrize("kind", ["paper", "beam"])
+def test_fused_step_equals_the_kernels_in_turn(world, kind, n):
+    """One fused call = move, weigh, normalise, estimate: the same bits."""
+    model = _models(world)[kind]
+    rng = np.random.default_rng(4)
+    p = world.sample_free_poses(n, 5)
+    p[:50] = world.sample_free_poses(1, 6)  # some at the true pose: a peaked update
+    w = rng.random(n)
+    w /= w.sum()
+    z = expected_readings(world, np.array([[1.5, 1.0, 0.2]]))[0]
+    z[2] = 5.0
+    motion = (0.1, 0.3, -0.05, 0.02, 0.03, 0.01)
+    noise = rng.standard_normal((n, 3))
+    moved, w2, log_mean, ess, est = model._step(p, w, motion, noise, z)
+    ref = naive.fused_step(p, w, motion, noise, lambda q: model.log_likelihood(q, z))
+    np.testing.assert_allclose(moved, ref[0], atol=1e-12)
+    np.testing.assert_allclose(w2, ref[1], rtol=1e-12)
+    assert log_mean == pytest.approx(ref[2], rel=1e-12)
+    assert ess == pytest.approx(ref[3], rel=1e-12)
+    np.testing.assert_allclose(est, ref[4], atol=1e-12)
+    # and bit for bit what MCL.predict, update, estimate compute
+    out = np.empty_like(p)
+    _kernels.sample_odometry(p, *motion, noise, out)
+    np.testing.assert_array_equal(moved, out)
+    ll = model.log_likelihood(out, z)
+    w3 = np.empty(n)
+    assert _kernels.update_weights(w, ll, w3) == (log_mean, ess)
+    np.testing.assert_array_equal(w2, w3)
+    np.testing.assert_array_equal(est, _kernels.weighted_pose_mean(out, w3))
+
+
+def test_beam_skip_leaves_the_likelihood_unchanged(world):
+    """Leaving out hit terms below 2^-60 p_rand changes no bit."""
+    model = _models(world)["beam"]
+    p = world.sample_free_poses(2000, 7)
+    z = np.array([0.2, 4.9, 1.0, 3.0, 0.5, 2.2, 5.0, 0.15])
+    motion = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+    noise = np.zeros((len(p), 3))
+    w = np.full(len(p), 1 / len(p))
+    m = model._model(z)
+    table, where = model._where()
+    skip = model._u2_skip
+    assert 80 < skip < 120  # |z - zhat| > ~1.45 m with sigma 0.15 m
+    u = (z - model.expected(p)) / 0.15
+    assert np.mean(u[:, z < 5.0] ** 2 >= skip) > 0.1  # many terms are left out
+    outs = []
+    for u2 in (skip, math.inf):
+        ow = np.empty(len(p))
+        _kernels.beam_table_step(
+            p, noise, motion, model.sonar.sensors, table, where, *m[:5],
+            (*m[5:], 0.2, u2), w, np.empty_like(p), ow,
+        )  # fmt: skip
+        outs.append(ow)
+    np.testing.assert_array_equal(outs[0], outs[1])
+    assert _kernels.beam_skip(2.0, 0.0) == math.inf
+
+
+def _run(world, make, steps=4, seed=1):
+    mcl = make(world, seed)
+    odo = [np.array([1.0, 1.0, 0.0]) + k * np.array([0.3, 0.0, 0.05]) for k in range(5)]
+    z = expected_readings(world, np.array([[1.5, 1.0, 0.2]]))[0]
+    ests = [mcl.step(odo[k], odo[k + 1], z).copy() for k in range(steps)]
+    return np.array(ests), mcl.particles, mcl.weights
+
+
+def _stepwise(world, make, steps=4, seed=1):
+    """The same run with `predict`, `update`, `estimate`, `resample` in turn."""
+    mcl = make(world, seed)
+    odo = [np.array([1.0, 1.0, 0.0]) + k * np.array([0.3, 0.0, 0.05]) for k in range(5)]
+    z = expected_readings(world, np.array([[1.5, 1.0, 0.2]]))[0]
+    ests = []
+    for k in range(steps):
+        mcl.predict(odo[k], odo[k + 1])
+        mcl.update(z)
+        ests.append(mcl.estimate())
+        mcl.resample()
+    return np.array(ests), mcl.particles, mcl.weights
+
+
+@pytest.mark.parametrize(
+    "make",
+    [
+        lambda w, s: MCL.paper(w, n=300, fast=True, rng=s),
+        lambda w, s: MCL(w, _models(w)["beam"], n=300, rng=s),
+        lambda w, s: MCL(
+            w, _models(w)["beam"], resampling=KLDResampling(n_max=6000), n=6000, rng=s
+        ),
+        lambda w, s: MCL(
+            w,
+            _models(w)["paper"],
+            resampling=ThresholdResampling("systematic", 1.0),
+            n=3 * NORMALS_CHUNK,
+            rng=s,
+        ),  # fmt: skip
+    ],
+    ids=["paper", "beam", "beam-kld-lut", "paper-chunked-noise"],
+)
+def test_mcl_step_equals_its_parts(world, make):
+    for a, b in zip(_run(world, make), _stepwise(world, make), strict=True):
+        np.testing.assert_array_equal(a, b)
+
+
+def test_systematic_gather_matches_resampler():
+    rng = np.random.default_rng(8)
+    p = rng.uniform(-3, 3, (500, 3))
+    w = rng.random(500) ** 4
+    for n in (500, 123):
+        u = np.random.default_rng(9).random()
+        out = np.empty((n, 3))
+        _kernels.systematic_gather(p, w, u, out)
+        idx = systematic_resample(w, np.random.default_rng(9), n)
+        np.testing.assert_array_equal(out, p[idx])
+        np.testing.assert_array_equal(out, naive.systematic_gather(p, w, u, n))
+
+
+def test_standard_normals_depend_on_rng_and_n_only():
+    small = standard_normals(np.random.default_rng(1), 100)
+    np.testing.assert_array_equal(
+        small, np.random.default_rng(1).standard_normal((100, 3))
+    )
+    n = 2 * NORMALS_CHUNK + 17
+    threads = numba.get_num_threads()
+    try:
+        numba.set_num_threads(1)
+        one = standard_normals(np.random.default_rng(2), n)
+    finally:
+        numba.set_num_threads(threads)
+    many = standard_normals(np.random.default_rng(2), n)
+    np.testing.assert_array_equal(one, many)
+    assert not np.array_equal(many, standard_normals(np.random.default_rng(3), n))
+    # the chunks are distinct streams of standard normals
+    c = NORMALS_CHUNK
+    assert not np.array_equal(many[:17], many[c : c + 17])
+    assert abs(many.mean()) < 0.01 and many.std() == pytest.approx(1.0, abs=0.01)
+    rows = many.reshape(-1)
+    assert abs(np.corrcoef(rows[:-1], rows[1:])[0, 1]) < 0.01
+
+
+def test_large_filter_is_reproducible_whatever_the_threads(world):
+    """Chunked noise over threads: the same run with 1 thread and with all."""
+
+    def make(w, s):
+        return MCL(w, _models(w)["beam"], n=3 * NORMALS_CHUNK, rng=s)
+
+    threads = numba.get_num_threads()
+    try:
+        numba.set_num_threads(1)
+        one = _run(world, make, steps=2)
+    finally:
+        numba.set_num_threads(threads)
+    for a, b in zip(one, _run(world, make, steps=2), strict=True):
+        np.testing.assert_array_equal(a, b)
