@@ -161,3 +161,15 @@ def test_periodic_corridor_fools_the_best_filter_early():
     route = experiment.drive_route(world, seed=0, n_steps=10)
     hist = experiment.run_filter(route, experiment.BEST_CONFIG, 0)
     assert hist.error[-1] > 0.5 and hist.n_particles[-1] > 1000
+
+
+def test_bench_mcl_cli_writes_json(tmp_path):
+    """The bench runs (tiny sizes) and reports median and fastest per path."""
+    out = tmp_path / "b.json"
+    args = ["bench", "mcl", "--n", "50", "--reps", "2", "--table-world", ""]
+    assert main([*args, "--no-first-step", "--json", str(out)]) == 0
+    results = json.loads(out.read_text())["results"]
+    paths = {(r["path"], r["model"]) for r in results}
+    assert paths == {("fast", "paper"), ("exact", "paper"), ("numpy", "paper"),
+                     ("fast", "beam"), ("exact", "beam")}  # fmt: skip
+    assert all(0 < r["ms_min"] <= r["ms_per_step"] for r in results)
