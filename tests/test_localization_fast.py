@@ -265,3 +265,18 @@ def test_large_filter_is_reproducible_whatever_the_threads(world):
         numba.set_num_threads(threads)
     for a, b in zip(one, _run(world, make, steps=2), strict=True):
         np.testing.assert_array_equal(a, b)
+
+
+def test_step_accepts_particles_set_from_outside(world):
+    """Particles assigned as a strided view step like their contiguous copy."""
+    results = []
+    for strided in (False, True):
+        mcl = MCL(world, _models(world)["beam"], n=200, rng=5)
+        p = np.asfortranarray(world.sample_free_poses(200, 6))
+        mcl.particles = p if strided else np.ascontiguousarray(p)
+        mcl.weights = np.full(400, 1 / 200)[::2] if strided else np.full(200, 1 / 200)
+        z = expected_readings(world, np.array([[1.5, 1.0, 0.2]]))[0]
+        results.append(mcl.step([1, 1, 0], [1.3, 1, 0.05], z).copy())
+        results.append(mcl.particles.copy())
+    np.testing.assert_array_equal(results[0], results[2])
+    np.testing.assert_array_equal(results[1], results[3])

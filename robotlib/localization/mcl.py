@@ -116,8 +116,12 @@ class ThresholdResampling:
         n = len(mcl.weights)
         if mcl.ess >= self.threshold * n and self.threshold < 1.0:
             return None
+        p, w = mcl.particles, mcl.weights
+        if not (_plain(p, 2) and _plain(w, 1) and p.shape == (n, 3)):
+            idx = self.indexes(mcl)  # set from outside: the checked path
+            return None if idx is None else _gather(_particles(p), idx)
         out = np.empty((n, 3))  # the same draw as `systematic_resample`
-        _kernels.systematic_gather(mcl.particles, mcl.weights, mcl.rng.random(), out)
+        _kernels.systematic_gather(p, w, mcl.rng.random(), out)
         return out
 
 
@@ -209,6 +213,16 @@ class AugmentedInjection:
     def reset(self) -> None:
         """Forget the averages."""
         self.w_slow = self.w_fast = float("nan")
+
+
+def _plain(a, ndim: int) -> bool:
+    """Whether ``a`` is a C-contiguous float64 array of ``ndim`` dimensions."""
+    return (
+        type(a) is np.ndarray
+        and a.dtype == np.float64
+        and a.ndim == ndim
+        and a.flags.c_contiguous
+    )
 
 
 def _gather(particles: np.ndarray, idx) -> np.ndarray:
@@ -455,10 +469,16 @@ class MCL:
             return False
         rot1, trans, rot2 = odometry_increment(odo_prev, odo_now)
         motion = (rot1, trans, rot2, *_noise_std(self.motion.alphas, rot1, trans, rot2))
-        p = self.particles
+        p, w = self.particles, self.weights
+        if not _plain(p, 2) or p.shape[1] != 3:  # set from outside
+            p = _particles(p)
+        if not _plain(w, 1):
+            w = np.ascontiguousarray(w, dtype=np.float64)
+        if w.shape != (len(p),):
+            raise ValueError("weights must have shape (N,) like the particles")
         noise = standard_normals(self.rng, len(p))
         self.particles, weights, log_mean, ess, self.last_estimate = sensor._step(
-            p, self.weights, motion, noise, z
+            p, w, motion, noise, z
         )
         self._weighed(weights, log_mean, ess)
         return True
