@@ -9,6 +9,11 @@ random particles, augmented MCL), and replace particles that left the
 admissible area (the paper's step 3). `MCL.paper` builds the paper's filter
 exactly; `MCL.best` the strongest configuration this project offers.
 
+With the odometry motion model and a sensor model on a cone table (``fast``),
+`MCL.step` moves, weighs and estimates in one kernel call, and low-variance
+resampling gathers in one more: the same numbers as `MCL.predict`,
+`MCL.update`, `MCL.estimate` and `MCL.resample` in turn, with the same draws.
+
 Resampling policies (each a small frozen dataclass):
 
 - `PaperResampling`: every step, multinomial selection, then the paper's
