@@ -1,6 +1,10 @@
 """Grade a folder of N copies of a lab's solution and print the wall time.
 
 python bench/bench_grade.py [--lab lab3_mcl] [--copies 30] [--jobs 2]
+                            [--solution PATH]
+
+``--solution`` grades copies of another version of the lab's source notebook
+(e.g. an older one from git) against itself, to compare grading costs.
 """
 
 from __future__ import annotations
@@ -22,22 +26,25 @@ def main() -> None:
     parser.add_argument("--lab", default="lab3_mcl")
     parser.add_argument("--copies", type=int, default=30)
     parser.add_argument("--jobs", type=int, default=os.cpu_count())
+    parser.add_argument("--solution", type=Path, help="the lab's source notebook")
     args = parser.parse_args()
-    solution = ROOT / "solutions" / f"{args.lab}.ipynb"
+    solution = args.solution or ROOT / "solutions" / f"{args.lab}.ipynb"
     with tempfile.TemporaryDirectory() as tmp:
         subs = Path(tmp) / "submissions"
         for i in range(args.copies):
             (subs / f"student{i:02d}").mkdir(parents=True)
             shutil.copy(solution, subs / f"student{i:02d}" / f"{args.lab}.ipynb")
         t0 = time.monotonic()
-        results, checks = g.grade(subs, args.lab, jobs=args.jobs, progress=False)
+        results, checks = g.grade(
+            subs, args.lab, solution, jobs=args.jobs, progress=False
+        )
         wall = time.monotonic() - t0
         g.write_gradebook(Path(tmp) / "gradebook.csv", results, checks)
     full = sum(r.total == r.max_points for r in results)
     secs = sorted(r.seconds for r in results)
     print(
-        f"lab {args.lab}: {args.copies} copies, {args.jobs} jobs, "
-        f"{os.cpu_count()} cores"
+        f"lab {args.lab} ({solution.name}): {args.copies} copies, "
+        f"{args.jobs} jobs, {os.cpu_count()} cores"
     )
     print(
         f"wall time {wall:.1f} s (reference run included), "
