@@ -260,7 +260,7 @@ def _scan(z, n_sensors: int) -> np.ndarray:
     z = np.ascontiguousarray(z, dtype=np.float64)
     if z.shape != (n_sensors,):
         raise ValueError(f"z must have shape ({n_sensors},), got {z.shape}")
-    if not np.all(z > 0):
+    if z.size and not z.min() > 0:  # NaN too; quicker than np.all for a few
         raise ValueError("sonar readings must be positive")
     return z
 
