@@ -102,6 +102,8 @@ class ConeTable:
             steps = sonar.cone / (sonar.n_rays - 1) / bin_width
             if abs(steps - round(steps)) < 1e-9 and round(steps) >= 1:
                 ray_step = int(round(steps))
+        if ny * nx * n_bins >= 2**31:  # the fused steps index it with int32
+            raise ValueError("cone table too large: use a coarser resolution")
         self.table = np.empty((ny, nx, n_bins), dtype=np.uint16)
         t0 = time.perf_counter()
         _kernels.build_cone_table(
@@ -520,7 +522,7 @@ class BeamSensorModel(_ExpectedModel):
         if n >= PARALLEL_MIN:  # one model table per scan, then lookups
             log_mean, ess, est = _kernels.lut_table_step_parallel(
                 particles, normals, motion, sensors, table, where, self._lut(model),
-                exponent, weights, out_p, out_w,
+                model[2], exponent, weights, out_p, out_w,
             )  # fmt: skip
         else:
             log_mean, ess, est = _kernels.beam_table_step(
