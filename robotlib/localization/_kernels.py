@@ -1170,14 +1170,21 @@ def paper_table_step(
 
 
 @nb.njit(**JIT_PARALLEL)
-def paper_table_step_parallel(
-    particles, normals, motion, sensors, table, where, z, inv_n, weights, out_p, out_w
-):
-    """`paper_table_step` over threads (sums serial: same result)."""
+def paper_lut_step_parallel(
+    particles, normals, motion, sensors, table, where, terms, inv_n, weights, out_p,
+    out_w,
+):  # fmt: skip
+    """`paper_table_step` over threads, each term read from a table (same result).
+
+    ``terms[i, k]`` is ``|(z_i - k / 1000) / z_i|`` for every millimetre ``k``
+    a table entry can hold (as `beam_scan_lut` for the beam model): a lookup
+    instead of a division per beam. Sums serial.
+    """
     n = particles.shape[0]
+    s_count = sensors.shape[0]
     cs = np.empty((n, 2))
-    mm = np.empty((n, sensors.shape[0]), dtype=np.int32)
-    skip = np.zeros(sensors.shape[0], dtype=np.bool_)
+    mm = np.empty((n, s_count), dtype=np.int32)
+    skip = np.zeros(s_count, dtype=np.bool_)
     for j in nb.prange(n):
         _move_cells(j, particles, motion, normals, sensors, table, where, skip,
                     out_p, cs, mm)  # fmt: skip
@@ -1185,7 +1192,10 @@ def paper_table_step_parallel(
     for j in nb.prange(n):
         _gather_mm(j, flat, mm)
     for j in nb.prange(n):
-        _paper_mm(j, mm, z, inv_n, out_w)
+        d = 0.0
+        for i in range(s_count):
+            d += terms[i, mm[j, i]]
+        out_w[j] = math.log(math.exp(-d / s_count) + inv_n)
     return _weigh_estimate_parallel(weights, out_p, cs, out_w)
 
 

@@ -365,16 +365,19 @@ class PaperSensorModel(_ExpectedModel):
         z = _scan(z, len(self.sonar.sensors))
         n = len(particles)
         out_p, out_w = np.empty((n, 3)), np.empty(n)
-        kernel = (
-            _kernels.paper_table_step_parallel
-            if n >= PARALLEL_MIN
-            else _kernels.paper_table_step
-        )
         table, where = self._where()
-        log_mean, ess, est = kernel(
-            particles, normals, motion, self.sonar.sensors, table, where, z, 1.0 / n,
-            weights, out_p, out_w,
-        )  # fmt: skip
+        if n >= PARALLEL_MIN:  # each reading's term per millimetre, then lookups
+            k = np.arange(int(round(self.sonar.max_range * 1000)) + 1)
+            terms = np.abs((z[:, None] - k * 0.001) / z[:, None])
+            log_mean, ess, est = _kernels.paper_lut_step_parallel(
+                particles, normals, motion, self.sonar.sensors, table, where, terms,
+                1.0 / n, weights, out_p, out_w,
+            )  # fmt: skip
+        else:
+            log_mean, ess, est = _kernels.paper_table_step(
+                particles, normals, motion, self.sonar.sensors, table, where, z,
+                1.0 / n, weights, out_p, out_w,
+            )  # fmt: skip
         return out_p, out_w, log_mean, ess, est
 
 
