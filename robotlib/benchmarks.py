@@ -78,8 +78,17 @@ def _numpy_step(state, odo_prev, odo_now, z, rng):
     return p[idx], est
 
 
-def _time(fn, reps: int) -> tuple[float, float]:
-    """Median and fastest of ``reps`` calls, ms."""
+def _time(fn, reps: int, min_seconds: float = 0.2) -> tuple[float, float]:
+    """Return the median and the fastest of ``reps`` calls (more if fast), ms.
+
+    Calls that take less than ``min_seconds / reps`` are repeated up to
+    ``min_seconds`` in all (at most 2000 times), so that a fast step is
+    timed warm, over many repetitions.
+    """
+    t0 = time.perf_counter()
+    fn()
+    once = time.perf_counter() - t0
+    reps = max(reps, min(2000, int(min_seconds / max(once, 1e-9))))
     times = []
     for _ in range(reps):
         t0 = time.perf_counter()

@@ -473,10 +473,8 @@ class BeamSensorModel(_ExpectedModel):
         z = _scan(z, zhat.shape[1])
         q = self.params
         out = np.empty(len(zhat))
-        kernel = (
-            _kernels.beam_loglik_parallel
-            if len(zhat) >= PARALLEL_MIN
-            else _kernels.beam_loglik
+        kernel = (  # as many threads as the cone casts (erf and exp per beam)
+            _kernels.beam_loglik_parallel if len(zhat) >= 64 else _kernels.beam_loglik
         )
         kernel(
             z,
