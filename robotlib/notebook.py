@@ -58,12 +58,17 @@ def _warm_mcl() -> None:
     paper.estimate(p, w)
     paper.dispersion_index(p, world.size)
     odo = np.asarray(world.start, dtype=float)
-    for mcl in (
+    # The exact and fast (fused) paths, small N and the many-particle paths
+    # (threads, chunked noise) of the filters the labs and widgets build.
+    filters = (
         MCL.paper(world, n=20, rng=0),
+        MCL.paper(world, n=20, fast=True, rng=0),
         MCL(
             world, BeamSensorModel(world), resampling=KLDResampling(20, 40), n=20, rng=0
         ),
-    ):
+        MCL.best(world, rng=0, n=10_000),
+    )
+    for mcl in filters:
         mcl.step(odo, odo + [0.1, 0.0, 0.0], z)
 
 
