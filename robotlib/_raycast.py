@@ -221,20 +221,8 @@ def cast_grid(poses, angles, max_range, field, x0, y0, resolution, out):
 
 
 @nb.njit(**JIT)
-def sonar_cone(sx, sy, sth, segments, n_rays, cone, max_range, cos_specular):
-    """One sonar's first echo and its one-bounce multipath range.
-
-    The cone of full width ``cone`` around heading ``sth`` is sampled by
-    ``n_rays`` rays (evenly, edges included; one ray on the axis if
-    ``n_rays == 1``). A ray that meets a wall whose normal makes an angle with
-    the ray larger than the specular angle (``cos`` of incidence below
-    ``cos_specular``) reflects away and gives no echo; it travels on, mirrored
-    by the wall, to the next wall it meets.
-
-    Returns ``(echo, multipath)``: the shortest echoing range (``inf`` if no
-    ray echoes or none within ``max_range``) and the shortest total path of a
-    reflected ray's bounce (``inf`` if none within ``max_range``).
-    """
+def _cone(sx, sy, sth, segments, n_rays, cone, max_range, cos_specular, bounce):
+    """Body of `sonar_cone` (``bounce``) and `cone_echo` (no bounce)."""
     echo = np.inf
     multipath = np.inf
     for r in range(n_rays):
@@ -256,6 +244,8 @@ def sonar_cone(sx, sy, sth, segments, n_rays, cone, max_range, cos_specular):
         if cos_inc >= cos_specular:
             echo = t
             continue
+        if not bounce:
+            continue
         dot = dx * nxn + dy * nyn
         rx = dx - 2.0 * dot * nxn
         ry = dy - 2.0 * dot * nyn
@@ -268,11 +258,31 @@ def sonar_cone(sx, sy, sth, segments, n_rays, cone, max_range, cos_specular):
 
 
 @nb.njit(**JIT)
-def _sensor_cone(k, i, poses, sensors, segments, n_rays, cone, max_range, cos_specular):
-    """`sonar_cone` of sensor ``i`` (robot frame) on robot pose ``k``."""
+def sonar_cone(sx, sy, sth, segments, n_rays, cone, max_range, cos_specular):
+    """One sonar's first echo and its one-bounce multipath range.
+
+    The cone of full width ``cone`` around heading ``sth`` is sampled by
+    ``n_rays`` rays (evenly, edges included; one ray on the axis if
+    ``n_rays == 1``). A ray that meets a wall whose normal makes an angle with
+    the ray larger than the specular angle (``cos`` of incidence below
+    ``cos_specular``) reflects away and gives no echo; it travels on, mirrored
+    by the wall, to the next wall it meets.
+
+    Returns ``(echo, multipath)``: the shortest echoing range (``inf`` if no
+    ray echoes or none within ``max_range``) and the shortest total path of a
+    reflected ray's bounce (``inf`` if none within ``max_range``).
+    """
+    return _cone(sx, sy, sth, segments, n_rays, cone, max_range, cos_specular, True)
+
+
+@nb.njit(**JIT)
+def _sensor_cone(
+    k, i, poses, sensors, segments, n_rays, cone, max_range, cos_specular, bounce
+):
+    """`_cone` of sensor ``i`` (robot frame) on robot pose ``k``."""
     c = math.cos(poses[k, 2])
     s = math.sin(poses[k, 2])
-    return sonar_cone(
+    return _cone(
         poses[k, 0] + c * sensors[i, 0] - s * sensors[i, 1],
         poses[k, 1] + s * sensors[i, 0] + c * sensors[i, 1],
         poses[k, 2] + sensors[i, 2],
@@ -281,6 +291,7 @@ def _sensor_cone(k, i, poses, sensors, segments, n_rays, cone, max_range, cos_sp
         cone,
         max_range,
         cos_specular,
+        bounce,
     )
 
 
@@ -304,7 +315,7 @@ def _scan_pose(
 ):
     for i in range(sensors.shape[0]):
         echo, multipath = _sensor_cone(
-            k, i, poses, sensors, segments, n_rays, cone, max_range, cos_specular
+            k, i, poses, sensors, segments, n_rays, cone, max_range, cos_specular, True
         )
         z = max_range
         if echo < max_range:
@@ -322,7 +333,7 @@ def _expected_pose(
 ):
     for i in range(sensors.shape[0]):
         echo, _ = _sensor_cone(
-            k, i, poses, sensors, segments, n_rays, cone, max_range, cos_specular
+            k, i, poses, sensors, segments, n_rays, cone, max_range, cos_specular, False
         )
         z = echo if echo < max_range else max_range
         out[k, i] = min(max(z, min_range), max_range)
@@ -502,22 +513,5 @@ def cone_walls(sx, sy, ux, uy, cos_half, sin_half, segments, max_range, out):
 @nb.njit(**JIT)
 def cone_echo(sx, sy, sth, segments, n_rays, cone, max_range, cos_specular):
     """`sonar_cone`'s first echo alone (no multipath bounce): the same number."""
-    echo = np.inf
-    for r in range(n_rays):
-        if n_rays == 1:
-            a = sth
-        else:
-            a = sth - 0.5 * cone + cone * r / (n_rays - 1)
-        dx = math.cos(a)
-        dy = math.sin(a)
-        t, m = ray_segments(sx, sy, dx, dy, segments)
-        if m < 0 or t >= max_range or t >= echo:
-            continue
-        ex = segments[m, 2] - segments[m, 0]
-        ey = segments[m, 3] - segments[m, 1]
-        length = math.sqrt(ex * ex + ey * ey)
-        nxn = -ey / length
-        nyn = ex / length
-        if abs(dx * nxn + dy * nyn) >= cos_specular:
-            echo = t
+    echo, _ = _cone(sx, sy, sth, segments, n_rays, cone, max_range, cos_specular, False)
     return echo
