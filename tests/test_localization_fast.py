@@ -20,27 +20,16 @@ from robotlib.localization import (
 )
 from robotlib.localization.motion import NORMALS_CHUNK, standard_normals
 from robotlib.sonar import SonarModel
-from robotlib.world import World, load_world
+from robotlib.world import load_world
 
 from . import naive_mcl as naive
+from .worlds import door_corridor
 
 
 @pytest.fixture(scope="module")
 def world():
     """A 6 m x 2 m corridor with a door, a box and a slanted wall."""
-    segs = [
-        (0, 0, 6, 0),
-        (0, 2, 2.5, 2),
-        (3.5, 2, 6, 2),
-        (2.5, 2, 2.5, 3),
-        (3.5, 2, 3.5, 3),
-        (2.5, 3, 3.5, 3),
-        (0, 0, 0, 2),
-        (6, 0, 6, 2),
-        (4.5, 0.0, 4.5, 0.5),
-        (1.0, 1.6, 1.8, 1.9),
-    ]
-    return World(segs, bounds=(-0.2, -0.2, 6.2, 3.2), start=(1.0, 1.0, 0.0))
+    return door_corridor(extra=[(1.0, 1.6, 1.8, 1.9)])
 
 
 def _full_cast(world, poses, sonar):

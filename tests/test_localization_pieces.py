@@ -24,26 +24,15 @@ from robotlib.localization import (
     systematic_resample,
 )
 from robotlib.sonar import SonarModel, expected_ranges
-from robotlib.world import World
 
 from . import naive_mcl as naive
+from .worlds import door_corridor
 
 
 @pytest.fixture(scope="module")
 def world():
     """A 6 m x 2 m corridor with one door and a box, start at the west end."""
-    segs = [
-        (0, 0, 6, 0),
-        (0, 2, 2.5, 2),
-        (3.5, 2, 6, 2),
-        (2.5, 2, 2.5, 3),
-        (3.5, 2, 3.5, 3),
-        (2.5, 3, 3.5, 3),
-        (0, 0, 0, 2),
-        (6, 0, 6, 2),
-        (4.5, 0.0, 4.5, 0.5),
-    ]
-    return World(segs, bounds=(-0.2, -0.2, 6.2, 3.2), start=(1.0, 1.0, 0.0))
+    return door_corridor()
 
 
 def test_odometry_increment_hand_cases():
