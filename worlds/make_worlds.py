@@ -106,6 +106,22 @@ def to_world(
     )
 
 
+CORRIDOR_ENDS = [
+    (500, 3000, 500, 4500),  # west end, chamfered at the north corner
+    (500, 4500, 1000, 5000),
+    (28500, 3000, 28500, 5000),  # east end, flat
+    # the north wall beyond the last room, with an alcove 1 m x 0.6 m
+    (27000, 5000, 27300, 5000),
+    (27300, 5000, 27300, 5600),
+    (27300, 5600, 28300, 5600),
+    (28300, 5600, 28300, 5000),
+    (28300, 5000, 28500, 5000),
+    (27000, 7500, 28500, 7500),  # close the solid block behind the alcove
+    (28500, 5000, 28500, 7500),
+]
+"""The two 28 m corridors' end walls and east alcove, mm."""
+
+
 def corridor() -> World:
     """Build the paper's long aliased corridor (28 m x 2 m).
 
@@ -146,20 +162,7 @@ def corridor() -> World:
         ],
         2500,
     )
-    ends = [
-        (500, 3000, 500, 4500),  # west end, chamfered at the north corner
-        (500, 4500, 1000, 5000),
-        (28500, 3000, 28500, 5000),  # east end, flat
-        # the north wall beyond the last room, with an alcove 1 m x 0.6 m
-        (27000, 5000, 27300, 5000),
-        (27300, 5000, 27300, 5600),
-        (27300, 5600, 28300, 5600),
-        (28300, 5600, 28300, 5000),
-        (28300, 5000, 28500, 5000),
-        (27000, 7500, 28500, 7500),  # close the solid block behind the alcove
-        (28500, 5000, 28500, 7500),
-    ]
-    return to_world(south + north + ends, (29000, 8000), (1500, 4000, 0.0))
+    return to_world(south + north + CORRIDOR_ENDS, (29000, 8000), (1500, 4000, 0.0))
 
 
 def corridor_periodic() -> World:
@@ -192,20 +195,7 @@ def corridor_periodic() -> World:
         ],
         2500,
     )
-    ends = [
-        (500, 3000, 500, 4500),  # west end, chamfered at the north corner
-        (500, 4500, 1000, 5000),
-        (28500, 3000, 28500, 5000),  # east end, flat
-        # the north wall beyond the last room, with an alcove 1 m x 0.6 m
-        (27000, 5000, 27300, 5000),
-        (27300, 5000, 27300, 5600),
-        (27300, 5600, 28300, 5600),
-        (28300, 5600, 28300, 5000),
-        (28300, 5000, 28500, 5000),
-        (27000, 7500, 28500, 7500),  # close the solid block behind the alcove
-        (28500, 5000, 28500, 7500),
-    ]
-    return to_world(south + north + ends, (29000, 8000), (1500, 4000, 0.0))
+    return to_world(south + north + CORRIDOR_ENDS, (29000, 8000), (1500, 4000, 0.0))
 
 
 def corridor2() -> World:
