@@ -101,10 +101,6 @@ def _edt_1d(f, n, v, z, out):
         out[q] = np.inf if f[p] == np.inf else (q - p) * (q - p) + f[p]
 
 
-_JUMP = 3.0
-"""Clearance, in cells, from which the grid caster jumps instead of stepping."""
-
-
 @nb.njit(**JIT)
 def clearance_field(occupied, out):
     """Write the grid caster's field into ``out``, shape ``occupied.shape + 2``.
@@ -140,84 +136,72 @@ def clearance_field(occupied, out):
 
 
 @nb.njit(**JIT)
-def ray_grid(field, x0, y0, resolution, ox, oy, dx, dy, max_range):
-    """Distance from ``(ox, oy)`` along unit vector ``(dx, dy)`` to an occupied cell.
+def _cast_grid_pose(k, poses, ca, sa, max_range, field, x0, y0, resolution, out):
+    """Cast every ray of pose ``k`` on a `clearance_field`; write ``out[k]``.
 
-    ``field`` comes from `clearance_field`. Returns the distance to the
-    boundary where the ray enters the first occupied cell: 0 if it starts in
-    one or outside the grid; the distance to the grid's edge if it leaves the
-    grid first; ``max_range`` if it travels that far without a hit.
-
-    Near obstacles the ray walks from cell to cell in order (Amanatides and
-    Woo's traversal); through open space it jumps ahead by the clearance.
+    Each ray advances from its origin by the clearance of the cell it is in
+    (a distance within which it cannot hit anything) or, where that is under
+    one cell, to the next cell boundary; it stops on entering an occupied
+    cell (0 if it starts in one or outside the grid, the grid's edge counting
+    as a wall) or past ``max_range``. The rays of a pose advance together, one
+    step each per round, so that their reads of ``field`` overlap in memory.
     """
-    gx = (ox - x0) / resolution + 1.0
-    gy = (oy - y0) / resolution + 1.0
-    ny = field.shape[0] - 2
-    nx = field.shape[1] - 2
-    if not (1.0 <= gx < nx + 1.0 and 1.0 <= gy < ny + 1.0):
-        return 0.0
-    step_j = 1 if dx > 0 else -1
-    step_i = 1 if dy > 0 else -1
-    t_delta_x = 1.0 / abs(dx) if abs(dx) > _EPS else np.inf
-    t_delta_y = 1.0 / abs(dy) if abs(dy) > _EPS else np.inf
+    n_rays = ca.shape[0]
+    gx = (poses[k, 0] - x0) / resolution + 1.0
+    gy = (poses[k, 1] - y0) / resolution + 1.0
+    if not (1.0 <= gx < field.shape[1] - 1 and 1.0 <= gy < field.shape[0] - 1):
+        out[k, :] = 0.0
+        return
     limit = max_range / resolution
-    t = 0.0
-    while True:
-        px = gx + t * dx
-        py = gy + t * dy
-        j = int(math.floor(px))
-        i = int(math.floor(py))
-        c = field[i, j]
-        if c < 0.0:
-            return t * resolution
-        if c >= _JUMP:
-            t += c
-            if t >= limit:
-                return max_range
-            continue
-        # Walk cell by cell from the point at t until a hit or open space.
-        t_max_x = t + ((j + 1 - px) if dx > 0 else (px - j)) * t_delta_x
-        t_max_y = t + ((i + 1 - py) if dy > 0 else (py - i)) * t_delta_y
-        while True:
-            if t_max_x < t_max_y:
-                t = t_max_x
-                t_max_x += t_delta_x
-                j += step_j
-            else:
-                t = t_max_y
-                t_max_y += t_delta_y
-                i += step_i
-            if t >= limit:
-                return max_range
-            c = field[i, j]
+    c0 = math.cos(poses[k, 2])
+    s0 = math.sin(poses[k, 2])
+    dx = np.empty(n_rays)
+    dy = np.empty(n_rays)
+    inv_dx = np.empty(n_rays)
+    inv_dy = np.empty(n_rays)
+    t = np.zeros(n_rays)
+    active = np.arange(n_rays)
+    for r in range(n_rays):
+        dx[r] = c0 * ca[r] - s0 * sa[r]
+        dy[r] = s0 * ca[r] + c0 * sa[r]
+        inv_dx[r] = 1.0 / dx[r] if dx[r] != 0.0 else np.inf
+        inv_dy[r] = 1.0 / dy[r] if dy[r] != 0.0 else np.inf
+    n = n_rays
+    while n > 0:
+        still = 0
+        for q in range(n):
+            r = active[q]
+            px = gx + t[r] * dx[r]
+            py = gy + t[r] * dy[r]
+            fj = math.floor(px)
+            fi = math.floor(py)
+            c = field[int(fi), int(fj)]
             if c < 0.0:
-                return t * resolution
-            if c >= _JUMP:
-                break
-        t += 1e-9
+                out[k, r] = t[r] * resolution
+                continue
+            if c < 1.0:
+                bx = ((fj + 1.0 - px) if dx[r] >= 0 else (fj - px)) * inv_dx[r]
+                by = ((fi + 1.0 - py) if dy[r] >= 0 else (fi - py)) * inv_dy[r]
+                c = min(bx, by) + 1e-9
+            t[r] += c
+            if t[r] >= limit:
+                out[k, r] = max_range
+                continue
+            active[still] = r
+            still += 1
+        n = still
 
 
 @nb.njit(**JIT_PARALLEL)
 def cast_grid(poses, angles, max_range, field, x0, y0, resolution, out):
-    """Grid version of `cast_segments`: ``out[k, r]`` via `ray_grid`."""
+    """Grid version of `cast_segments` on a `clearance_field`: ``out[k, r]``.
+
+    Ranges are to the boundary where each ray enters its first occupied cell.
+    """
     ca = np.cos(angles)
     sa = np.sin(angles)
     for k in nb.prange(poses.shape[0]):
-        c = math.cos(poses[k, 2])
-        s = math.sin(poses[k, 2])
-        for r in range(angles.shape[0]):
-            out[k, r] = ray_grid(
-                field,
-                x0,
-                y0,
-                resolution,
-                poses[k, 0],
-                poses[k, 1],
-                c * ca[r] - s * sa[r],
-                s * ca[r] + c * sa[r],
-                max_range,
-            )
+        _cast_grid_pose(k, poses, ca, sa, max_range, field, x0, y0, resolution, out)
 
 
 @nb.njit(**JIT)
