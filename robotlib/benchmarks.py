@@ -3,11 +3,11 @@
 ``robotlib bench mcl [--json FILE]`` times one MCL step (predict, weight,
 estimate, systematic resampling) per particle count for the fast path (cone
 table lookup), the exact path (cone casting) and a plain NumPy implementation
-of the paper's model on the same table, in the same run, and prints milliseconds and
-ratios; ``--json`` writes ``{"results": [{"path", "model", "n",
-"ms_per_step"}, ...]}``. It also measures the cone table's build time and
-memory for worlds (``--table-world``, default the office and a 20 m x 20 m
-square of rooms).
+of the same model (the paper's or the tempered beam) on the same table, in
+the same run, and prints milliseconds and ratios; ``--json`` writes
+``{"results": [{"path", "model", "n", "ms_per_step"}, ...]}``. It also
+measures the cone table's build time and memory for worlds
+(``--table-world``, default the office and a 20 m x 20 m square of rooms).
 
 It also times the first step of filters in a fresh process (numba's cache
 warm: run it twice), import and construction apart (``--first-step``).
@@ -36,11 +36,54 @@ import numpy as np
 __all__ = ["add_arguments", "run", "bench_mcl", "BENCHES"]
 
 
+def _numpy_beam_norms(params, max_range: float, n: int):
+    """Beam model factors per expected range in mm (plain Python, computed once)."""
+    sigma, lam = params.sigma_hit, params.lambda_short
+    hit, short = np.zeros(n), np.zeros(n)
+    for k in range(n):
+        zhat = k * 0.001
+        mass = 0.5 * (
+            math.erf((max_range - zhat) / (sigma * math.sqrt(2.0)))
+            - math.erf(-zhat / (sigma * math.sqrt(2.0)))
+        )
+        if mass > 0.0:
+            hit[k] = params.z_hit / (sigma * math.sqrt(2.0 * math.pi) * mass)
+        if zhat > 0.0:
+            short[k] = params.z_short * lam / (1.0 - math.exp(-lam * zhat))
+    return hit, short
+
+
+def _numpy_weights(mm, z, beam) -> np.ndarray:
+    """Normalised weights (N,) from expected ranges ``mm`` (N, S) in millimetres.
+
+    ``beam`` None: the paper's innovation weights; else ``(params, max_range,
+    hit, short)`` (`_numpy_beam_norms`): the tempered beam model.
+    """
+    zhat = mm * 0.001
+    if beam is None:
+        d = np.mean(np.abs((z - zhat) / z), axis=1)
+        w = np.exp(-d) + 1.0 / len(mm)
+    else:
+        params, max_range, hit, short = beam
+        u = (z - zhat) / params.sigma_hit
+        prob = hit[mm] * np.exp(-0.5 * u * u) + params.z_rand / max_range
+        prob += np.where(z <= zhat, short[mm] * np.exp(-params.lambda_short * z), 0.0)
+        prob = np.where(z >= max_range - 0.001, params.z_max, prob)
+        loglik = params.exponent * np.log(prob).sum(axis=1)
+        w = np.exp(loglik - loglik.max())
+    return w / w.sum()
+
+
 def _numpy_step(state, odo_prev, odo_now, z, rng):
-    """One MCL step in plain NumPy (the paper's model on the table), to compare."""
+    """One MCL step in plain NumPy on the same cone table, to compare.
+
+    ``state`` is ``(particles, table, sensors, origin, inv_res, beam)`` with
+    ``beam`` None for the paper's innovation weights, else ``(params,
+    max_range, hit, short)`` for the (tempered) beam model.
+    """
     from .localization.motion import _noise_std, odometry_increment
 
-    p, table, sensors, origin, inv_res = state
+    p, table, sensors, origin, inv_res, beam = state
     rot1, trans, rot2 = odometry_increment(odo_prev, odo_now)
     sd = _noise_std((0.002, 0.005, 0.01, 0.0005), rot1, trans, rot2)
     nrm = rng.standard_normal((len(p), 3))
@@ -61,10 +104,7 @@ def _numpy_step(state, odo_prev, odo_now, z, rng):
     col = np.clip(np.floor((sx - origin[0]) * inv_res).astype(np.int64), 0, nx - 1)
     row = np.clip(np.floor((sy - origin[1]) * inv_res).astype(np.int64), 0, ny - 1)
     b = np.floor((p[:, 2:3] + sensors[:, 2]) * nb / (2 * np.pi) + 0.5).astype(np.int64)
-    zhat = table[row, col, b % nb] * 0.001
-    d = np.mean(np.abs((z - zhat) / z), axis=1)
-    w = np.exp(-d) + 1.0 / len(p)
-    w = w / w.sum()
+    w = _numpy_weights(table[row, col, b % nb].astype(np.int64), z, beam)
     est = np.array(
         [
             w @ p[:, 0],
@@ -132,21 +172,28 @@ def bench_mcl(
     odo0 = np.array(world.start)
     odo1 = odo0 + [0.5, 0.0, 0.05]
     table = cone_table(world)
+    beam_params = BeamParameters(exponent=0.2)
     results = []
     for n in counts:
         start = world.sample_free_poses(n, 0)
         for model in models:
             for path in paths:
-                if path == "numpy" and model != "paper":
-                    continue  # the NumPy reference implements the paper's model
                 r = reps if (path != "exact" or n <= 10_000) else max(2, reps // 10)
                 if path == "numpy":
+                    max_range = table.sonar.max_range
+                    beam = None
+                    if model == "beam":
+                        norms = _numpy_beam_norms(
+                            beam_params, max_range, int(table.table.max()) + 1
+                        )
+                        beam = (beam_params, max_range, *norms)
                     state = (
                         start,
                         np.asarray(table.table),
                         table.sonar.sensors,
                         table.origin,
                         1.0 / table.resolution,
+                        beam,
                     )
                     rng = np.random.default_rng(0)
                     _numpy_step(state, odo0, odo1, z, rng)
@@ -158,9 +205,7 @@ def bench_mcl(
                     sensor = (
                         PaperSensorModel(world, fast=fast)
                         if model == "paper"
-                        else BeamSensorModel(
-                            world, fast=fast, params=BeamParameters(exponent=0.2)
-                        )
+                        else BeamSensorModel(world, fast=fast, params=beam_params)
                     )
                     mcl = MCL(
                         world,

@@ -170,6 +170,32 @@ def test_bench_mcl_cli_writes_json(tmp_path):
     assert main([*args, "--no-first-step", "--json", str(out)]) == 0
     results = json.loads(out.read_text())["results"]
     paths = {(r["path"], r["model"]) for r in results}
-    assert paths == {("fast", "paper"), ("exact", "paper"), ("numpy", "paper"),
-                     ("fast", "beam"), ("exact", "beam")}  # fmt: skip
+    assert paths == {
+        (path, model)
+        for path in ("fast", "exact", "numpy")
+        for model in ("paper", "beam")
+    }
     assert all(0 < r["ms_min"] <= r["ms_per_step"] for r in results)
+
+
+def test_bench_numpy_beam_weights_match_the_fast_beam_model():
+    """The bench's plain NumPy beam model is the library's model."""
+    from robotlib.benchmarks import _numpy_beam_norms, _numpy_weights
+    from robotlib.localization import BeamParameters, BeamSensorModel, cone_table
+    from robotlib.world import load_world
+
+    world = load_world("corridor")
+    params = BeamParameters(exponent=0.2)
+    model = BeamSensorModel(world, fast=True, params=params)
+    table = cone_table(world)
+    particles = world.sample_free_poses(500, rng=3)
+    z = model.expected(np.array([world.start]))[0]
+    z[2] = 5.0  # one max reading
+    loglik = model.log_likelihood(particles, z)
+    expected = np.exp(loglik - loglik.max())
+    expected /= expected.sum()
+    mm = np.rint(table.lookup(particles) * 1000).astype(np.int64)
+    beam = (params, 5.0, *_numpy_beam_norms(params, 5.0, int(mm.max()) + 1))
+    np.testing.assert_allclose(
+        _numpy_weights(mm, z, beam), expected, rtol=1e-9, atol=1e-15
+    )
