@@ -8,6 +8,7 @@ computed on demand and cached per resolution.
 
 from __future__ import annotations
 
+import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -19,8 +20,20 @@ from .p3dx import ROBOT_RADIUS
 
 __all__ = ["World", "Grid", "WORLDS_DIR", "load_world", "world_names"]
 
-WORLDS_DIR = Path(__file__).resolve().parent.parent / "worlds"
-"""The project's ``worlds/`` folder (short names are looked up here)."""
+
+def _worlds_dir() -> Path:
+    """Return the folder of the shipped worlds.
+
+    The repository's ``worlds/`` (a checkout or an editable install), else
+    where a regular install put them (``share/robotlib/worlds``).
+    """
+    repo = Path(__file__).resolve().parent.parent / "worlds"
+    installed = Path(sys.prefix) / "share" / "robotlib" / "worlds"
+    return repo if repo.is_dir() or not installed.is_dir() else installed
+
+
+WORLDS_DIR = _worlds_dir()
+"""The folder of the shipped worlds (short names are looked up here)."""
 
 POINT_SIZE = 0.02
 """Side of the small cross that stands for one map DATA point, m."""
