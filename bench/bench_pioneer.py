@@ -61,19 +61,25 @@ def polls(speed, n=50):
     )
 
 
+def _poll_until_link_error(r):
+    """Poll ``r`` until its link fails; return the error's name and seconds taken."""
+    kind = "no error"
+    t0 = time.perf_counter()
+    try:
+        for _ in range(10000):
+            r.pose()
+    except ConnectionError as exc:
+        kind = type(exc).__name__
+    return kind, time.perf_counter() - t0
+
+
 def dead_link(link):
     t = Timeouts(link=link)
     with SimServer("corridor", port=0, speed=1.0, seed=0) as srv:
         r = PioneerRobot.from_address(srv.addresses[0], timeouts=t)
         r.pose()
         srv._stop.set()  # the server goes silent (its sockets close as it stops)
-        t0 = time.perf_counter()
-        try:
-            for _ in range(10000):
-                r.pose()
-        except ConnectionError as exc:
-            kind = type(exc).__name__
-        took = time.perf_counter() - t0
+        kind, took = _poll_until_link_error(r)
         r.disconnect()
     print(f"server gone: {kind} after {1e3 * took:.0f} ms")
 
@@ -111,13 +117,7 @@ def dead_link(link):
         r = PioneerRobot(TcpTransport("127.0.0.1", port, t), timeouts=t)
         r.pose()
         frozen.set()  # robot -> client bytes stop, the socket stays open
-        t0 = time.perf_counter()
-        try:
-            for _ in range(10000):
-                r.pose()
-        except ConnectionError as exc:
-            kind = type(exc).__name__
-        took = time.perf_counter() - t0
+        kind, took = _poll_until_link_error(r)
         r.disconnect()
         stop.set()
         th.join(2)

@@ -36,28 +36,20 @@ import numpy as np
 __all__ = ["add_arguments", "run", "bench_mcl", "BENCHES"]
 
 
-def _numpy_beam_norms(params, max_range: float, n: int):
-    """Beam model factors per expected range in mm (plain Python, computed once)."""
-    sigma, lam = params.sigma_hit, params.lambda_short
-    hit, short = np.zeros(n), np.zeros(n)
-    for k in range(n):
-        zhat = k * 0.001
-        mass = 0.5 * (
-            math.erf((max_range - zhat) / (sigma * math.sqrt(2.0)))
-            - math.erf(-zhat / (sigma * math.sqrt(2.0)))
-        )
-        if mass > 0.0:
-            hit[k] = params.z_hit / (sigma * math.sqrt(2.0 * math.pi) * mass)
-        if zhat > 0.0:
-            short[k] = params.z_short * lam / (1.0 - math.exp(-lam * zhat))
-    return hit, short
+def _beam_norms(params, max_range: float, n: int):
+    """Return the beam model's hit and short factors for ranges 0..n-1 mm."""
+    from .localization._kernels import beam_norms
+
+    p = params
+    return beam_norms(max_range, p.z_hit, p.z_short, p.sigma_hit, p.lambda_short, n)
 
 
 def _numpy_weights(mm, z, beam) -> np.ndarray:
     """Normalised weights (N,) from expected ranges ``mm`` (N, S) in millimetres.
 
     ``beam`` None: the paper's innovation weights; else ``(params, max_range,
-    hit, short)`` (`_numpy_beam_norms`): the tempered beam model.
+    hit, short)`` with the per-millimetre factors of `_kernels.beam_norms`
+    (computed once, outside the timed step): the tempered beam model.
     """
     zhat = mm * 0.001
     if beam is None:
@@ -183,10 +175,13 @@ def bench_mcl(
                     max_range = table.sonar.max_range
                     beam = None
                     if model == "beam":
-                        norms = _numpy_beam_norms(
-                            beam_params, max_range, int(table.table.max()) + 1
+                        beam = (
+                            beam_params,
+                            max_range,
+                            *_beam_norms(
+                                beam_params, max_range, int(table.table.max()) + 1
+                            ),
                         )
-                        beam = (beam_params, max_range, *norms)
                     state = (
                         start,
                         np.asarray(table.table),

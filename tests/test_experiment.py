@@ -180,7 +180,7 @@ def test_bench_mcl_cli_writes_json(tmp_path):
 
 def test_bench_numpy_beam_weights_match_the_fast_beam_model():
     """The bench's plain NumPy beam model is the library's model."""
-    from robotlib.benchmarks import _numpy_beam_norms, _numpy_weights
+    from robotlib.benchmarks import _beam_norms, _numpy_weights
     from robotlib.localization import BeamParameters, BeamSensorModel, cone_table
     from robotlib.world import load_world
 
@@ -195,7 +195,7 @@ def test_bench_numpy_beam_weights_match_the_fast_beam_model():
     expected = np.exp(loglik - loglik.max())
     expected /= expected.sum()
     mm = np.rint(table.lookup(particles) * 1000).astype(np.int64)
-    beam = (params, 5.0, *_numpy_beam_norms(params, 5.0, int(mm.max()) + 1))
+    beam = (params, 5.0, *_beam_norms(params, 5.0, int(mm.max()) + 1))
     np.testing.assert_allclose(
         _numpy_weights(mm, z, beam), expected, rtol=1e-9, atol=1e-15
     )
