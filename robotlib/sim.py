@@ -5,7 +5,9 @@ them together, one 100 ms cycle per `Simulator.step`, as a Pioneer's
 controller does. Each body keeps its true pose and its odometry pose apart:
 the odometry integrates what the wheels did, the truth adds slip drawn from an
 `OdometryNoise` model. Walls (and other robots) stop a body and set its stall
-flag. Sonar readings come from `robotlib.sonar`'s cone model at the true pose.
+flag. Sonar readings come from `robotlib.sonar`'s cone model at the true pose;
+a laser scan (`robotlib.laser`), only when asked for, from its own random
+stream, so reading the laser changes no sonar or odometry number.
 
 `SimRobot` wraps a body as a `robotlib.robot.Robot`, so the paper's API runs
 on it; each poll is one simulated cycle.
@@ -20,6 +22,7 @@ import numpy as np
 
 from . import _geometry, _raycast
 from .geometry import as_rng, wrap_angle
+from .laser import LaserModel, simulate_laser
 from .p3dx import (
     AXLE_TRACK,
     CYCLE,
@@ -123,6 +126,7 @@ class SimBody:
         self._sim = sim
         self._rng = rng
         self._initial = np.array(pose, dtype=float)
+        self._laser_rng: np.random.Generator | None = None
         self._reset()
 
     def _reset(self) -> None:
@@ -224,6 +228,20 @@ class SimBody:
         self._sonar_on = bool(on)
         if not on:
             self._sonar[:] = self._sim.sonar.max_range
+
+    def scan_laser(self) -> np.ndarray:
+        """Return a laser scan at the true pose now, shape (n_beams,), m.
+
+        The noise comes from a stream of its own (spawned from this body's
+        on first use), so scanning leaves the sonar and odometry noise as
+        they would be without a laser.
+        """
+        if self._laser_rng is None:
+            self._laser_rng = self._rng.spawn(1)[0]
+        obstacles = self._sim._obstacles_for(self)
+        return simulate_laser(
+            obstacles, self.true_pose, self._sim.laser, self._laser_rng
+        )[0]
 
     # -- reports ----------------------------------------------------------
     @property
@@ -350,6 +368,9 @@ class Simulator:
         The robots' sonar ring and its noise (default: a Pioneer 3-DX's).
     odometry : OdometryNoise, optional
         The odometry error model.
+    laser : LaserModel, optional
+        The laser each robot carries (default: a SICK LMS-200), read with
+        `SimBody.scan_laser` or `SimRobot.readlaser`.
     """
 
     def __init__(
@@ -358,9 +379,11 @@ class Simulator:
         seed: np.random.Generator | int | None = None,
         sonar: SonarModel | None = None,
         odometry: OdometryNoise | None = None,
+        laser: LaserModel | None = None,
     ):
         self.world = world
         self.sonar = SonarModel() if sonar is None else sonar
+        self.laser = LaserModel() if laser is None else laser
         self.odometry = OdometryNoise() if odometry is None else odometry
         self._rng = as_rng(seed)
         self.bodies: list[SimBody] = []
@@ -441,6 +464,12 @@ class SimRobot(Robot):
 
     def _send(self, command: str, value=None) -> None:
         self.body.command(command, value)
+
+    def _has_laser(self) -> bool:
+        return True
+
+    def _read_laser(self) -> np.ndarray:
+        return self.body.scan_laser()
 
     def _update(self) -> RobotState:
         self.simulator.step()
