@@ -211,7 +211,7 @@ def sonar_update_many(Ls, x0, y0, res, poses, sensors, ranges, half_cone,
 def _occ_prob(L, i, j):
     """Occupancy probability of cell ``(i, j)``; 0.5 (unknown) off the grid."""
     if 0 <= i < L.shape[0] and 0 <= j < L.shape[1]:
-        return 1.0 - 1.0 / (1.0 + math.exp(L[i, j]))
+        return 1.0 - 1.0 / (1.0 + math.exp(np.float64(L[i, j])))
     return 0.5
 
 
