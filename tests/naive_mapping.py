@@ -12,8 +12,22 @@ def cell_centres(shape, origin, res):
     return np.meshgrid(xs, ys)
 
 
-def sonar_cone_increments(shape, origin, res, sx, sy, sth, z, half_cone, max_range,
-                          thickness, l_occ, l_free, sigma, max_weight):  # fmt: skip
+def sonar_cone_increments(
+    shape,
+    origin,
+    res,
+    sx,
+    sy,
+    sth,
+    z,
+    half_cone,
+    max_range,
+    thickness,
+    l_occ,
+    l_free,
+    sigma,
+    max_weight,
+):
     """Every cell centre tested by its polar coordinates about the sensor."""
     gx, gy = cell_centres(shape, origin, res)
     dx, dy = gx - sx, gy - sy
@@ -29,17 +43,44 @@ def sonar_cone_increments(shape, origin, res, sx, sy, sth, z, half_cone, max_ran
     return np.where(inside, np.where(occ, l_occ, l_free) * weight, 0.0)
 
 
-def sonar_scan(L, origin, res, pose, sensors, ranges, half_cone, max_range,
-               thickness, l_occ, l_free, sigma, max_weight, l_min, l_max):  # fmt: skip
+def sonar_scan(
+    L,
+    origin,
+    res,
+    pose,
+    sensors,
+    ranges,
+    half_cone,
+    max_range,
+    thickness,
+    l_occ,
+    l_free,
+    sigma,
+    max_weight,
+    l_min,
+    l_max,
+):
     L = L.astype(np.float64).copy()
     x, y, th = pose
     for (ax, ay, ah), z in zip(sensors, ranges, strict=True):
         sx = x + math.cos(th) * ax - math.sin(th) * ay
         sy = y + math.sin(th) * ax + math.cos(th) * ay
         inc = sonar_cone_increments(
-            L.shape, origin, res, sx, sy, th + ah, z, half_cone, max_range,
-            thickness, l_occ, l_free, sigma, max_weight,
-        )  # fmt: skip
+            L.shape,
+            origin,
+            res,
+            sx,
+            sy,
+            th + ah,
+            z,
+            half_cone,
+            max_range,
+            thickness,
+            l_occ,
+            l_free,
+            sigma,
+            max_weight,
+        )
         L = np.clip(L + inc, l_min, l_max)
     return L
 
@@ -68,13 +109,15 @@ def beam_cells(shape, origin, res, ox, oy, a, z, max_range):
     return cells
 
 
-def laser_scan(L, origin, res, lpose, angles, ranges, max_range, l_occ, l_free,
-               l_min, l_max):  # fmt: skip
+def laser_scan(
+    L, origin, res, lpose, angles, ranges, max_range, l_occ, l_free, l_min, l_max
+):
     L = L.astype(np.float64).copy()
     ny, nx = L.shape
     for a, z in zip(angles, ranges, strict=True):
-        cells = beam_cells(L.shape, origin, res, lpose[0], lpose[1], lpose[2] + a, z,
-                           max_range)  # fmt: skip
+        cells = beam_cells(
+            L.shape, origin, res, lpose[0], lpose[1], lpose[2] + a, z, max_range
+        )
         for k, (i, j) in enumerate(cells):
             if 0 <= i < ny and 0 <= j < nx:
                 last = k == len(cells) - 1
@@ -105,8 +148,9 @@ def laser_loglik(L, origin, res, lpose, angles, ranges, max_range, p_rand):
     return total
 
 
-def sonar_loglik(L, origin, res, pose, sensors, ranges, half_cone, max_range,
-                 n_rays, p_rand):  # fmt: skip
+def sonar_loglik(
+    L, origin, res, pose, sensors, ranges, half_cone, max_range, n_rays, p_rand
+):
     total = 0.0
     x, y, th = pose
     for (ax, ay, ah), z in zip(sensors, ranges, strict=True):
@@ -122,7 +166,7 @@ def sonar_loglik(L, origin, res, pose, sensors, ranges, half_cone, max_range,
                 res,
                 sx + z * math.cos(th + ah + o),
                 sy + z * math.sin(th + ah + o),
-            )  # fmt: skip
+            )
             for o in offs
         )
         total += math.log(p_rand + (1 - p_rand) * best)

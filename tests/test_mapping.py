@@ -12,7 +12,7 @@ from robotlib.mapping import (
     record_drive,
     trajectory_rms,
 )
-from robotlib.mapping import _kernels as K
+from robotlib.mapping import _kernels as kern
 from robotlib.raycast import cast_rays
 from robotlib.robot import Robot
 from robotlib.sim import SimRobot, Simulator
@@ -38,9 +38,10 @@ def test_laser_matches_the_exact_caster_at_its_mount():
     laser = LaserModel()
     got = expected_laser(ROOM, poses, laser)
     lp = laser_poses(poses, laser)
-    assert np.allclose(lp[:, :2] - poses[:, :2],
-                       0.018 * np.column_stack([np.cos(poses[:, 2]),
-                                                np.sin(poses[:, 2])]))  # fmt: skip
+    assert np.allclose(
+        lp[:, :2] - poses[:, :2],
+        0.018 * np.column_stack([np.cos(poses[:, 2]), np.sin(poses[:, 2])]),
+    )
     want = cast_rays(ROOM, lp, laser.angles, laser.max_range)
     assert got.shape == (20, 181)
     np.testing.assert_array_equal(got, want)
@@ -124,10 +125,24 @@ def test_sonar_cone_kernel_matches_the_reference(sigma):
         sth = rng.uniform(-math.pi, math.pi)
         z = rng.choice([rng.uniform(0.1, 2.5), 5.0])
         L = np.zeros(shape, np.float32)
-        K.sonar_cone_update(L, *origin, res, sx, sy, sth, z, math.radians(15), 5.0,
-                            SONAR_ARGS["thickness"], SONAR_ARGS["l_occ"],
-                            SONAR_ARGS["l_free"], sigma, SONAR_ARGS["max_weight"],
-                            -6.0, 6.0)  # fmt: skip
+        kern.sonar_cone_update(
+            L,
+            *origin,
+            res,
+            sx,
+            sy,
+            sth,
+            z,
+            math.radians(15),
+            5.0,
+            SONAR_ARGS["thickness"],
+            SONAR_ARGS["l_occ"],
+            SONAR_ARGS["l_free"],
+            sigma,
+            SONAR_ARGS["max_weight"],
+            -6.0,
+            6.0,
+        )
         want = naive.sonar_cone_increments(
             shape,
             origin,
@@ -155,17 +170,40 @@ def test_sonar_ring_update_and_numpy_model_match_the_reference():
         z = rng.uniform(0.3, 5.0, 8)
         z[rng.random(8) < 0.3] = 5.0
         g.update_sonar(pose, z, sonar, model)
-        ref = naive.sonar_scan(ref, g.origin, 0.1, pose, sonar.sensors, z,
-                               sonar.cone / 2, 5.0, model.thickness, model.l_occ,
-                               model.l_free, model.sigma, model.max_weight,
-                               model.l_min, model.l_max)  # fmt: skip
+        ref = naive.sonar_scan(
+            ref,
+            g.origin,
+            0.1,
+            pose,
+            sonar.sensors,
+            z,
+            sonar.cone / 2,
+            5.0,
+            model.thickness,
+            model.l_occ,
+            model.l_free,
+            model.sigma,
+            model.max_weight,
+            model.l_min,
+            model.l_max,
+        )
     np.testing.assert_allclose(g.logodds, ref, atol=1e-5)
     # the NumPy inverse model, cell by cell, for one reading
     cells = np.stack(naive.cell_centres(g.shape, g.origin, 0.1), axis=-1)
     inc = inverse_sonar_model(cells, (2.0, 2.0, 0.4), 1.7, sonar, model)
-    want = naive.sonar_cone_increments(g.shape, g.origin, 0.1, 2.0, 2.0, 0.4, 1.7,
-                                       sonar.cone / 2, 5.0, sigma=model.sigma,
-                                       **SONAR_ARGS)  # fmt: skip
+    want = naive.sonar_cone_increments(
+        g.shape,
+        g.origin,
+        0.1,
+        2.0,
+        2.0,
+        0.4,
+        1.7,
+        sonar.cone / 2,
+        5.0,
+        sigma=model.sigma,
+        **SONAR_ARGS,
+    )
     np.testing.assert_allclose(inc, want, atol=1e-12)
     assert inc.max() > 0 > inc.min()
 
@@ -180,7 +218,9 @@ def test_laser_kernel_matches_the_reference():
         lp = np.array([rng.uniform(0, 3), rng.uniform(0, 2), rng.uniform(-3, 3)])
         z = rng.uniform(0.05, 3.0, len(angles))
         z[rng.random(len(z)) < 0.2] = 2.5  # max range
-        K.laser_scan_update(L, *origin, res, lp, angles, z, 2.5, 0.9, -0.4, -6.0, 6.0)
+        kern.laser_scan_update(
+            L, *origin, res, lp, angles, z, 2.5, 0.9, -0.4, -6.0, 6.0
+        )
         ref = naive.laser_scan(ref, origin, res, lp, angles, z, 2.5, 0.9, -0.4, -6, 6)
     np.testing.assert_allclose(L, ref, atol=1e-5)
 
@@ -190,38 +230,81 @@ def test_many_particle_kernels_match_single_map_kernels_and_references():
     shape, origin, res = (40, 60), (-0.5, -0.5), 0.1
     n = 5
     Ls = rng.normal(0, 2, (n, *shape)).astype(np.float32)
-    poses = np.column_stack([rng.uniform(1, 4, n), rng.uniform(1, 2.5, n),
-                             rng.uniform(-3, 3, n)])  # fmt: skip
+    poses = np.column_stack(
+        [rng.uniform(1, 4, n), rng.uniform(1, 2.5, n), rng.uniform(-3, 3, n)]
+    )
     angles = np.linspace(-math.pi / 2, math.pi / 2, 19)
     z = rng.uniform(0.2, 3.0, 19)
     z[3] = 4.0
     out = np.empty(n)
-    K.laser_loglik_many(Ls, *origin, res, poses, angles, z, 4.0, 0.05, out)
+    kern.laser_loglik_many(Ls, *origin, res, poses, angles, z, 4.0, 0.05, out)
     for k in range(n):
         want = naive.laser_loglik(Ls[k], origin, res, poses[k], angles, z, 4.0, 0.05)
         assert out[k] == pytest.approx(want, rel=1e-9)
     sonar = SonarModel()
     zs = rng.uniform(0.3, 5.0, 8)
     zs[0] = 5.0
-    K.sonar_loglik_many(Ls, *origin, res, poses, sonar.sensors, zs, sonar.cone / 2,
-                        5.0, 5, 0.05, out)  # fmt: skip
+    kern.sonar_loglik_many(
+        Ls, *origin, res, poses, sonar.sensors, zs, sonar.cone / 2, 5.0, 5, 0.05, out
+    )
     for k in range(n):
-        want = naive.sonar_loglik(Ls[k], origin, res, poses[k], sonar.sensors, zs,
-                                  sonar.cone / 2, 5.0, 5, 0.05)  # fmt: skip
+        want = naive.sonar_loglik(
+            Ls[k],
+            origin,
+            res,
+            poses[k],
+            sonar.sensors,
+            zs,
+            sonar.cone / 2,
+            5.0,
+            5,
+            0.05,
+        )
         assert out[k] == pytest.approx(want, rel=1e-9)
     many = Ls.copy()
-    K.laser_update_many(many, *origin, res, poses, angles, z, 4.0, 0.9, -0.4, -6, 6)
-    K.sonar_update_many(many, *origin, res, poses, sonar.sensors, zs, sonar.cone / 2,
-                        5.0, 0.1, 0.9, -0.35, 0.15, 0.3, -6.0, 6.0)  # fmt: skip
+    kern.laser_update_many(many, *origin, res, poses, angles, z, 4.0, 0.9, -0.4, -6, 6)
+    kern.sonar_update_many(
+        many,
+        *origin,
+        res,
+        poses,
+        sonar.sensors,
+        zs,
+        sonar.cone / 2,
+        5.0,
+        0.1,
+        0.9,
+        -0.35,
+        0.15,
+        0.3,
+        -6.0,
+        6.0,
+    )
     for k in range(n):
         one = Ls[k].copy()
-        K.laser_scan_update(one, *origin, res, poses[k], angles, z, 4.0, 0.9, -0.4,
-                            -6, 6)  # fmt: skip
-        K.sonar_scan_update(one, *origin, res, poses[k], sonar.sensors, zs,
-                            sonar.cone / 2, 5.0, 0.1, 0.9, -0.35, 0.15, 0.3, -6, 6)  # fmt: skip
+        kern.laser_scan_update(
+            one, *origin, res, poses[k], angles, z, 4.0, 0.9, -0.4, -6, 6
+        )
+        kern.sonar_scan_update(
+            one,
+            *origin,
+            res,
+            poses[k],
+            sonar.sensors,
+            zs,
+            sonar.cone / 2,
+            5.0,
+            0.1,
+            0.9,
+            -0.35,
+            0.15,
+            0.3,
+            -6,
+            6,
+        )
         np.testing.assert_array_equal(many[k], one)
     src, dst = np.array([0, 0, 2]), np.array([1, 3, 4])
-    K.copy_maps(many, src, dst)
+    kern.copy_maps(many, src, dst)
     np.testing.assert_array_equal(many[3], many[0])
     np.testing.assert_array_equal(many[4], many[2])
 
