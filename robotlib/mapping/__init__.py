@@ -4,7 +4,15 @@ Estimators here never plot: drawing lives in `robotlib.plotting`.
 """
 
 from .drive import ROUTES, DriveLog, perturbed_route, record_drive
+from .fastslam import (
+    FastSLAMResult,
+    GridFastSLAM,
+    normalise_log_weights,
+    resample_maps,
+    run_fastslam,
+)
 from .metrics import MapScore, dilate, heading_rms, map_score, trajectory_rms
+from .motion import apply_arc, arc_increment, arc_noise_cov, sample_arc_motion
 from .occupancy import (
     InverseLaserModel,
     InverseSonarModel,
@@ -19,6 +27,15 @@ from .occupancy import (
 __all__ = [
     "ROUTES",
     "DriveLog",
+    "FastSLAMResult",
+    "GridFastSLAM",
+    "apply_arc",
+    "arc_increment",
+    "arc_noise_cov",
+    "normalise_log_weights",
+    "resample_maps",
+    "run_fastslam",
+    "sample_arc_motion",
     "InverseLaserModel",
     "InverseSonarModel",
     "MapScore",

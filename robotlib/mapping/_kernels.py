@@ -217,16 +217,21 @@ def _occ_prob(L, i, j):
 
 @nb.njit(**JIT)
 def _best_near(L, x0, y0, res, px, py):
-    """Largest occupancy probability in the 3 x 3 cells around point ``(px, py)``."""
+    """Largest occupancy probability in the 3 x 3 cells around point ``(px, py)``.
+
+    Cells off the grid count as unknown (log-odds 0); the largest log-odds
+    gives the largest probability, so one exponential does.
+    """
     j = int(math.floor((px - x0) / res))
     i = int(math.floor((py - y0) / res))
-    best = 0.0
-    for di in range(-1, 2):
-        for dj in range(-1, 2):
-            p = _occ_prob(L, i + di, j + dj)
-            if p > best:
-                best = p
-    return best
+    ny, nx = L.shape
+    best = -np.inf
+    for ii in range(i - 1, i + 2):
+        for jj in range(j - 1, j + 2):
+            v = np.float64(L[ii, jj]) if 0 <= ii < ny and 0 <= jj < nx else 0.0
+            if v > best:
+                best = v
+    return 1.0 - 1.0 / (1.0 + math.exp(best))
 
 
 @nb.njit(**JIT_PARALLEL)
@@ -294,3 +299,91 @@ def copy_maps(Ls, src, dst):
     """
     for q in nb.prange(src.shape[0]):
         Ls[dst[q]] = Ls[src[q]]
+
+
+@nb.njit(**JIT)
+def _evidence(L, i, j):
+    """Positive log-odds of cell ``(i, j)`` (0 if free, unknown or off the grid)."""
+    if 0 <= i < L.shape[0] and 0 <= j < L.shape[1] and L[i, j] > 0:
+        return np.float64(L[i, j])
+    return 0.0
+
+
+@nb.njit(**JIT)
+def _bilinear_evidence(L, x0, y0, res, px, py):
+    """`_evidence` at point ``(px, py)``, bilinear between cell centres."""
+    gx = (px - x0) / res - 0.5
+    gy = (py - y0) / res - 0.5
+    j = int(math.floor(gx))
+    i = int(math.floor(gy))
+    fx = gx - j
+    fy = gy - i
+    return (1 - fy) * ((1 - fx) * _evidence(L, i, j) + fx * _evidence(L, i, j + 1)) + (
+        fy * ((1 - fx) * _evidence(L, i + 1, j) + fx * _evidence(L, i + 1, j + 1))
+    )
+
+
+@nb.njit(**JIT)
+def _match_score(L, x0, y0, res, px, py, pth, mx, my, mth, angles, ranges, max_range):
+    """Sum of `_bilinear_evidence` at the scan's end points from robot pose p."""
+    c = math.cos(pth)
+    s = math.sin(pth)
+    lx = px + c * mx - s * my
+    ly = py + s * mx + c * my
+    total = 0.0
+    for r in range(angles.shape[0]):
+        if ranges[r] >= max_range:
+            continue
+        a = pth + mth + angles[r]
+        total += _bilinear_evidence(
+            L, x0, y0, res, lx + ranges[r] * math.cos(a), ly + ranges[r] * math.sin(a)
+        )
+    return total
+
+
+@nb.njit(**JIT_PARALLEL)
+def match_laser_many(Ls, x0, y0, res, poses, mount, angles, ranges, max_range,
+                     step_xy, step_th, levels, out):  # fmt: skip
+    """Hill-climb each robot pose ``poses[n]`` to fit the scan to map ``Ls[n]``.
+
+    From each pose, try moves of ``step_xy`` (m) along x and y and
+    ``step_th`` (rad) in heading, both ways; take the best that raises
+    `_match_score`; when none does, halve the steps, ``levels`` times.
+    Writes the fitted poses to ``out`` (N, 3).
+    """
+    for n in nb.prange(Ls.shape[0]):
+        px = poses[n, 0]
+        py = poses[n, 1]
+        pth = poses[n, 2]
+        best = _match_score(Ls[n], x0, y0, res, px, py, pth, mount[0], mount[1],
+                            mount[2], angles, ranges, max_range)  # fmt: skip
+        sxy = step_xy
+        sth = step_th
+        for _ in range(levels):
+            for _it in range(20):
+                bi = -1
+                bx = px
+                by = py
+                bt = pth
+                for k in range(6):
+                    qx = px + (sxy if k == 0 else (-sxy if k == 1 else 0.0))
+                    qy = py + (sxy if k == 2 else (-sxy if k == 3 else 0.0))
+                    qt = pth + (sth if k == 4 else (-sth if k == 5 else 0.0))
+                    v = _match_score(Ls[n], x0, y0, res, qx, qy, qt, mount[0],
+                                     mount[1], mount[2], angles, ranges, max_range)  # fmt: skip
+                    if v > best:
+                        best = v
+                        bi = k
+                        bx = qx
+                        by = qy
+                        bt = qt
+                if bi < 0:
+                    break
+                px = bx
+                py = by
+                pth = bt
+            sxy *= 0.5
+            sth *= 0.5
+        out[n, 0] = px
+        out[n, 1] = py
+        out[n, 2] = math.atan2(math.sin(pth), math.cos(pth))
