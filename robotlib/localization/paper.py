@@ -28,7 +28,8 @@ from ..world import World
 from . import _kernels
 from .motion import _particles, sample_motion_odometry
 from .resampling import _weights, multinomial_resample
-from .sensors import ConeTable, expected_readings, innovation_loglik
+from .cones import ConeTable, expected_readings
+from .sensors import innovation_loglik
 
 __all__ = [
     "ADMISSIBLE_RADIUS",
