@@ -26,9 +26,9 @@ from .._random import as_rng
 from ..sensing import SonarModel
 from ..world import World
 from . import _kernels
+from .cones import ConeTable, expected_readings
 from .motion import _particles, sample_motion_odometry
 from .resampling import _weights, multinomial_resample
-from .cones import ConeTable, expected_readings
 from .sensors import innovation_loglik
 
 __all__ = [
