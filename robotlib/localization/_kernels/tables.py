@@ -164,16 +164,6 @@ def _table_mm(particles, j, c, s, sensors, i, table, x0, y0, inv_res):
     return table[row, col, b]
 
 
-@nb.njit(**JIT)
-def _lookup_one(j, particles, sensors, table, x0, y0, inv_res, out):
-    c = math.cos(particles[j, 2])
-    s = math.sin(particles[j, 2])
-    for i in range(sensors.shape[0]):
-        out[j, i] = (
-            _table_mm(particles, j, c, s, sensors, i, table, x0, y0, inv_res) * 0.001
-        )
-
-
 def _expected_table(particles, sensors, table, x0, y0, inv_res, out):
     """Sonar ranges ``out`` (N, S) looked up in a cone table (see `build_cone_table`).
 
@@ -181,7 +171,13 @@ def _expected_table(particles, sensors, table, x0, y0, inv_res, out):
     heading the nearest direction bin.
     """
     for j in nb.prange(particles.shape[0]):
-        _lookup_one(j, particles, sensors, table, x0, y0, inv_res, out)
+        c = math.cos(particles[j, 2])
+        s = math.sin(particles[j, 2])
+        for i in range(sensors.shape[0]):
+            out[j, i] = (
+                _table_mm(particles, j, c, s, sensors, i, table, x0, y0, inv_res)
+                * 0.001
+            )
 
 
 expected_table, expected_table_parallel = serial_and_parallel(_expected_table)
