@@ -129,7 +129,7 @@ def laser_scan(
 def best_near(L, origin, res, px, py):
     j = math.floor((px - origin[0]) / res)
     i = math.floor((py - origin[1]) / res)
-    p = np.full((3, 3), 0.5)
+    p = np.full((3, 3), 0.5)  # off the grid: unknown
     for di in range(-1, 2):
         for dj in range(-1, 2):
             if 0 <= i + di < L.shape[0] and 0 <= j + dj < L.shape[1]:

@@ -3,7 +3,6 @@ import math
 import numpy as np
 import pytest
 
-from robotlib.laser import LaserModel, expected_laser, laser_poses, simulate_laser
 from robotlib.mapping import (
     InverseSonarModel,
     OccupancyGrid,
@@ -13,10 +12,15 @@ from robotlib.mapping import (
     trajectory_rms,
 )
 from robotlib.mapping import _kernels as kern
-from robotlib.raycast import cast_rays
 from robotlib.robot import Robot
+from robotlib.sensing import SonarModel, cast_rays
+from robotlib.sensing.laser import (
+    LaserModel,
+    expected_laser,
+    laser_poses,
+    simulate_laser,
+)
 from robotlib.sim import SimRobot, Simulator
-from robotlib.sonar import SonarModel
 from robotlib.world import World
 
 from . import naive_mapping as naive

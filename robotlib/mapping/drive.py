@@ -17,11 +17,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..geometry import as_rng, wrap_angle
-from ..laser import LaserModel
+from .._random import as_rng
+from ..sensing import SonarModel
+from ..sensing.laser import LaserModel
 from ..sim import OdometryNoise, Simulator
-from ..sonar import SonarModel
 from ..world import World, load_world
+from ..world.geometry import wrap_angle
 
 __all__ = ["DriveLog", "record_drive", "ROUTES", "perturbed_route"]
 

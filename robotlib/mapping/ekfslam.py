@@ -27,10 +27,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..geometry import as_rng, wrap_angle
-from ..raycast import cast_rays
+from .._random import as_rng
+from ..sensing import cast_rays
 from ..sim import OdometryNoise
 from ..world import World
+from ..world.geometry import wrap_angle
 from .motion import arc_increment, arc_noise_cov
 
 __all__ = [

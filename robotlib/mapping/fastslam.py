@@ -27,11 +27,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..geometry import as_rng
-from ..laser import LaserModel, laser_poses
+from .._random import as_rng
 from ..localization.resampling import effective_sample_size, systematic_resample
+from ..sensing import SonarModel
+from ..sensing.laser import LaserModel, laser_poses
 from ..sim import OdometryNoise
-from ..sonar import SonarModel
 from ..world import World
 from . import _kernels
 from .metrics import MapScore, map_score, trajectory_rms

@@ -22,8 +22,8 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from ..geometry import wrap_angle
 from ..world import World
+from ..world.geometry import wrap_angle
 
 __all__ = ["MapScore", "map_score", "dilate", "trajectory_rms"]
 

@@ -15,8 +15,9 @@ import math
 
 import numpy as np
 
-from ..geometry import as_rng, wrap_angle
+from .._random import as_rng
 from ..sim import OdometryNoise
+from ..world.geometry import wrap_angle
 
 __all__ = ["arc_increment", "apply_arc", "sample_arc_motion", "arc_noise_cov"]
 

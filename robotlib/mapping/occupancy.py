@@ -23,8 +23,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..laser import LaserModel, laser_poses
-from ..sonar import SonarModel
+from ..sensing import SonarModel
+from ..sensing.laser import LaserModel, laser_poses
 from ..world import Grid, World
 from . import _kernels
 

@@ -8,8 +8,8 @@ Gaussian noise; a beam that hits nothing within ``max_range`` reports
 mode (8 m range, 5 mm statistical error, 10 mm resolution) and ARIA's P3-DX
 mounting (18 mm ahead of the centre of rotation, facing forward).
 
-Imports only `robotlib.raycast`, `robotlib.geometry` and `robotlib.world`
-(the sensing layer): nothing from the simulator or above.
+Imports the world and this package's casters only: never the simulator,
+the robot API or anything above them.
 """
 
 from __future__ import annotations
@@ -19,10 +19,10 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from . import _raycast
-from .geometry import as_rng
+from .._random import as_rng
+from ..world import Grid
+from . import _kernels
 from .raycast import _poses, _segments, grid_field
-from .world import Grid
 
 __all__ = ["LaserModel", "laser_poses", "expected_laser", "simulate_laser"]
 
@@ -137,11 +137,11 @@ def expected_laser(walls, poses, model: LaserModel | None = None) -> np.ndarray:
     if isinstance(walls, Grid):
         field = grid_field(walls)
         x0, y0 = walls.origin
-        _raycast.cast_grid(
+        _kernels.cast_grid(
             lp, a, float(model.max_range), field, x0, y0, walls.resolution, out
         )
     else:
-        _raycast.cast_segments(lp, a, float(model.max_range), _segments(walls), out)
+        _kernels.cast_segments(lp, a, float(model.max_range), _segments(walls), out)
     return out
 
 
