@@ -369,8 +369,10 @@ def match_laser_many(Ls, x0, y0, res, poses, mount, angles, ranges, max_range,
                     qx = px + (sxy if k == 0 else (-sxy if k == 1 else 0.0))
                     qy = py + (sxy if k == 2 else (-sxy if k == 3 else 0.0))
                     qt = pth + (sth if k == 4 else (-sth if k == 5 else 0.0))
-                    v = _match_score(Ls[n], x0, y0, res, qx, qy, qt, mount[0],
-                                     mount[1], mount[2], angles, ranges, max_range)  # fmt: skip
+                    v = _match_score(
+                        Ls[n], x0, y0, res, qx, qy, qt, mount[0], mount[1],
+                        mount[2], angles, ranges, max_range,
+                    )  # fmt: skip
                     if v > best:
                         best = v
                         bi = k

@@ -70,7 +70,7 @@ class RangeBearingSensor:
     bearing_std: float = math.radians(2.0)
 
     @property
-    def R(self) -> np.ndarray:
+    def R(self) -> np.ndarray:  # noqa: N802 (the textbook's name)
         """Measurement noise covariance (2, 2)."""
         return np.diag([self.range_std**2, self.bearing_std**2])
 
@@ -121,9 +121,7 @@ def observe_landmarks(
     seen = (d <= sensor.max_range) & (np.abs(b) <= sensor.fov / 2) & (d > 0.05)
     if walls is not None and seen.any():
         k = np.flatnonzero(seen)
-        ranges = np.array(
-            [cast_rays(walls, [x, y, th], [b[i]], sensor.max_range)[0, 0] for i in k]
-        )
+        ranges = cast_rays(walls, [x, y, th], b[k], sensor.max_range)[0]
         seen[k] = ranges >= d[k] - 0.05
     ids = np.flatnonzero(seen)
     z = np.column_stack(
@@ -159,7 +157,7 @@ def ekf_predict(mu, P, ds: float, dth: float, noise: OdometryNoise, inflate=1.0)
 
 
 def _expected(mu, j):
-    """Expected ``(range, bearing)`` of landmark ``j`` and its Jacobian (2, n)."""
+    """Return landmark ``j``'s expected ``(range, bearing)`` and Jacobian (2, n)."""
     lx, ly = mu[3 + 2 * j], mu[4 + 2 * j]
     dx, dy = lx - mu[0], ly - mu[1]
     q = dx * dx + dy * dy
@@ -174,19 +172,20 @@ def _expected(mu, j):
 def ekf_update(mu, P, z, j: int, R):
     """EKF update with observation ``z = (range, bearing)`` of landmark ``j``.
 
-    Returns the new ``(mu, P)`` (Joseph form, so ``P`` stays symmetric).
+    Returns the new ``(mu, P)`` (``P - K S K^T``, symmetrised: O(n^2)).
     """
     mu = np.asarray(mu, dtype=float)
     P = np.asarray(P, dtype=float)
     zhat, H = _expected(mu, j)
     nu = np.asarray(z, dtype=float) - zhat
     nu[1] = wrap_angle(nu[1])
-    S = H @ P @ H.T + R
-    K = P @ H.T @ np.linalg.inv(S)
+    PHt = P @ H.T
+    S = H @ PHt + R
+    K = PHt @ np.linalg.inv(S)
     mu = mu + K @ nu
     mu[2] = wrap_angle(mu[2])
-    IKH = np.eye(len(mu)) - K @ H
-    P = IKH @ P @ IKH.T + K @ R @ K.T
+    P = P - K @ S @ K.T
+    P = 0.5 * (P + P.T)
     return mu, P
 
 

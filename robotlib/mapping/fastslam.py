@@ -188,7 +188,7 @@ class GridFastSLAM:
 
     @classmethod
     def for_world(cls, world: World, resolution: float = 0.05, **kw) -> GridFastSLAM:
-        """Return a filter on the cells of ``world.occupancy_grid`` from its start pose."""
+        """Return a filter on ``world.occupancy_grid``'s cells, from its start pose."""
         truth = world.occupancy_grid(resolution)
         kw.setdefault("start", world.start)
         return cls(truth.shape, truth.origin, resolution, **kw)
