@@ -4,7 +4,9 @@ Grids are log-odds arrays ``L[i, j]`` (row ``i`` is y, column ``j`` is x)
 with the lower-left corner of cell ``[0, 0]`` at ``(x0, y0)`` and cells of
 side ``res``; stacks of grids ``L[n, i, j]`` hold one map per particle.
 Every kernel takes contiguous arrays and scalars only; updates clamp each
-cell to ``[l_min, l_max]``. Imports nothing of robotlib's but the JIT config.
+cell to ``[l_min, l_max]``. The per-particle kernels (``*_many``,
+`copy_maps`) come serial and ``*_parallel`` (over threads), from one body,
+with the same bits. Imports nothing of robotlib's but the JIT config.
 """
 
 import math
@@ -12,7 +14,7 @@ import math
 import numba as nb
 import numpy as np
 
-from .._config import JIT, JIT_PARALLEL
+from .._config import JIT, serial_and_parallel
 
 
 @nb.njit(**JIT)
@@ -184,8 +186,7 @@ def laser_scan_update(L, x0, y0, res, lpose, angles, ranges, max_range, l_occ,
         )  # fmt: skip
 
 
-@nb.njit(**JIT_PARALLEL)
-def laser_update_many(Ls, x0, y0, res, lposes, angles, ranges, max_range, l_occ,
+def _laser_update_many(Ls, x0, y0, res, lposes, angles, ranges, max_range, l_occ,
                       l_free, l_min, l_max):  # fmt: skip
     """`laser_scan_update` of one scan into each map ``Ls[n]`` from ``lposes[n]``."""
     for n in nb.prange(Ls.shape[0]):
@@ -195,8 +196,10 @@ def laser_update_many(Ls, x0, y0, res, lposes, angles, ranges, max_range, l_occ,
         )  # fmt: skip
 
 
-@nb.njit(**JIT_PARALLEL)
-def sonar_update_many(Ls, x0, y0, res, poses, sensors, ranges, half_cone,
+laser_update_many, laser_update_many_parallel = serial_and_parallel(_laser_update_many)
+
+
+def _sonar_update_many(Ls, x0, y0, res, poses, sensors, ranges, half_cone,
                       max_range, thickness, l_occ, l_free, sigma, max_weight,
                       l_min, l_max):  # fmt: skip
     """`sonar_scan_update` of one ring reading into each ``Ls[n]`` at ``poses[n]``."""
@@ -205,6 +208,9 @@ def sonar_update_many(Ls, x0, y0, res, poses, sensors, ranges, half_cone,
             Ls[n], x0, y0, res, poses[n], sensors, ranges, half_cone, max_range,
             thickness, l_occ, l_free, sigma, max_weight, l_min, l_max,
         )  # fmt: skip
+
+
+sonar_update_many, sonar_update_many_parallel = serial_and_parallel(_sonar_update_many)
 
 
 @nb.njit(**JIT)
@@ -234,8 +240,7 @@ def _best_near(L, x0, y0, res, px, py):
     return 1.0 - 1.0 / (1.0 + math.exp(best))
 
 
-@nb.njit(**JIT_PARALLEL)
-def laser_loglik_many(Ls, x0, y0, res, lposes, angles, ranges, max_range, p_rand,
+def _laser_loglik_many(Ls, x0, y0, res, lposes, angles, ranges, max_range, p_rand,
                       out):  # fmt: skip
     """Log-likelihood of one scan in each particle's own map: ``out[n]``.
 
@@ -257,8 +262,10 @@ def laser_loglik_many(Ls, x0, y0, res, lposes, angles, ranges, max_range, p_rand
         out[n] = total
 
 
-@nb.njit(**JIT_PARALLEL)
-def sonar_loglik_many(Ls, x0, y0, res, poses, sensors, ranges, half_cone,
+laser_loglik_many, laser_loglik_many_parallel = serial_and_parallel(_laser_loglik_many)
+
+
+def _sonar_loglik_many(Ls, x0, y0, res, poses, sensors, ranges, half_cone,
                       max_range, n_rays, p_rand, out):  # fmt: skip
     """Log-likelihood of one ring reading in each particle's own map: ``out[n]``.
 
@@ -290,8 +297,10 @@ def sonar_loglik_many(Ls, x0, y0, res, poses, sensors, ranges, half_cone,
         out[n] = total
 
 
-@nb.njit(**JIT_PARALLEL)
-def copy_maps(Ls, src, dst):
+sonar_loglik_many, sonar_loglik_many_parallel = serial_and_parallel(_sonar_loglik_many)
+
+
+def _copy_maps(Ls, src, dst):
     """Copy map ``Ls[src[q]]`` over ``Ls[dst[q]]`` for every ``q`` (in place).
 
     No ``dst`` may also be a ``src`` (the caller copies survivors over the
@@ -299,6 +308,9 @@ def copy_maps(Ls, src, dst):
     """
     for q in nb.prange(src.shape[0]):
         Ls[dst[q]] = Ls[src[q]]
+
+
+copy_maps, copy_maps_parallel = serial_and_parallel(_copy_maps)
 
 
 @nb.njit(**JIT)
@@ -341,8 +353,7 @@ def _match_score(L, x0, y0, res, px, py, pth, mx, my, mth, angles, ranges, max_r
     return total
 
 
-@nb.njit(**JIT_PARALLEL)
-def match_laser_many(Ls, x0, y0, res, poses, mount, angles, ranges, max_range,
+def _match_laser_many(Ls, x0, y0, res, poses, mount, angles, ranges, max_range,
                      step_xy, step_th, levels, out):  # fmt: skip
     """Hill-climb each robot pose ``poses[n]`` to fit the scan to map ``Ls[n]``.
 
@@ -389,3 +400,6 @@ def match_laser_many(Ls, x0, y0, res, poses, mount, angles, ranges, max_range,
         out[n, 0] = px
         out[n, 1] = py
         out[n, 2] = math.atan2(math.sin(pth), math.cos(pth))
+
+
+match_laser_many, match_laser_many_parallel = serial_and_parallel(_match_laser_many)

@@ -38,7 +38,13 @@ from .metrics import MapScore, map_score, trajectory_rms
 from .motion import sample_arc_motion
 from .occupancy import InverseLaserModel, InverseSonarModel, OccupancyGrid
 
+PARALLEL_MIN = 64
+"""Particle count from which the per-particle kernels run over threads (below,
+a thread pool's wake-up costs more than it saves, the more so on a busy
+machine)."""
+
 __all__ = [
+    "PARALLEL_MIN",
     "GridFastSLAM",
     "FastSLAMResult",
     "run_fastslam",
@@ -82,9 +88,10 @@ def resample_maps(maps: np.ndarray, indexes) -> tuple[np.ndarray, np.ndarray]:
     parents = np.arange(n)
     parents[dead] = extra
     if len(dead):
-        _kernels.copy_maps(
-            maps, np.ascontiguousarray(extra), np.ascontiguousarray(dead)
+        kernel = (
+            _kernels.copy_maps_parallel if n >= PARALLEL_MIN else _kernels.copy_maps
         )
+        kernel(maps, np.ascontiguousarray(extra), np.ascontiguousarray(dead))
     return parents, parents
 
 
@@ -204,6 +211,10 @@ class GridFastSLAM:
         return normalise_log_weights(self.logw)
 
     # -- the pieces -------------------------------------------------------
+    def _kernel(self, name: str):
+        """Return the serial or threaded kernel ``name`` for this many particles."""
+        return getattr(_kernels, name + ("_parallel" if self.n >= PARALLEL_MIN else ""))
+
     def _geometry(self):
         return (*self.origin, self.resolution)
 
@@ -212,7 +223,7 @@ class GridFastSLAM:
         lp = np.ascontiguousarray(laser_poses(poses, self.laser))
         k = self.beam_step
         out = np.empty(len(lp))
-        _kernels.laser_loglik_many(
+        self._kernel("laser_loglik_many")(
             self.maps, *self._geometry(), lp,
             np.ascontiguousarray(self.laser.angles[::k]),
             np.ascontiguousarray(np.asarray(scan, dtype=float)[::k]),
@@ -223,7 +234,7 @@ class GridFastSLAM:
     def weigh_sonar(self, poses, ranges) -> np.ndarray:
         """Log-likelihood (N,) of a sonar ring reading in each particle's map."""
         out = np.empty(len(poses))
-        _kernels.sonar_loglik_many(
+        self._kernel("sonar_loglik_many")(
             self.maps, *self._geometry(), np.ascontiguousarray(poses, dtype=float),
             self.sonar.sensors, np.ascontiguousarray(ranges, dtype=float),
             self.sonar.cone / 2, self.sonar.max_range, 5, self.p_rand, out,
@@ -234,7 +245,7 @@ class GridFastSLAM:
         """Fit each pose (N, 3) to the scan in its particle's map; return the fits."""
         k = self.match_beam_step
         out = np.empty((len(poses), 3))
-        _kernels.match_laser_many(
+        self._kernel("match_laser_many")(
             self.maps, *self._geometry(), np.ascontiguousarray(poses, dtype=float),
             np.asarray(self.laser.mount, dtype=float),
             np.ascontiguousarray(self.laser.angles[::k]),
@@ -248,7 +259,7 @@ class GridFastSLAM:
         z = np.ascontiguousarray(np.asarray(scan, dtype=float))
         if self.sensor == "laser":
             m = self.laser_model
-            _kernels.laser_update_many(
+            self._kernel("laser_update_many")(
                 self.maps, *self._geometry(),
                 np.ascontiguousarray(laser_poses(self.particles, self.laser)),
                 np.ascontiguousarray(self.laser.angles), z, self.laser.max_range,
@@ -256,7 +267,7 @@ class GridFastSLAM:
             )  # fmt: skip
         else:
             m = self.sonar_model
-            _kernels.sonar_update_many(
+            self._kernel("sonar_update_many")(
                 self.maps, *self._geometry(), self.particles, self.sonar.sensors, z,
                 self.sonar.cone / 2, self.sonar.max_range, m.thickness, m.l_occ,
                 m.l_free, m.sigma or 0.0, m.max_weight, m.l_min, m.l_max,
