@@ -21,7 +21,7 @@ COMMANDS = {
     ),
     "bench": ("robotlib.benchmarks", "measure kernels and the MCL step"),
     "release": ("robotlib.course.release", "write labs/ from solutions/"),
-    "grade": ("robotlib.course.grade", "grade a folder of submissions with nbval"),
+    "grade": ("robotlib.course.grade", "grade a folder of submissions in a sandbox"),
 }
 """Subcommand name to (module, one-line help)."""
 
