@@ -221,8 +221,8 @@ class _Scanner(ast.NodeVisitor):
         self._docstring(node)
         self.generic_visit(node)
 
-    visit_AsyncFunctionDef = visit_FunctionDef
-    visit_ClassDef = visit_FunctionDef
+    visit_AsyncFunctionDef = visit_FunctionDef  # noqa: N815
+    visit_ClassDef = visit_FunctionDef  # noqa: N815
 
     def visit_Import(self, node):
         for a in node.names:

@@ -66,7 +66,7 @@ class Result:
         return float(sum(self.points.values()))
 
     def to_json(self) -> dict:
-        """The record written to disk."""
+        """Return the record written to disk."""
         return asdict(self)
 
     @classmethod
@@ -77,7 +77,7 @@ class Result:
 
 
 def slug(name: str) -> str:
-    """A file name for ``name``: readable, and unique (a hash of the exact name)."""
+    """Return a file name for ``name``: readable, unique (hashes the exact name)."""
     ascii_ = unicodedata.normalize("NFKD", name).encode("ascii", "ignore").decode()
     base = re.sub(r"[^A-Za-z0-9_.@-]+", "_", ascii_).strip("._")[:60] or "student"
     digest = hashlib.sha1(name.encode("utf-8", "surrogateescape")).hexdigest()[:8]
@@ -103,7 +103,7 @@ class Records:
         self.folder.mkdir(parents=True, exist_ok=True)
 
     def path(self, student: str) -> Path:
-        """The record file of ``student``."""
+        """Return the record file of ``student``."""
         return self.folder / f"{slug(student)}.json"
 
     def save(self, result: Result, fingerprint: str) -> None:
@@ -112,7 +112,7 @@ class Records:
         _atomic(self.path(result.student), json.dumps(data, indent=1))
 
     def load(self, student: str) -> tuple[Result, str] | None:
-        """The stored result of ``student`` and its fingerprint, or None."""
+        """Return the stored result of ``student`` and its fingerprint, or None."""
         try:
             data = json.loads(self.path(student).read_text(encoding="utf-8"))
         except (OSError, ValueError):

@@ -213,7 +213,7 @@ def _source(cell: dict) -> str:
 
 
 def student_cells(plan: LabPlan, student: dict) -> list[dict]:
-    """The student's cells the student process runs, in notebook order.
+    """Return the student's cells the student process runs, in notebook order.
 
     Each is ``{"id", "exercise", "source"}``; ``exercise`` is None for a
     cell the student added.
@@ -242,7 +242,7 @@ def student_cells(plan: LabPlan, student: dict) -> list[dict]:
 
 
 def scan_submission(plan: LabPlan, cells: list[dict]) -> tuple[dict, list[str]]:
-    """Static pass: ``({exercise: [notes]}, flags)``."""
+    """Run the static pass; return ``({exercise: [notes]}, flags)``."""
     zero: dict[str, list[str]] = {}
     flags: list[str] = []
     for cell in cells:

@@ -63,7 +63,7 @@ class Limits:
     cpu: int = 900
 
     def prlimit(self) -> list[str]:
-        """The ``prlimit`` command prefix setting these limits."""
+        """Return the ``prlimit`` command prefix setting these limits."""
         return [
             "prlimit",
             f"--as={self.memory}",
@@ -210,7 +210,7 @@ def _rewrite(root: str, value: str) -> str:
 
 
 def sandbox_uid(slot: int) -> int | None:
-    """The uid grading slot ``slot`` runs as (None unless we are root)."""
+    """Return the uid grading slot ``slot`` runs as (None unless we are root)."""
     if os.geteuid() != 0:
         return None
     return 61000 + slot

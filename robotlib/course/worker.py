@@ -305,7 +305,9 @@ def _check(fin: int, fout: int) -> None:
             with contextlib.redirect_stdout(buf):
                 run(f"<check {chk['gid']}>", chk["source"])
         except StudentError as exc:
-            status, error, student = "failed", f"your {exc.name} failed", exc.error
+            last = exc.error.strip().splitlines()[-1] if exc.error.strip() else ""
+            status, student = "failed", exc.error
+            error = f"your {exc.name} failed: {last}"[:300]
         except AssertionError as exc:
             status, error = "failed", str(exc) or "an assertion failed"
         except BaseException as exc:  # noqa: BLE001 - reported, the next check runs
