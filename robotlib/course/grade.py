@@ -107,7 +107,8 @@ def _compare(gid: str, rec: dict, reference: dict | None) -> str | None:
         if a != b:
             return f"wrong result: expected {b[:150]!r}, got {a[:150]!r}"
     if len(got_lines) != len(want["lines"]):
-        return f"wrong result: printed {len(got_lines)} CHECK lines, not {len(want['lines'])}"
+        n, m = len(got_lines), len(want["lines"])
+        return f"wrong result: printed {n} CHECK lines, not {m}"
     if got_hidden != want["hidden"]:
         return "wrong result on the hidden inputs (not shown)"
     return None

@@ -231,8 +231,9 @@ class _Proc:
 def run_submission(
     plan: LabPlan, cells: list[dict], opts: Options, slot: int = 0
 ) -> Outcome:
-    """Run ``cells`` (the student's) against ``plan``'s checks; never raises
-    for anything the submission does.
+    """Run ``cells`` (the student's) against ``plan``'s checks.
+
+    Never raises for anything the submission does.
     """
     out = Outcome()
     t_end = time.monotonic() + opts.timeout

@@ -120,7 +120,7 @@ def safe_loads(data: bytes):
 
 
 def _trim(exc: BaseException, sources: dict[str, str]) -> str:
-    """The student's traceback: frames of their cells only."""
+    """Return the student's traceback: frames of their cells only."""
     lines = []
     for fr in traceback.extract_tb(exc.__traceback__):
         m = re.fullmatch(r"<ipython-input-\d+-(.*)>", fr.filename)
@@ -255,7 +255,8 @@ class _Proxy:
 
     def __call__(self, *args, **kwargs):
         value, args2, kwargs2 = self._ask("call", pickle.dumps((args, kwargs)))
-        for a, b in zip(args, args2 if isinstance(args2, tuple | list) else ()):
+        after = args2 if isinstance(args2, tuple | list) else ()
+        for a, b in zip(args, after, strict=False):
             _sync(a, b)
         if isinstance(kwargs2, dict):
             for k, v in kwargs.items():
