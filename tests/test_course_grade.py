@@ -1,3 +1,4 @@
+# ruff: noqa: E501
 """Grading end to end on a tiny lab, in the sandbox, against adversarial submissions.
 
 One module-scoped grading run (the CLI, two at a time) covers the classes of
