@@ -1,4 +1,4 @@
-"""Every lab graded end to end in the sandbox: solution full, released zero, cheats zero.
+"""Every lab graded in the sandbox: solution full, released zero, cheats zero.
 
 For each ``solutions/*.ipynb`` one grading run holds the solution, the
 released lab, a partial solution (for the labs listed in `PARTIAL`) and two
