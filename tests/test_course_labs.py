@@ -1,8 +1,10 @@
 """Every lab graded in the sandbox: solution full, released zero, cheats zero.
 
 For each ``solutions/*.ipynb`` one grading run holds the solution, the
-released lab, a partial solution (for the labs listed in `PARTIAL`) and two
-cheating submissions built from the exercises' ``writes`` metadata: each
+released lab, a partial solution (for the labs listed in `PARTIAL`), a
+do-nothing answer (for the labs in `DO_NOTHING`: it must fail the outcome
+checks) and two cheating submissions built from the exercises' ``writes``
+metadata: each
 exercise with ``writes`` has, in one of them, the solution's cell plus a
 route to its first listed function, alternately an aliased import (caught by
 the static scan) and a run-time lookup by a string built at run time
@@ -36,6 +38,23 @@ PARTIAL = {
     "lab3_mcl": (
         {"l3-05", "l3-10", "l3-13", "l3-37"},
         {"weights": 2, "select": 1, "resize": 2, "low_variance": 2, "global": 2},
+    ),
+    "lab5_slam": (
+        {"l5-03", "l5-20"},
+        {"inverse_sonar": 2, "ekf_update": 3, "ekf_outcome": 2},
+    ),
+}
+
+# lab -> (a do-nothing body for each exercise cell, the outcome checks it must fail)
+DO_NOTHING = {
+    "lab5_slam": (
+        {
+            "l5-03": "return np.zeros(np.asarray(cells).shape[:-1])",
+            "l5-06": "return np.zeros(world.occupancy_grid(resolution).shape)",
+            "l5-12": "return maps, particles, logw",
+            "l5-20": "return mu, P",
+        },
+        {"sonar_map", "fastslam_outcome", "ekf_outcome"},
     ),
 }
 
@@ -106,6 +125,14 @@ def lab_graded(request, tmp_path_factory):
             if cell.id in PARTIAL[lab][0]:
                 cell.source = sources[cell.id]
         subs["partial"] = partial
+    if lab in DO_NOTHING:
+        nothing = copy.deepcopy(released)
+        for cell in nothing.cells:
+            body = DO_NOTHING[lab][0].get(cell.id)
+            if body is not None:
+                assert "raise NotImplementedError()" in cell.source, cell.id
+                cell.source = cell.source.replace("raise NotImplementedError()", body)
+        subs["nothing"] = nothing
     plan = cheats(sol)
     for i, (nb, _) in enumerate(plan):
         subs[f"cheat{i}"] = nb
@@ -127,6 +154,9 @@ def test_solution_full_released_zero(lab_graded):
     if lab in PARTIAL:
         got = {k: v for k, v in rows["partial"].points.items() if v}
         assert got == PARTIAL[lab][1], rows["partial"].reasons
+    if lab in DO_NOTHING:  # answers that return their inputs or zeros
+        r = rows["nothing"]
+        assert all(r.points[g] == 0 for g in DO_NOTHING[lab][1]), r.reasons
 
 
 def test_cheats_score_zero_for_their_exercise_only(lab_graded):
