@@ -171,3 +171,50 @@ def sonar_loglik(
         )
         total += math.log(p_rand + (1 - p_rand) * best)
     return total
+
+
+def sonar_beam_loglik(
+    L, origin, res, pose, sensors, ranges, half_cone, max_range, n_rays, sigma,
+    p_rand, occ, c_unknown,
+):  # fmt: skip
+    """The sonar beam model, one ray point at a time (see the kernel's docstring)."""
+    ny, nx = L.shape
+
+    def cell(px, py):
+        return int(math.floor((py - origin[1]) / res)), int(
+            math.floor((px - origin[0]) / res)
+        )
+
+    total = 0.0
+    x, y, th = pose
+    for (ax, ay, ah), z in zip(sensors, ranges, strict=True):
+        if z >= max_range:
+            continue
+        sx = x + math.cos(th) * ax - math.sin(th) * ay
+        sy = y + math.sin(th) * ax + math.cos(th) * ay
+        zhat, q = math.inf, 0.0
+        offs = np.linspace(-half_cone, half_cone, n_rays) if n_rays > 1 else [0.0]
+        for k, o in enumerate(offs):
+            a = (
+                th
+                + ah
+                + (half_cone * (2.0 * k / (n_rays - 1) - 1.0) if n_rays > 1 else o)
+            )
+            d = 0.5 * res
+            while d < z + 3 * sigma and d < zhat:
+                i, j = cell(sx + d * math.cos(a), sy + d * math.sin(a))
+                if 0 <= i < ny and 0 <= j < nx and L[i, j] > occ:
+                    zhat = d
+                    break
+                d += 0.5 * res
+            i, j = cell(sx + z * math.cos(a), sy + z * math.sin(a))
+            v = float(L[i, j]) if 0 <= i < ny and 0 <= j < nx else 0.0
+            q = max(q, 1.0 - 1.0 / (1.0 + math.exp(v)))
+        p = 0.0
+        if zhat < math.inf:
+            p = math.exp(-0.5 * ((z - zhat) / sigma) ** 2)
+            if zhat < z - 3 * sigma:
+                q = 0.0
+        p = max(p, c_unknown * q)
+        total += math.log(p_rand + (1 - p_rand) * p)
+    return total

@@ -265,6 +265,17 @@ def test_many_particle_kernels_match_single_map_kernels_and_references():
             0.05,
         )
         assert out[k] == pytest.approx(want, rel=1e-9)
+    for c_unknown in (0.0, 0.5):
+        kern.sonar_beam_loglik_many(
+            Ls, *origin, res, poses, sonar.sensors, zs, sonar.cone / 2, 5.0, 5,
+            0.15, 0.2, 0.5, c_unknown, out,
+        )  # fmt: skip
+        for k in range(n):
+            want = naive.sonar_beam_loglik(
+                Ls[k], origin, res, poses[k], sonar.sensors, zs, sonar.cone / 2,
+                5.0, 5, 0.15, 0.2, 0.5, c_unknown,
+            )  # fmt: skip
+            assert out[k] == pytest.approx(want, rel=1e-9)
     many = Ls.copy()
     kern.laser_update_many(many, *origin, res, poses, angles, z, 4.0, 0.9, -0.4, -6, 6)
     kern.sonar_update_many(

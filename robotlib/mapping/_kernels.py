@@ -300,6 +300,83 @@ def _sonar_loglik_many(Ls, x0, y0, res, poses, sensors, ranges, half_cone,
 sonar_loglik_many, sonar_loglik_many_parallel = serial_and_parallel(_sonar_loglik_many)
 
 
+@nb.njit(**JIT)
+def sonar_beam_loglik(L, x0, y0, res, px, py, pth, sensors, ranges, half_cone,
+                      max_range, n_rays, sigma, p_rand, occ, c_unknown):  # fmt: skip
+    """Log-likelihood of one ring reading from robot pose ``p`` in map ``L``.
+
+    A beam model on the map: for each echo ``z < max_range``, ``n_rays`` rays
+    across the cone march (in steps of half a cell, up to ``z + 3 sigma``)
+    to the first cell whose log-odds exceed ``occ``; the nearest such cell
+    over the cone is the expected range ``zhat``. The reading scores
+    ``log(p_rand + (1 - p_rand) p)`` with ``p`` the larger of
+    ``exp(-(z - zhat)^2 / (2 sigma^2))`` (0 when no cell was found) and
+    ``c_unknown`` times the largest occupancy probability at the arc's ray
+    ends (an echo from cells the map has not seen yet), the latter 0 when
+    the map holds a wall more than ``3 sigma`` before the echo (the echo
+    would have come from it). Max-range readings (specular misses) score 0.
+    """
+    ny, nx = L.shape
+    c = math.cos(pth)
+    s = math.sin(pth)
+    step = 0.5 * res
+    total = 0.0
+    for k in range(sensors.shape[0]):
+        z = ranges[k]
+        if z >= max_range:
+            continue
+        sx = px + c * sensors[k, 0] - s * sensors[k, 1]
+        sy = py + s * sensors[k, 0] + c * sensors[k, 1]
+        dlim = z + 3.0 * sigma
+        zhat = np.inf
+        q = 0.0
+        for r in range(n_rays):
+            off = 0.0 if n_rays == 1 else half_cone * (2.0 * r / (n_rays - 1) - 1.0)
+            a = pth + sensors[k, 2] + off
+            ca = math.cos(a)
+            sa = math.sin(a)
+            d = step
+            while d < dlim and d < zhat:
+                j = int(math.floor((sx + d * ca - x0) / res))
+                i = int(math.floor((sy + d * sa - y0) / res))
+                if 0 <= i < ny and 0 <= j < nx and L[i, j] > occ:
+                    zhat = d
+                    break
+                d += step
+            p_end = _occ_prob(
+                L, int(math.floor((sy + z * sa - y0) / res)),
+                int(math.floor((sx + z * ca - x0) / res)),
+            )  # fmt: skip
+            if p_end > q:
+                q = p_end
+        p = 0.0
+        if zhat < np.inf:
+            e = (z - zhat) / sigma
+            p = math.exp(-0.5 * e * e)
+            if zhat < z - 3.0 * sigma:
+                q = 0.0
+        if c_unknown * q > p:
+            p = c_unknown * q
+        total += math.log(p_rand + (1.0 - p_rand) * p)
+    return total
+
+
+def _sonar_beam_loglik_many(Ls, x0, y0, res, poses, sensors, ranges, half_cone,
+                            max_range, n_rays, sigma, p_rand, occ, c_unknown,
+                            out):  # fmt: skip
+    """`sonar_beam_loglik` of one ring reading in each map ``Ls[n]`` at ``poses[n]``."""
+    for n in nb.prange(Ls.shape[0]):
+        out[n] = sonar_beam_loglik(
+            Ls[n], x0, y0, res, poses[n, 0], poses[n, 1], poses[n, 2], sensors,
+            ranges, half_cone, max_range, n_rays, sigma, p_rand, occ, c_unknown,
+        )  # fmt: skip
+
+
+sonar_beam_loglik_many, sonar_beam_loglik_many_parallel = serial_and_parallel(
+    _sonar_beam_loglik_many
+)
+
+
 def _copy_maps(Ls, src, dst):
     """Copy map ``Ls[src[q]]`` over ``Ls[dst[q]]`` for every ``q`` (in place).
 
