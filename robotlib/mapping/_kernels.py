@@ -23,6 +23,22 @@ def _clamp(v, lo, hi):
 
 
 @nb.njit(**JIT)
+def _small_atan(t):
+    """Return ``atan(t)``, by its odd series to ``t^19`` where ``|t| <= 0.3``.
+
+    The series' error there is below ``1e-11`` (inside a 30 degree cone
+    ``|t| <= 0.27``); elsewhere ``math.atan``.
+    """
+    if t > 0.3 or t < -0.3:
+        return math.atan(t)
+    u = t * t
+    p = -1.0 / 19.0
+    for k in range(8, -1, -1):
+        p = (1.0 - 2.0 * (k % 2)) / (2 * k + 1) + u * p
+    return t * p
+
+
+@nb.njit(**JIT)
 def sonar_cone_update(
     L, x0, y0, res, sx, sy, sth, z, half_cone, max_range, thickness,
     l_occ, l_free, sigma, max_weight, l_min, l_max,
@@ -74,9 +90,33 @@ def sonar_cone_update(
     reach2 = reach * reach
     inner = z - half
     inv2s2 = 0.5 / (sigma * sigma) if sigma > 0.0 else 0.0
+    # each row's cells between the cone's edges and inside the circle; the
+    # interval is widened by a cell, the exact tests below decide
+    e1x = math.cos(sth - half_cone)
+    e1y = math.sin(sth - half_cone)
+    e2x = math.cos(sth + half_cone)
+    e2y = math.sin(sth + half_cone)
     for i in range(i0, i1 + 1):
         cy = y0 + (i + 0.5) * res - sy
-        for j in range(j0, j1 + 1):
+        rr = reach2 - cy * cy
+        if rr < 0.0:
+            continue
+        lo = -math.sqrt(rr)
+        hi = -lo
+        if half_cone < 0.5 * math.pi:
+            # left of edge 1: -e1y cx >= -e1x cy; right of edge 2: e2y cx >= e2x cy
+            for e in range(2):
+                a = -e1y if e == 0 else e2y
+                b = -e1x * cy if e == 0 else e2x * cy
+                if a > 1e-9:
+                    lo = max(lo, b / a)
+                elif a < -1e-9:
+                    hi = min(hi, b / a)
+        if lo > hi + res:
+            continue
+        ja = max(j0, int(math.floor((lo + sx - x0) / res - 0.5)) - 1)
+        jb = min(j1, int(math.ceil((hi + sx - x0) / res - 0.5)) + 1)
+        for j in range(ja, jb + 1):
             cx = x0 + (j + 0.5) * res - sx
             along = cx * ux + cy * uy
             if along <= 0.0:
@@ -89,7 +129,7 @@ def sonar_cone_update(
                 continue
             w = w0
             if inv2s2 > 0.0:
-                phi = math.atan2(perp, along)
+                phi = _small_atan(perp / along)
                 w *= math.exp(-phi * phi * inv2s2)
             if echo and math.sqrt(d2) >= inner:
                 L[i, j] = _clamp(L[i, j] + w * l_occ, l_min, l_max)

