@@ -363,3 +363,27 @@ def test_known_pose_maps_of_a_seeded_drive():
     again = record_drive(door_corridor(), route, seed=2, every=2)
     np.testing.assert_array_equal(again.sonar, log.sonar)
     np.testing.assert_array_equal(again.laser, log.laser)
+
+
+def test_scan_fitting_kernel_matches_the_reference():
+    rng = np.random.default_rng(8)
+    shape, origin, res = (40, 60), (-0.5, -0.5), 0.1
+    n = 4
+    Ls = np.maximum(rng.normal(0, 2, (n, *shape)), 0).astype(np.float32)
+    poses = np.column_stack(
+        [rng.uniform(1, 4, n), rng.uniform(1, 2.5, n), rng.uniform(-3, 3, n)]
+    )
+    mount = np.array([0.16, 0.01, 0.02])
+    angles = np.linspace(-math.pi / 2, math.pi / 2, 23)
+    z = rng.uniform(0.2, 2.0, 23)
+    z[[2, 9]] = 4.0  # no return
+    out = np.empty((n, 3))
+    kern.match_laser_many(
+        Ls, *origin, res, poses, mount, angles, z, 4.0, 0.05, 0.03, 3, out
+    )
+    for k in range(n):
+        want = naive.match_laser(
+            Ls[k], origin, res, poses[k], mount, angles, z, 4.0, (0.05, 0.03), 3
+        )
+        np.testing.assert_allclose(out[k], want, atol=1e-9)
+        assert not np.allclose(out[k], poses[k])  # it moved

@@ -453,21 +453,41 @@ def _bilinear_evidence(L, x0, y0, res, px, py):
 
 
 @nb.njit(**JIT)
-def _match_score(L, x0, y0, res, px, py, pth, mx, my, mth, angles, ranges, max_range):
-    """Sum of `_bilinear_evidence` at the scan's end points from robot pose p."""
+def _match_score(L, x0, y0, res, px, py, pth, bx, by):
+    """Sum of `_bilinear_evidence` at the scan's end points from robot pose p.
+
+    ``bx, by`` (B,) are the end points of the returns in the robot frame, so
+    each pose costs one cosine and sine.
+    """
     c = math.cos(pth)
     s = math.sin(pth)
-    lx = px + c * mx - s * my
-    ly = py + s * mx + c * my
     total = 0.0
-    for r in range(angles.shape[0]):
-        if ranges[r] >= max_range:
-            continue
-        a = pth + mth + angles[r]
+    for r in range(bx.shape[0]):
         total += _bilinear_evidence(
-            L, x0, y0, res, lx + ranges[r] * math.cos(a), ly + ranges[r] * math.sin(a)
+            L, x0, y0, res, px + c * bx[r] - s * by[r], py + s * bx[r] + c * by[r]
         )
     return total
+
+
+@nb.njit(**JIT)
+def scan_points(mount, angles, ranges, max_range):
+    """End points (B, 2) of the returns (``ranges < max_range``), robot frame.
+
+    The laser sits at ``mount = (x, y, heading)`` on the robot.
+    """
+    nr = 0
+    for r in range(angles.shape[0]):
+        if ranges[r] < max_range:
+            nr += 1
+    out = np.empty((nr, 2))
+    q = 0
+    for r in range(angles.shape[0]):
+        if ranges[r] < max_range:
+            a = mount[2] + angles[r]
+            out[q, 0] = mount[0] + ranges[r] * math.cos(a)
+            out[q, 1] = mount[1] + ranges[r] * math.sin(a)
+            q += 1
+    return out
 
 
 def _match_laser_many(Ls, x0, y0, res, poses, mount, angles, ranges, max_range,
@@ -479,38 +499,37 @@ def _match_laser_many(Ls, x0, y0, res, poses, mount, angles, ranges, max_range,
     `_match_score`; when none does, halve the steps, ``levels`` times.
     Writes the fitted poses to ``out`` (N, 3).
     """
+    pts = scan_points(mount, angles, ranges, max_range)
+    bx = np.ascontiguousarray(pts[:, 0])
+    by = np.ascontiguousarray(pts[:, 1])
     for n in nb.prange(Ls.shape[0]):
         px = poses[n, 0]
         py = poses[n, 1]
         pth = poses[n, 2]
-        best = _match_score(Ls[n], x0, y0, res, px, py, pth, mount[0], mount[1],
-                            mount[2], angles, ranges, max_range)  # fmt: skip
+        best = _match_score(Ls[n], x0, y0, res, px, py, pth, bx, by)
         sxy = step_xy
         sth = step_th
         for _ in range(levels):
             for _it in range(20):
                 bi = -1
-                bx = px
-                by = py
+                bx_ = px
+                by_ = py
                 bt = pth
                 for k in range(6):
                     qx = px + (sxy if k == 0 else (-sxy if k == 1 else 0.0))
                     qy = py + (sxy if k == 2 else (-sxy if k == 3 else 0.0))
                     qt = pth + (sth if k == 4 else (-sth if k == 5 else 0.0))
-                    v = _match_score(
-                        Ls[n], x0, y0, res, qx, qy, qt, mount[0], mount[1],
-                        mount[2], angles, ranges, max_range,
-                    )  # fmt: skip
+                    v = _match_score(Ls[n], x0, y0, res, qx, qy, qt, bx, by)
                     if v > best:
                         best = v
                         bi = k
-                        bx = qx
-                        by = qy
+                        bx_ = qx
+                        by_ = qy
                         bt = qt
                 if bi < 0:
                     break
-                px = bx
-                py = by
+                px = bx_
+                py = by_
                 pth = bt
             sxy *= 0.5
             sth *= 0.5
