@@ -57,6 +57,9 @@ def _warm_mcl() -> None:
     paper.check_particles(world, p[idx], w, rng)
     paper.estimate(p, w)
     paper.dispersion_index(p, world.size)
+    many, _ = paper.uniform_particles(world, 64, rng)  # the threaded scan (N >= 64)
+    paper.admissible(world, paper.predict(many, odo0 := np.zeros(3), odo0, rng=rng))
+    paper.expected(world, many)
     odo = np.asarray(world.start, dtype=float)
     # The exact and fast (fused) paths, small N and the many-particle paths
     # (threads, chunked noise) of the filters the labs and widgets build.
