@@ -102,6 +102,18 @@ class World:
 
     __hash__ = None
 
+    def __setstate__(self, state: dict) -> None:
+        """Unpickle with the arrays read-only again, as built.
+
+        Pickling drops NumPy's read-only flag; numba types a writable array
+        differently, so an unpickled world would compile every kernel anew.
+        """
+        for value in (*state.values(), *(state.get("_cache") or {}).values()):
+            for a in (value, getattr(value, "data", None)):
+                if isinstance(a, np.ndarray):
+                    a.setflags(write=False)
+        self.__dict__.update(state)
+
     @property
     def size(self) -> tuple[float, float]:
         """Width and height of the bounds, m."""
