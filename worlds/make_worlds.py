@@ -402,7 +402,7 @@ def write_pairs(name: str) -> None:
         "world": name,
         "start_region": PAIRS[name]["start"],
         "goal_region": PAIRS[name]["goal"],
-        "clearance": 0.45,
+        "clearance": 0.7,
         "heading": "towards the goal, +-45 deg",
         "units": "m",
     }

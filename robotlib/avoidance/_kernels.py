@@ -70,10 +70,17 @@ def certainty_update(
         dx, dy = math.cos(a), math.sin(a)
         reach = min(r - res, clear_range)
         if reach > 0.0:
-            j0 = max(int(math.floor((sx - reach - x0) / res)), 0)
-            j1 = min(int(math.floor((sx + reach - x0) / res)), nx - 1)
-            i0 = max(int(math.floor((sy - reach - y0) / res)), 0)
-            i1 = min(int(math.floor((sy + reach - y0) / res)), ny - 1)
+            # the cone's bounding box: its apex, its two edges' ends, its axis
+            bx0, bx1, by0, by1 = sx, sx, sy, sy
+            for e in (-1.0, 0.0, 1.0):
+                ex = sx + reach * math.cos(a + e * half_cone)
+                ey = sy + reach * math.sin(a + e * half_cone)
+                bx0, bx1 = min(bx0, ex), max(bx1, ex)
+                by0, by1 = min(by0, ey), max(by1, ey)
+            j0 = max(int(math.floor((bx0 - x0) / res)), 0)
+            j1 = min(int(math.floor((bx1 - x0) / res)), nx - 1)
+            i0 = max(int(math.floor((by0 - y0) / res)), 0)
+            i1 = min(int(math.floor((by1 - y0) / res)), ny - 1)
             cos_half = math.cos(half_cone)
             for i in range(i0, i1 + 1):
                 py = y0 + (i + 0.5) * res - sy
@@ -281,3 +288,43 @@ def plus_direction(blocked, target, previous, wide, mu_goal, mu_heading, mu_prev
             if cost < best_cost:
                 best, best_cost = a, cost
     return best
+
+
+@nb.njit(**JIT)
+def follow_direction(blocked, target, side, margin):
+    """Boundary following on the histogram: the first free way round the obstacle.
+
+    From the target's sector, walk the sectors counter-clockwise (``side =
+    +1``: the obstacle stays on the right) or clockwise (``side = -1``) to
+    the first free sector, and steer ``margin`` sectors further (at most to
+    the middle of that free run). Returns the direction, rad, robot frame
+    (the target itself if its sector is free, nan if none is free).
+    """
+    n = blocked.shape[0]
+    alpha = 2.0 * math.pi / n
+    kt = int(math.floor((_wrap(target) + math.pi) / alpha)) % n
+    if not blocked[kt]:
+        return _wrap(target)
+    for m in range(1, n):
+        k = kt + side * m
+        if not blocked[k % n]:
+            run = 0
+            while run < n and not blocked[(k + side * run) % n]:
+                run += 1
+            step = min(margin, (run - 1) // 2)
+            return _sector_angle(k + side * step, n)
+    return math.nan
+
+
+@nb.njit(**JIT)
+def hysteresis(hist, low, high, blocked):
+    """Make the histogram binary with hysteresis, in place.
+
+    ``blocked[k]`` becomes True above ``high``, False below ``low``, and keeps
+    its value in between.
+    """
+    for k in range(hist.shape[0]):
+        if hist[k] > high:
+            blocked[k] = True
+        elif hist[k] < low:
+            blocked[k] = False

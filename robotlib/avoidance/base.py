@@ -17,7 +17,6 @@ import math
 
 import numpy as np
 
-from ..geometry import wrap_angle
 from ..p3dx import (
     DEFAULT_MAX_ROT_VELOCITY,
     SONAR_MAX_RANGE,
@@ -167,7 +166,7 @@ class Controller:
     def goal_direction(self, pose) -> tuple[float, float]:
         """Return the goal's bearing (rad, robot frame) and distance (m)."""
         gx, gy = goal_in_robot_frame(self.goal, pose)
-        return wrap_angle(math.atan2(gy, gx)), math.hypot(gx, gy)
+        return math.atan2(gy, gx), math.hypot(gx, gy)
 
     def __repr__(self) -> str:
         return f"{type(self).__name__}(goal={self.goal})"

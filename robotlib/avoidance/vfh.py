@@ -26,12 +26,17 @@ import math
 
 import numpy as np
 
-from ..geometry import wrap_angle
 from ..p3dx import ROBOT_RADIUS, SONAR_CONE
 from . import _kernels
 from .base import Controller
 
 __all__ = ["VFH", "polar_histogram", "choose_direction", "smooth_histogram"]
+
+
+def _wrap(a: float) -> float:
+    """Wrap one angle to (-pi, pi] (a fast scalar `robotlib.geometry.wrap_angle`)."""
+    w = math.remainder(a, 2.0 * math.pi)
+    return math.pi if w == -math.pi else w
 
 
 def polar_histogram(
@@ -151,7 +156,7 @@ def choose_direction(hist, threshold: float, target: float, wide: int = 16) -> f
     n = len(h)
     alpha = 2.0 * math.pi / n
     free = h < threshold
-    target = wrap_angle(float(target))
+    target = _wrap(float(target))
     kt = int((target + math.pi) // alpha) % n
     if free[kt]:
         return target
@@ -159,7 +164,7 @@ def choose_direction(hist, threshold: float, target: float, wide: int = 16) -> f
     for start, length in _valleys(free):
         ends = (start, (start + length - 1) % n)
         for side, border in enumerate(ends):
-            dist = abs(wrap_angle((border + 0.5) * alpha - math.pi - target))
+            dist = abs(_wrap((border + 0.5) * alpha - math.pi - target))
             if dist >= best_dist:
                 continue
             best_dist = dist
@@ -168,7 +173,7 @@ def choose_direction(hist, threshold: float, target: float, wide: int = 16) -> f
                 k = border + inward
             else:
                 k = start + (length - 1) / 2.0
-            best = wrap_angle((k + 0.5) * alpha - math.pi)
+            best = _wrap((k + 0.5) * alpha - math.pi)
     return best
 
 
@@ -208,6 +213,11 @@ class VFH(Controller):
     mu : tuple of float
         VFH+'s cost weights of a candidate direction's angle to the goal, to
         the current heading and to the previous choice.
+    escape : bool
+        Escape traps by following the obstacle's boundary (see `_escape`).
+    patience, progress : float
+        A trap is declared when the distance to the goal has not shrunk by
+        ``progress`` m in ``patience`` s.
     max_speed, max_turn : float
         Command limits, m/s and rad/s.
     turn_gain : float
@@ -231,6 +241,11 @@ class VFH(Controller):
         The last (smoothed) polar histogram.
     steer : float
         The last chosen direction (robot frame, rad; nan: all blocked).
+    following : int
+        0 while heading for the goal; +1 or -1 while following a boundary
+        (obstacle on the right, or on the left).
+    escapes : int
+        How many times the controller began following a boundary.
     """
 
     name = "VFH"
@@ -241,19 +256,22 @@ class VFH(Controller):
         *,
         resolution: float = 0.1,
         extent: float = 40.0,
-        window: float = 2.5,
-        enlarge: float = ROBOT_RADIUS + 0.15,
+        window: float = 1.8,
+        enlarge: float = ROBOT_RADIUS + 0.05,
         n_sectors: int = 72,
-        threshold_low: float = 40.0,
-        threshold_high: float = 80.0,
+        threshold_low: float = 75.0,
+        threshold_high: float = 150.0,
         wide: int = 16,
         increment: float = 3.0,
         decrement: float = 1.0,
         cmax: float = 15.0,
         cone: float = SONAR_CONE,
-        clear_range: float = 3.0,
+        clear_range: float = 2.5,
         fade: float = 1.0,
         mu: tuple[float, float, float] = (5.0, 2.0, 2.0),
+        escape: bool = True,
+        patience: float = 10.0,
+        progress: float = 0.3,
         max_speed: float = 0.5,
         max_turn: float = math.radians(90.0),
         turn_gain: float = 1.5,
@@ -278,6 +296,9 @@ class VFH(Controller):
         self.half_cone = 0.5 * float(cone)
         self.clear_range = float(clear_range)
         self.fade = float(fade)
+        self.escape = bool(escape)
+        self.patience = float(patience)
+        self.progress = float(progress)
         self.mu_goal, self.mu_heading, self.mu_previous = (float(m) for m in mu)
         self.histogram_fn = histogram
         self.direction_fn = direction
@@ -294,6 +315,12 @@ class VFH(Controller):
         self._previous = 0.0
         self._heading = 0.0
         self._has_previous = False
+        self.following = 0
+        self.escapes = 0
+        self._cycle = 0
+        self._best = math.inf
+        self._best_cycle = 0
+        self._follow_from = math.inf
 
     def update_grid(self, sonar: np.ndarray, pose: np.ndarray) -> None:
         """Add one scan to the certainty grid (centred on the first pose seen)."""
@@ -344,8 +371,12 @@ class VFH(Controller):
         )
         return xy, sub[i, j]
 
-    def polar(self, pose) -> np.ndarray:
-        """Return the smoothed polar histogram at ``pose`` from the current grid."""
+    def polar(self, pose, window: float | None = None) -> np.ndarray:
+        """Return the smoothed polar histogram at ``pose`` from the current grid.
+
+        ``window``: the active window's radius (default: the controller's).
+        """
+        window = self.window if window is None else window
         if self.histogram_fn is not None:
             pts, cert = self.window_cells(pose)
             raw = np.asarray(self.histogram_fn(pts, cert, pose), dtype=float)
@@ -356,7 +387,7 @@ class VFH(Controller):
                 self.origin[1],
                 self.resolution,
                 pose,
-                self.window,
+                window,
                 self.enlarge,
                 self._raw,
             )
@@ -367,16 +398,15 @@ class VFH(Controller):
 
     def _choose(self, hist: np.ndarray, target: float) -> float:
         if self.direction_fn is not None:
+            self._blocked = hist >= self.threshold_high
             return float(self.direction_fn(hist, self.threshold_high, target))
         # hysteresis: blocked above high, free below low, else as before
-        self._blocked = np.where(
-            hist > self.threshold_high,
-            True,
-            np.where(hist < self.threshold_low, False, self._blocked),
+        _kernels.hysteresis(
+            hist, self.threshold_low, self.threshold_high, self._blocked
         )
-        previous = (
-            wrap_angle(self._previous - self._heading) if self._has_previous else 0.0
-        )
+        previous = 0.0
+        if self._has_previous:
+            previous = _wrap(self._previous - self._heading)
         return _kernels.plus_direction(
             self._blocked,
             target,
@@ -387,19 +417,50 @@ class VFH(Controller):
             self.mu_previous,
         )
 
+    def _escape(self, pose, dist: float, target: float, steer: float) -> float:
+        """Trap escape: follow the obstacle's boundary until nearer the goal.
+
+        When the distance to the goal has not shrunk by ``progress`` m for
+        ``patience`` s (cycles of 0.1 s), follow the boundary on the side the
+        histogram's choice leaned to, until the goal's sector is free and the
+        robot is nearer the goal than where following began.
+        """
+        self._cycle += 1
+        if dist < self._best - self.progress:
+            self._best, self._best_cycle = dist, self._cycle
+        if self.following == 0:
+            if self._cycle - self._best_cycle > self.patience / 0.1:
+                lean = _wrap(steer - target) if not math.isnan(steer) else 1.0
+                self.following = 1 if lean >= 0 else -1
+                self._follow_from = dist
+                self.escapes += 1
+            else:
+                return steer
+        n = self.n_sectors
+        kt = int((_wrap(target) + math.pi) // (2 * math.pi / n)) % n
+        if not self._blocked[kt] and dist < self._follow_from - self.progress:
+            self.following = 0
+            self._best, self._best_cycle = dist, self._cycle
+            return steer
+        return _kernels.follow_direction(self._blocked, target, self.following, 4)
+
     def _command(self, sonar: np.ndarray, pose: np.ndarray) -> tuple[float, float]:
         self.update_grid(sonar, pose)
-        hist = self.polar(pose)
-        self.histogram = hist
         if self.goal is None:
-            target = 0.0
+            target, window, dist = 0.0, self.window, math.inf
         else:
-            target, _ = self.goal_direction(pose)
+            # what lies beyond the goal does not block the way to it
+            target, dist = self.goal_direction(pose)
+            window = min(self.window, dist + self.enlarge)
+        hist = self.polar(pose, window)
+        self.histogram = hist
         self._heading = float(pose[2])
         steer = self._choose(hist, target)
+        if self.goal is not None and self.escape:
+            steer = self._escape(pose, dist, target, steer)
         self.steer = steer
         if not math.isnan(steer):
-            self._previous = wrap_angle(pose[2] + steer)
+            self._previous = _wrap(pose[2] + steer)
             self._has_previous = True
         if math.isnan(steer):  # boxed in: turn on the spot, one way
             if self._spin == 0.0:
