@@ -22,13 +22,14 @@ import math
 
 import numpy as np
 
-from ..geometry import as_rng
-from ..sonar import SonarModel
+from .._random import as_rng
+from ..sensing import SonarModel
 from ..world import World
 from . import _kernels
+from .cones import ConeTable, expected_readings
 from .motion import _particles, sample_motion_odometry
 from .resampling import _weights, multinomial_resample
-from .sensors import ConeTable, expected_readings, innovation_loglik
+from .sensors import innovation_loglik
 
 __all__ = [
     "ADMISSIBLE_RADIUS",
