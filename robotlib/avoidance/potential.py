@@ -23,7 +23,7 @@ from collections import deque
 
 import numpy as np
 
-from ..geometry import wrap_angle
+from ..world import wrap_angle
 from . import _kernels
 from .base import LOCAL_MINIMUM, Controller, goal_in_robot_frame
 

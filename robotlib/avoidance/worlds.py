@@ -19,9 +19,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..geometry import as_rng, wrap_angle
+from .._random import as_rng
 from ..p3dx import ROBOT_RADIUS
-from ..world import WORLDS_DIR, World, load_world
+from ..world import WORLDS_DIR, World, load_world, wrap_angle
 
 __all__ = ["AVOID_WORLDS", "StartGoal", "start_goal_pairs", "pair_regions"]
 
