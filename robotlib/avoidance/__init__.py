@@ -21,7 +21,7 @@ runs seeded start/goal pairs (`start_goal_pairs`) of the avoidance worlds
 from .base import Controller, goal_in_robot_frame, sonar_endpoints
 from .bug2 import Bug2
 from .episode import OUTCOMES, Episode, run_episode, run_episodes
-from .potential import PotentialField, potential_force
+from .potential import PotentialField, force_field, potential_force
 from .reactive import BRAITENBERG, Braitenberg, WallFollower, sonar_activation
 from .vfh import VFH, choose_direction, polar_histogram, smooth_histogram
 from .worlds import AVOID_WORLDS, StartGoal, pair_regions, start_goal_pairs
@@ -34,6 +34,7 @@ __all__ = [
     "smooth_histogram",
     "PotentialField",
     "potential_force",
+    "force_field",
     "Braitenberg",
     "BRAITENBERG",
     "WallFollower",

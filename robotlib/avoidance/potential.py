@@ -27,7 +27,7 @@ from ..world import wrap_angle
 from . import _kernels
 from .base import LOCAL_MINIMUM, Controller, goal_in_robot_frame
 
-__all__ = ["PotentialField", "potential_force"]
+__all__ = ["PotentialField", "potential_force", "force_field"]
 
 
 def potential_force(
@@ -178,3 +178,52 @@ class PotentialField(Controller):
         w = self.turn_gain * angle
         v = self.max_speed * max(0.0, math.cos(angle)) * min(1.0, math.hypot(*f[:2]))
         return v, w
+
+
+def force_field(
+    world, goal, resolution: float = 0.4, heading: str = "goal", **gains
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Return the potential field's force over a world, as the sonars feel it.
+
+    At each grid point the robot is placed facing the goal (``heading="goal"``)
+    and the force of `potential_force` from the noise-free sonar readings
+    there (`robotlib.sensing.expected_ranges`) is turned into the world frame.
+
+    Parameters
+    ----------
+    world : robotlib.world.World
+        The world.
+    goal : array_like, shape (2,)
+        Goal, m.
+    resolution : float
+        Grid spacing, m.
+    heading : str
+        ``"goal"``: each pose faces the goal.
+    **gains
+        ``k_att``, ``k_rep``, ``d0`` for `potential_force`.
+
+    Returns
+    -------
+    x, y, fx, fy : numpy.ndarray, shape (ny, nx)
+        Grid points (m) and the force there, world frame; nan where a robot
+        would not fit.
+    """
+    from ..sensing import expected_ranges
+
+    if heading != "goal":
+        raise ValueError("only heading='goal' is supported")
+    x0, y0, x1, y1 = world.bounds
+    xs = np.arange(x0 + resolution / 2, x1, resolution)
+    ys = np.arange(y0 + resolution / 2, y1, resolution)
+    gx, gy = np.meshgrid(xs, ys)
+    theta = np.arctan2(goal[1] - gy, goal[0] - gx)
+    poses = np.column_stack([gx.ravel(), gy.ravel(), theta.ravel()])
+    z = expected_ranges(world, poses)
+    f = np.array(
+        [potential_force(zi, p, goal, **gains) for zi, p in zip(z, poses, strict=True)]
+    )
+    c, s = np.cos(poses[:, 2]), np.sin(poses[:, 2])
+    fx, fy = c * f[:, 0] - s * f[:, 1], s * f[:, 0] + c * f[:, 1]
+    free = world.is_free(poses[:, :2])
+    fx, fy = np.where(free, fx, np.nan), np.where(free, fy, np.nan)
+    return gx, gy, fx.reshape(gx.shape), fy.reshape(gx.shape)
