@@ -292,22 +292,29 @@ def plus_direction(blocked, target, previous, wide, mu_goal, mu_heading, mu_prev
 
 @nb.njit(**JIT)
 def follow_direction(blocked, target, side, margin):
-    """Boundary following on the histogram: the first free way round the obstacle.
+    """Boundary following on the binary histogram (the obstacle on one side).
 
-    From the target's sector, walk the sectors counter-clockwise (``side =
-    +1``: the obstacle stays on the right) or clockwise (``side = -1``) to
-    the first free sector, and steer ``margin`` sectors further (at most to
-    the middle of that free run). Returns the direction, rad, robot frame
-    (the target itself if its sector is free, nan if none is free).
+    ``side = +1`` keeps the obstacle on the right: starting from the sector
+    100 degrees to the right, walk counter-clockwise to the first free
+    sector whose right-hand neighbour is blocked (a valley's right border)
+    and steer ``margin`` sectors into the valley (at most to its middle).
+    ``side = -1`` is the mirror image. Returns the direction, rad, robot
+    frame; the target if no sector is blocked, nan if all are.
     """
     n = blocked.shape[0]
     alpha = 2.0 * math.pi / n
-    kt = int(math.floor((_wrap(target) + math.pi) / alpha)) % n
-    if not blocked[kt]:
+    n_blocked = 0
+    for k in range(n):
+        if blocked[k]:
+            n_blocked += 1
+    if n_blocked == 0:
         return _wrap(target)
-    for m in range(1, n):
-        k = kt + side * m
-        if not blocked[k % n]:
+    if n_blocked == n:
+        return math.nan
+    start = int(math.floor((-side * math.radians(100.0) + math.pi) / alpha))
+    for m in range(n):
+        k = start + side * m
+        if not blocked[k % n] and blocked[(k - side) % n]:
             run = 0
             while run < n and not blocked[(k + side * run) % n]:
                 run += 1

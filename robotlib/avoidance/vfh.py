@@ -218,6 +218,8 @@ class VFH(Controller):
     patience, progress : float
         A trap is declared when the distance to the goal has not shrunk by
         ``progress`` m in ``patience`` s.
+    follow_margin : int
+        Sectors between the boundary and the direction followed.
     max_speed, max_turn : float
         Command limits, m/s and rad/s.
     turn_gain : float
@@ -272,6 +274,7 @@ class VFH(Controller):
         escape: bool = True,
         patience: float = 10.0,
         progress: float = 0.3,
+        follow_margin: int = 4,
         max_speed: float = 0.5,
         max_turn: float = math.radians(90.0),
         turn_gain: float = 1.5,
@@ -299,6 +302,7 @@ class VFH(Controller):
         self.escape = bool(escape)
         self.patience = float(patience)
         self.progress = float(progress)
+        self.follow_margin = int(follow_margin)
         self.mu_goal, self.mu_heading, self.mu_previous = (float(m) for m in mu)
         self.histogram_fn = histogram
         self.direction_fn = direction
@@ -442,7 +446,9 @@ class VFH(Controller):
             self.following = 0
             self._best, self._best_cycle = dist, self._cycle
             return steer
-        return _kernels.follow_direction(self._blocked, target, self.following, 4)
+        return _kernels.follow_direction(
+            self._blocked, target, self.following, self.follow_margin
+        )
 
     def _command(self, sonar: np.ndarray, pose: np.ndarray) -> tuple[float, float]:
         self.update_grid(sonar, pose)
