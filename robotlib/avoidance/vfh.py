@@ -358,13 +358,21 @@ class VFH(Controller):
             self.cmax,
         )
 
-    def window_cells(self, pose) -> tuple[np.ndarray, np.ndarray]:
-        """Return the active window's occupied cells: centres (K, 2), certainty (K,)."""
+    def window_cells(self, pose, window: float | None = None):
+        """Return the occupied cells within ``window`` m of the robot.
+
+        Returns
+        -------
+        points : numpy.ndarray, shape (K, 2)
+            Cell centres, odometry frame, m.
+        certainty : numpy.ndarray, shape (K,)
+        """
+        window = self.window if window is None else window
         res = self.resolution
-        j0 = max(int((pose[0] - self.window - self.origin[0]) // res), 0)
-        i0 = max(int((pose[1] - self.window - self.origin[1]) // res), 0)
-        j1 = int((pose[0] + self.window - self.origin[0]) // res) + 1
-        i1 = int((pose[1] + self.window - self.origin[1]) // res) + 1
+        j0 = max(int((pose[0] - window - self.origin[0]) // res), 0)
+        i0 = max(int((pose[1] - window - self.origin[1]) // res), 0)
+        j1 = int((pose[0] + window - self.origin[0]) // res) + 1
+        i1 = int((pose[1] + window - self.origin[1]) // res) + 1
         sub = self.grid[i0:i1, j0:j1]
         i, j = np.nonzero(sub)
         xy = np.column_stack(
@@ -373,7 +381,8 @@ class VFH(Controller):
                 self.origin[1] + (i + i0 + 0.5) * res,
             ]
         )
-        return xy, sub[i, j]
+        near = np.hypot(xy[:, 0] - pose[0], xy[:, 1] - pose[1]) < window
+        return xy[near], sub[i, j][near]
 
     def polar(self, pose, window: float | None = None) -> np.ndarray:
         """Return the smoothed polar histogram at ``pose`` from the current grid.
@@ -382,7 +391,7 @@ class VFH(Controller):
         """
         window = self.window if window is None else window
         if self.histogram_fn is not None:
-            pts, cert = self.window_cells(pose)
+            pts, cert = self.window_cells(pose, window)
             raw = np.asarray(self.histogram_fn(pts, cert, pose), dtype=float)
         else:
             _kernels.histogram_grid(
