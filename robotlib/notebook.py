@@ -167,5 +167,6 @@ def setup(
     random.seed(seed)
     np.random.seed(seed)  # noqa: NPY002 - only for students' legacy calls
     np.set_printoptions(precision=4, suppress=True)
-    warm_up(tuple(warm))
+    if not os.environ.get("ROBOTLIB_SKIP_WARM_UP"):  # set by robotlib grade's
+        warm_up(tuple(warm))  # sandboxes when their numba cache holds the kernels
     return np.random.default_rng(seed)

@@ -54,9 +54,7 @@ def cache_subpath(source_dir: Path) -> str:
 
 
 def _package_dirs() -> list[Path]:
-    import robotlib
-
-    pkg = Path(robotlib.__file__).resolve().parent
+    pkg = Path(__file__).resolve().parents[1]  # the installed robotlib package
     subs = (p for p in pkg.rglob("*") if p.is_dir() and "__pycache__" not in p.parts)
     return [pkg, *sorted(subs)]
 

@@ -140,9 +140,7 @@ def _trim(exc: BaseException, sources: dict[str, str]) -> str:
 def _no_warm_up(spec: dict) -> None:
     """Make the set-up cell's warm-ups a no-op when the cache holds the kernels."""
     if spec.get("skip_warm_up"):
-        import robotlib.notebook
-
-        robotlib.notebook.warm_up = lambda parts=(): {}
+        os.environ["ROBOTLIB_SKIP_WARM_UP"] = "1"  # read by robotlib.notebook.setup
 
 
 def _student(fin: int, fout: int) -> None:
