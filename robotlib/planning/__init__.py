@@ -1,0 +1,47 @@
+"""Navigation: configuration space, grid and sampling planners, path following.
+
+- `configuration_space` / `CSpace`: an occupancy grid inflated by the robot's
+  radius and a cost map that keeps away from walls; `inflate`, `cost_map`.
+- Grid planners returning a `Plan` (path in m, cost, nodes expanded):
+  `wavefront`, `dijkstra`, `astar`, `weighted_astar` (4- or 8-connected);
+  `cost_field`, `wavefront_field` for whole fields.
+- Sampling planners against the wall segments: `rrt`, `rrt_star`, `shortcut`.
+
+Planners never plot; `robotlib.plotting` draws what they return.
+"""
+
+from .cspace import CSpace, configuration_space, cost_map, inflate
+from .grid import (
+    Plan,
+    astar,
+    cost_field,
+    dijkstra,
+    octile,
+    path_length,
+    wavefront,
+    wavefront_field,
+    weighted_astar,
+)
+from .rrt import Tree, edge_free, path_free, rrt, rrt_star, shortcut
+
+__all__ = [
+    "CSpace",
+    "Plan",
+    "Tree",
+    "astar",
+    "configuration_space",
+    "cost_field",
+    "cost_map",
+    "dijkstra",
+    "edge_free",
+    "inflate",
+    "octile",
+    "path_free",
+    "path_length",
+    "rrt",
+    "rrt_star",
+    "shortcut",
+    "wavefront",
+    "wavefront_field",
+    "weighted_astar",
+]
