@@ -183,6 +183,30 @@ class CSpace:
             )
         return i * nx + j
 
+    def nearest_free(self, xy, max_distance: float = 0.5) -> np.ndarray | None:
+        """Return the centre of the unblocked cell nearest ``xy``, m.
+
+        None when no unblocked cell lies within ``max_distance``.
+        """
+        p = np.asarray(xy, dtype=float)[:2]
+        if self.is_free(p):
+            return self.to_metres(self.to_cell(p))
+        r = int(np.ceil(max_distance / self.resolution))
+        i0, j0 = self.to_cell(p)
+        ny, nx = self.shape
+        ia, ib = max(0, i0 - r), min(ny, i0 + r + 1)
+        ja, jb = max(0, j0 - r), min(nx, j0 + r + 1)
+        if ia >= ib or ja >= jb:
+            return None
+        window = ~self.blocked[ia:ib, ja:jb]
+        cells = np.argwhere(window) + [ia, ja]
+        if len(cells) == 0:
+            return None
+        centres = self.to_metres(cells)
+        d = np.hypot(*(centres - p).T)
+        k = int(np.argmin(d))
+        return centres[k] if d[k] <= max_distance else None
+
     def with_points(self, xy, radius: float | None = None) -> CSpace:
         """Return a copy with obstacles at points ``xy`` (P, 2), m.
 
