@@ -338,7 +338,7 @@ def navigate(
 
 
 def _plan(cs0: CSpace, hits, pose, goal) -> np.ndarray | None:
-    """A* from the estimate to the goal around the marked echoes.
+    """Plan with A* from the estimate to the goal around the marked echoes.
 
     Echoes near the robot or the goal are left out (the robot must be able
     to leave where it is); without a path around the echoes, plan on the

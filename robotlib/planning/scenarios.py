@@ -61,5 +61,5 @@ def with_boxes(world: World, boxes, name: str | None = None) -> World:
 
 
 def office_with_boxes() -> World:
-    """The office with `OFFICE_BOXES` (for the simulator, not for the map)."""
+    """Return the office with `OFFICE_BOXES` (for the simulator, not for the map)."""
     return with_boxes(load_world("office"), OFFICE_BOXES)
