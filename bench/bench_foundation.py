@@ -10,7 +10,7 @@ import time
 import numpy as np
 
 from robotlib import load_world, robot
-from robotlib.raycast import cast_rays, cast_rays_grid, grid_field
+from robotlib.sensing import cast_rays, cast_rays_grid, grid_field
 from robotlib.sim import Simulator
 from robotlib.world import World
 

@@ -16,10 +16,10 @@ COMMANDS = {
         "serve the simulator over the Pioneer protocol",
     ),
     "reproduce": (
-        "robotlib.experiment",
+        "robotlib.experiments.reproduce",
         "run the paper's MCL experiment over many seeds",
     ),
-    "bench": ("robotlib.benchmarks", "measure kernels and the MCL step"),
+    "bench": ("robotlib.experiments.benchmarks", "measure a topic against its peers"),
     "release": ("robotlib.course.release", "write labs/ from solutions/"),
     "grade": ("robotlib.course.grade", "grade a folder of submissions with nbval"),
 }

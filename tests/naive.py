@@ -43,7 +43,7 @@ def cast_ray_grid_marching(occupied, origin, resolution, pose, angle, max_range,
 
 
 def sonar_cone(sx, sy, sth, segments, n_rays, cone, max_range, specular_angle):
-    """(echo, multipath) of one sonar, as `robotlib._raycast.sonar_cone` defines it."""
+    """(echo, multipath) of one sonar, as `sensing._kernels.sonar_cone` defines it."""
     segments = np.asarray(segments, float)
     echo, multipath = np.inf, np.inf
     offsets = [0.0] if n_rays == 1 else np.linspace(-cone / 2, cone / 2, n_rays)
@@ -70,7 +70,7 @@ def sonar_cone(sx, sy, sth, segments, n_rays, cone, max_range, specular_angle):
 
 
 def sonar_scan(segments, poses, model, uniforms, normals):
-    """Readings (K, S) as `robotlib.sonar` documents them, from the same noise draws."""
+    """Readings (K, S) as `robotlib.sensing.sonar` says, from the same noise draws."""
     out = np.empty((len(poses), len(model.sensors)))
     for k, (x, y, th) in enumerate(poses):
         for i, (ox, oy, oth) in enumerate(model.sensors):

@@ -9,7 +9,7 @@ import pytest
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-from robotlib import experiment  # noqa: E402
+from robotlib import experiments as experiment  # noqa: E402
 from robotlib.cli import main  # noqa: E402
 from robotlib.localization import (  # noqa: E402
     MCL,
@@ -18,7 +18,7 @@ from robotlib.localization import (  # noqa: E402
     KLDResampling,
     localized_step,
 )
-from robotlib.plotting_mcl import (  # noqa: E402
+from robotlib.plotting.mcl import (  # noqa: E402
     plot_error,
     plot_particle_count,
     plot_trajectories,
@@ -180,7 +180,7 @@ def test_bench_mcl_cli_writes_json(tmp_path):
 
 def test_bench_numpy_beam_weights_match_the_fast_beam_model():
     """The bench's plain NumPy beam model is the library's model."""
-    from robotlib.benchmarks import _beam_norms, _numpy_weights
+    from robotlib.experiments.bench_mcl import _beam_norms, _numpy_weights
     from robotlib.localization import BeamParameters, BeamSensorModel, cone_table
     from robotlib.world import load_world
 

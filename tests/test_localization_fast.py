@@ -6,7 +6,6 @@ import numba
 import numpy as np
 import pytest
 
-from robotlib import _raycast
 from robotlib.localization import (
     MCL,
     BeamParameters,
@@ -19,7 +18,8 @@ from robotlib.localization import (
     systematic_resample,
 )
 from robotlib.localization.motion import NORMALS_CHUNK, standard_normals
-from robotlib.sonar import SonarModel
+from robotlib.sensing import SonarModel
+from robotlib.sensing import _kernels as _raycast
 from robotlib.world import load_world
 
 from . import naive_mcl as naive

@@ -23,7 +23,7 @@ from robotlib.localization import (
     stratified_resample,
     systematic_resample,
 )
-from robotlib.sonar import SonarModel, expected_ranges
+from robotlib.sensing import SonarModel, expected_ranges
 
 from . import naive_mcl as naive
 from .worlds import door_corridor

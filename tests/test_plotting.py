@@ -8,7 +8,7 @@ import pytest
 
 from robotlib import load_world
 from robotlib import plotting as rp
-from robotlib.sonar import expected_ranges
+from robotlib.sensing import expected_ranges
 
 
 @pytest.fixture

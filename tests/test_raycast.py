@@ -6,7 +6,7 @@ from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 from robotlib import load_world
-from robotlib.raycast import cast_rays, cast_rays_grid
+from robotlib.sensing import cast_rays, cast_rays_grid
 from robotlib.world import World
 
 from . import naive
@@ -112,7 +112,7 @@ def test_bad_shapes_are_rejected():
 
 
 def test_grid_field_is_the_centre_distance_transform_less_a_diagonal():
-    from robotlib.raycast import grid_field
+    from robotlib.sensing import grid_field
     from robotlib.world import Grid
 
     occ = np.random.default_rng(1).random((23, 31)) < 0.05

@@ -16,11 +16,11 @@ from robotlib import (
     robot,
     setdeltaheading,
 )
-from robotlib.geometry import wrap_angle
 from robotlib.p3dx import ROBOT_RADIUS
+from robotlib.sensing import SonarModel, expected_ranges
 from robotlib.sim import OdometryNoise, SimRobot, Simulator
-from robotlib.sonar import SonarModel, expected_ranges
 from robotlib.world import World
+from robotlib.world.geometry import wrap_angle
 
 ROOM = World(
     [[0, 0, 10, 0], [10, 0, 10, 6], [10, 6, 0, 6], [0, 6, 0, 0]], start=(3, 3, 0)

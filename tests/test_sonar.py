@@ -5,8 +5,7 @@ import pytest
 
 from robotlib import load_world
 from robotlib.p3dx import SONAR_POSES
-from robotlib.raycast import cast_rays
-from robotlib.sonar import SonarModel, expected_ranges, simulate_ranges
+from robotlib.sensing import SonarModel, cast_rays, expected_ranges, simulate_ranges
 from robotlib.world import World
 
 from . import naive
@@ -22,7 +21,7 @@ def test_noisy_scan_matches_numpy_reference(name):
     rng = np.random.default_rng(2)
     uniforms = rng.random((30, 8, 2))
     normals = rng.standard_normal((30, 8))
-    from robotlib.sonar import _scan
+    from robotlib.sensing.sonar import _scan
 
     fast = _scan(world, poses, model, uniforms, normals)
     ref = naive.sonar_scan(world.obstacles, poses, model, uniforms, normals)

@@ -6,9 +6,10 @@ import numpy as np
 import pytest
 
 import robotlib
-from robotlib import widgets
-from robotlib.experiment import drive_route
+from robotlib.experiments import drive_route
 from robotlib.localization import MCL
+from robotlib.widgets import mcl as widgets
+from robotlib.widgets import teleop as teleop_widgets
 from robotlib.world import load_world, world_names
 
 
@@ -115,19 +116,19 @@ def test_mcl_panel_presets_and_worlds(route):
 def test_teleop_moves_the_robot():
     r = robotlib.robot("sim:corridor", seed=0)
     start = r.pose()
-    pose, sonar = widgets.teleop(r, "forward", 0.5)
+    pose, sonar = teleop_widgets.teleop(r, "forward", 0.5)
     assert abs(np.hypot(*(pose[:2] - start[:2])) - 0.5) < 0.05
     assert sonar.shape == (8,)
-    pose, _ = widgets.teleop(r, "left", angle=np.pi / 2)
+    pose, _ = teleop_widgets.teleop(r, "left", angle=np.pi / 2)
     assert abs(pose[2] - np.pi / 2) < np.radians(4)
     with pytest.raises(ValueError):
-        widgets.teleop(r, "jump")
+        teleop_widgets.teleop(r, "jump")
     r.disconnect()
 
 
 def test_teleop_panel_buttons():
     r = robotlib.robot("sim:corridor", seed=0)
-    panel = widgets.TeleopPanel(r, distance=1.0)
+    panel = teleop_widgets.TeleopPanel(r, distance=1.0)
     x0 = panel.pose[0]
     panel.buttons["forward"].click()
     assert panel.log == ["forward"]

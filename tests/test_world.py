@@ -1,4 +1,4 @@
-"""Tests of robotlib.world (World, grids, free space) and robotlib.geometry,
+"""Tests of robotlib.world (World, grids, free space) and robotlib.world.geometry,
 and of the worlds shipped in worlds/."""
 
 import math
@@ -8,8 +8,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from robotlib.geometry import compose, relative, wrap_angle
 from robotlib.world import World, load_world, world_names
+from robotlib.world.geometry import compose, relative, wrap_angle
 
 RES = 0.1  # coarse grids keep these tests fast
 
@@ -448,7 +448,7 @@ def _drive_east_mismatch(w, steps):
     count ``k`` (1..steps), the smallest summed mean |dz| (m) of the first
     ``k`` scans over all those other drives.
     """
-    from robotlib.sonar import expected_ranges
+    from robotlib.sensing import expected_ranges
 
     x0, y0, _ = w.start
     k = np.arange(steps) * 0.5

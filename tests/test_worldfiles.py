@@ -1,4 +1,4 @@
-"""Tests of robotlib.worldfiles: .wld and .map parsing, writing, errors."""
+"""Tests of robotlib.world's .wld and .map files: parsing, writing, errors."""
 
 import math
 
@@ -7,8 +7,8 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from robotlib.world import World
-from robotlib.worldfiles import (
+from robotlib.world import (
+    World,
     WorldFileError,
     format_map,
     format_wld,

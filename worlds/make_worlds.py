@@ -41,8 +41,7 @@ import math
 import random
 from pathlib import Path
 
-from robotlib.world import World
-from robotlib.worldfiles import write_wld
+from robotlib.world import World, write_wld
 
 HERE = Path(__file__).resolve().parent
 

@@ -15,8 +15,8 @@ import numba as nb
 import numpy as np
 
 from .._config import JIT, JIT_PARALLEL
-from .._geometry import point_segment_distance
-from .._raycast import cone_echo, cone_walls, sonar_cone
+from ..sensing._kernels import cone_echo, cone_walls, sonar_cone
+from ..world._kernels import point_segment_distance
 
 _TWO_PI = 2.0 * math.pi
 _LOG_SQRT_2PI = 0.5 * math.log(2.0 * math.pi)
@@ -65,8 +65,8 @@ def sample_odometry_parallel(particles, rot1, trans, rot2, sd1, sdt, sd2, normal
         _odometry_one(j, particles, rot1, trans, rot2, sd1, sdt, sd2, normals, out)
 
 
-# Expected readings by cone casts (the exact path) are `robotlib._raycast`'s
-# `expected_scan` and `expected_scan_parallel`, shared with `robotlib.sonar`.
+# Expected readings by cone casts (the exact path) are `robotlib.sensing._kernels`'s
+# `expected_scan` and `expected_scan_parallel`, shared with `robotlib.sensing.sonar`.
 
 
 # -- expected sonar readings: fast (cone table lookup) -----------------------
@@ -1273,7 +1273,7 @@ def systematic_gather(particles, weights, u, out):
 # -- expected sonar readings: exact, against the walls near each sensor ---------------
 
 _CULL_MARGIN = 1e-6
-"""Widening of each cone for `robotlib._raycast.cone_walls`, rad."""
+"""Widening of each cone for `robotlib.sensing._kernels.cone_walls`, rad."""
 
 
 @nb.njit(**JIT)
@@ -1315,12 +1315,12 @@ def expected_scan_blocks(
     poses, sensors, segments, start, block_segs, grid, n_rays, cone, max_range,
     min_range, cos_specular, out,
 ):  # fmt: skip
-    """`robotlib._raycast.expected_scan` with each cone cast against nearby walls.
+    """`expected_scan` (of `robotlib.sensing._kernels`), each cone against nearby walls.
 
     ``grid`` ``(x0, y0, 1 / side, nbx, nby)`` cuts the plane into square
     blocks; the walls a sensor in block ``b`` may reach within ``max_range``
     are ``block_segs[start[b]:start[b + 1]]`` (`wall_blocks`), and of those
-    the ones in its cone (`robotlib._raycast.cone_walls`). A sensor outside
+    the ones in its cone (`robotlib.sensing._kernels.cone_walls`). A sensor outside
     the blocks tests all ``segments``. The same readings as `expected_scan`.
     """
     near = np.empty_like(segments)
@@ -1350,7 +1350,7 @@ def wall_blocks(segments, bounds, max_range, side=1.0):
 
     A wall is listed for a block when its bounding box, grown by
     ``max_range`` (and 1e-6 m), overlaps the block: then and only then can a
-    sensor in the block pass `robotlib._raycast.cone_walls`'s range test for
+    sensor in the block pass `robotlib.sensing._kernels.cone_walls`'s range test for
     it. Walls keep their order.
 
     Returns

@@ -19,7 +19,7 @@ from statistics import NormalDist
 
 import numpy as np
 
-from ..geometry import as_rng
+from .._random import as_rng
 from . import _kernels
 from .resampling import _weights
 

@@ -24,7 +24,7 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
-from ..geometry import as_rng
+from .._random import as_rng
 from . import _kernels
 
 __all__ = ["odometry_increment", "sample_motion_odometry", "OdometryMotionModel"]

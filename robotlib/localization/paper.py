@@ -22,8 +22,8 @@ import math
 
 import numpy as np
 
-from ..geometry import as_rng
-from ..sonar import SonarModel
+from .._random import as_rng
+from ..sensing import SonarModel
 from ..world import World
 from . import _kernels
 from .motion import _particles, sample_motion_odometry

@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..geometry import as_rng
+from .._random import as_rng
 from . import _kernels
 
 __all__ = [

@@ -6,9 +6,9 @@ that compare against expected readings (the paper's and the beam model)
 compute them in one of two ways:
 
 - exact (``fast=False``): every particle casts its sonar cones against the
-  walls as `robotlib._raycast.sonar_cone` does, the simulator's own model
+  walls as `robotlib.sensing._kernels.sonar_cone` does, the simulator's own model
   (the same numbers; each cone is cast only against the walls it may reach,
-  see `robotlib._raycast.cone_walls`);
+  see `robotlib.sensing._kernels.cone_walls`);
 - fast (``fast=True``): a `ConeTable` precomputed once per world holds, per
   grid cell and per direction bin, the cone range from the cell's centre, in
   millimetres; a particle's reading is looked up at its sensor's cell and
@@ -28,7 +28,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..sonar import SonarModel
+from ..sensing import SonarModel
 from ..world import World
 from . import _kernels
 from .motion import PARALLEL_MIN, _particles

@@ -15,9 +15,9 @@ import time
 
 import numpy as np
 
-from ..geometry import wrap_angle
 from ..p3dx import CYCLE, SONAR_MAX_RANGE
 from ..robot import Robot, RobotState, RobotTimeout
+from ..world.geometry import wrap_angle
 from .commands import SYNC0, SYNC1, SYNC2, Command, command, encode_si
 from .packets import Packet, PacketDecoder, PacketError
 from .sip import (

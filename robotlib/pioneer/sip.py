@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..geometry import wrap_angle
+from ..world.geometry import wrap_angle
 from .packets import PacketError, Reader, frame
 
 __all__ = [

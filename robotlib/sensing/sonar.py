@@ -18,9 +18,9 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from . import _raycast
-from .geometry import as_rng
-from .p3dx import SONAR_CONE, SONAR_MAX_RANGE, SONAR_MIN_RANGE, SONAR_POSES
+from .._random import as_rng
+from ..p3dx import SONAR_CONE, SONAR_MAX_RANGE, SONAR_MIN_RANGE, SONAR_POSES
+from . import _kernels
 from .raycast import _poses, _segments
 
 __all__ = ["SonarModel", "expected_ranges", "simulate_ranges"]
@@ -99,7 +99,7 @@ def _scan(walls, poses, model, uniforms, normals):
     p = _poses(poses)
     seg = _segments(walls)
     out = np.empty((len(p), len(model.sensors)))
-    kernel = _raycast.sonar_scan_parallel if len(p) > 64 else _raycast.sonar_scan
+    kernel = _kernels.sonar_scan_parallel if len(p) > 64 else _kernels.sonar_scan
     kernel(
         p,
         model.sensors,
@@ -142,7 +142,7 @@ def expected_ranges(walls, poses, model: SonarModel | None = None) -> np.ndarray
     model = SonarModel() if model is None else model
     p = _poses(poses)
     out = np.empty((len(p), len(model.sensors)))
-    kernel = _raycast.expected_scan_parallel if len(p) > 64 else _raycast.expected_scan
+    kernel = _kernels.expected_scan_parallel if len(p) > 64 else _kernels.expected_scan
     kernel(
         p,
         model.sensors,

@@ -1,4 +1,7 @@
-"""Small geometric helpers shared across robotlib (SI units: metres, radians)."""
+"""Small geometric helpers shared across robotlib (SI units: metres, radians).
+
+Pure Python and NumPy; imports nothing of robotlib.
+"""
 
 from __future__ import annotations
 
@@ -6,7 +9,7 @@ import math
 
 import numpy as np
 
-__all__ = ["wrap_angle", "as_rng", "compose", "relative"]
+__all__ = ["wrap_angle", "compose", "relative"]
 
 
 def wrap_angle(theta):
@@ -27,24 +30,6 @@ def wrap_angle(theta):
         return math.pi if w == -math.pi else w
     w = np.remainder(np.asarray(theta, dtype=float) + np.pi, 2.0 * np.pi) - np.pi
     return np.where(w <= -np.pi, w + 2.0 * np.pi, w)
-
-
-def as_rng(rng: np.random.Generator | int | None) -> np.random.Generator:
-    """Return a NumPy ``Generator`` from a generator, a seed or ``None``.
-
-    Parameters
-    ----------
-    rng : numpy.random.Generator, int or None
-        An existing generator (returned as is), a seed, or ``None`` for fresh
-        OS entropy.
-
-    Returns
-    -------
-    numpy.random.Generator
-    """
-    if isinstance(rng, np.random.Generator):
-        return rng
-    return np.random.default_rng(rng)
 
 
 def compose(pose, delta):

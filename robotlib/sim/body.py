@@ -1,26 +1,22 @@
-"""A deterministic Pioneer 3-DX simulator stepped on simulated time.
+"""One simulated Pioneer 3-DX: its motion commands, odometry error, collisions, sonar.
 
-`Simulator` holds a world and any number of robots (`SimBody`) and advances
-them together, one 100 ms cycle per `Simulator.step`, as a Pioneer's
-controller does. Each body keeps its true pose and its odometry pose apart:
-the odometry integrates what the wheels did, the truth adds slip drawn from an
+`SimBody` keeps its true pose and its odometry pose apart: the odometry
+integrates what the wheels did, the truth adds slip drawn from an
 `OdometryNoise` model. Walls (and other robots) stop a body and set its stall
-flag. Sonar readings come from `robotlib.sonar`'s cone model at the true pose.
-
-`SimRobot` wraps a body as a `robotlib.robot.Robot`, so the paper's API runs
-on it; each poll is one simulated cycle.
+flag. Sonar readings come from `robotlib.sensing`'s cone model at the true
+pose. Imports the world, sensing and the robot's state record; never a
+backend or anything above the simulator.
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from . import _geometry, _raycast
-from .geometry import as_rng, wrap_angle
-from .p3dx import (
+from ..p3dx import (
     AXLE_TRACK,
     CYCLE,
     DEFAULT_ACCELERATION,
@@ -34,11 +30,16 @@ from .p3dx import (
     ROBOT_RADIUS,
     ROBOT_WIDTH,
 )
-from .robot import Robot, RobotState
-from .sonar import SonarModel
-from .world import World, load_world
+from ..robot import RobotState
+from ..sensing import _kernels as _sensing_kernels
+from ..world import _kernels as _world_kernels
+from ..world.geometry import wrap_angle
 
-__all__ = ["OdometryNoise", "Simulator", "SimBody", "SimRobot"]
+if TYPE_CHECKING:
+    from .simulator import Simulator
+
+__all__ = ["OdometryNoise", "SimBody", "footprint_segments"]
+
 
 _STOPPED_V = 0.004
 _STOPPED_W = math.radians(1.0)
@@ -98,7 +99,7 @@ def _approach(remaining: float, vmax: float, decel: float) -> float:
     return math.copysign(speed, remaining)
 
 
-def _footprint_segments(pose: np.ndarray) -> np.ndarray:
+def footprint_segments(pose: np.ndarray) -> np.ndarray:
     """Return the robot's rectangular outline as four segments (4, 4), m."""
     c, s = math.cos(pose[2]), math.sin(pose[2])
     hw = ROBOT_WIDTH / 2
@@ -287,7 +288,7 @@ class SimBody:
         self._w = w
 
     def _clear(self, pose: np.ndarray, obstacles, others) -> bool:
-        if _geometry.nearest_distance(pose[0], pose[1], obstacles) <= ROBOT_RADIUS:
+        if _world_kernels.nearest_distance(pose[0], pose[1], obstacles) <= ROBOT_RADIUS:
             return False
         return all(math.hypot(*(pose[:2] - o[:2])) > 2 * ROBOT_RADIUS for o in others)
 
@@ -317,7 +318,7 @@ class SimBody:
         if not self._sonar_on:
             return
         out = np.empty((1, n))
-        _raycast.sonar_scan(
+        _sensing_kernels.sonar_scan(
             self.true_pose[None, :],
             model.sensors,
             obstacles,
@@ -334,117 +335,3 @@ class SimBody:
             out,
         )
         self._sonar = out[0]
-
-
-class Simulator:
-    """Robots in a world, stepped together on simulated time.
-
-    Parameters
-    ----------
-    world : World
-        The world the robots live in.
-    seed : numpy.random.Generator, int or None
-        Randomness for odometry slip and sonar noise; each robot gets its own
-        stream spawned from it, so a seed reproduces every run bit for bit.
-    sonar : SonarModel, optional
-        The robots' sonar ring and its noise (default: a Pioneer 3-DX's).
-    odometry : OdometryNoise, optional
-        The odometry error model.
-    """
-
-    def __init__(
-        self,
-        world: World,
-        seed: np.random.Generator | int | None = None,
-        sonar: SonarModel | None = None,
-        odometry: OdometryNoise | None = None,
-    ):
-        self.world = world
-        self.sonar = SonarModel() if sonar is None else sonar
-        self.odometry = OdometryNoise() if odometry is None else odometry
-        self._rng = as_rng(seed)
-        self.bodies: list[SimBody] = []
-        self.time = 0.0
-
-    def add_robot(self, pose=None) -> SimBody:
-        """Add a robot at ``pose`` (m, rad; default: the world's start pose).
-
-        Raises
-        ------
-        ValueError
-            If the robot would overlap a wall or another robot.
-        """
-        pose = np.array(self.world.start if pose is None else pose, dtype=float)
-        if pose.shape != (3,):
-            raise ValueError(f"pose must be (x, y, theta), got shape {pose.shape}")
-        pose[2] = wrap_angle(pose[2])
-        body = SimBody(self, pose, self._rng.spawn(1)[0])
-        others = [b.true_pose for b in self.bodies]
-        if not body._clear(pose, self.world.obstacles, others):
-            raise ValueError(f"a robot at {tuple(pose)} would overlap a wall or robot")
-        self.bodies.append(body)
-        return body
-
-    def _obstacles_for(self, body: SimBody) -> np.ndarray:
-        """World obstacles plus the outlines of every other robot."""
-        others = [
-            _footprint_segments(b.true_pose) for b in self.bodies if b is not body
-        ]
-        if not others:
-            return self.world.obstacles
-        return np.ascontiguousarray(np.concatenate([self.world.obstacles, *others]))
-
-    def step(self) -> None:
-        """Advance every robot by one cycle (`robotlib.p3dx.CYCLE`, 100 ms)."""
-        for body in self.bodies:
-            others = [b.true_pose for b in self.bodies if b is not body]
-            body._advance(self.world.obstacles, others)
-        for body in self.bodies:
-            body._sense(self._obstacles_for(body))
-        self.time += CYCLE
-
-    def reset(self) -> None:
-        """Put every robot back at its initial pose, stopped, odometry reset."""
-        for body in self.bodies:
-            body._reset()
-        self.time = 0.0
-
-
-class SimRobot(Robot):
-    """The in-process simulator behind the `robotlib.robot.Robot` interface.
-
-    Each poll advances the whole simulator by one cycle.
-
-    Parameters
-    ----------
-    sim : Simulator
-        The simulator.
-    body : SimBody, optional
-        The body to drive; default: a new one at the world's start pose.
-    """
-
-    def __init__(self, sim: Simulator, body: SimBody | None = None):
-        super().__init__()
-        self.simulator = sim
-        self.body = sim.add_robot() if body is None else body
-        self._state = self.body.state
-
-    @classmethod
-    def from_address(cls, address: str, seed=None, **options) -> SimRobot:
-        """Open ``"sim:NAME_OR_PATH"``; ``options`` go to `Simulator`."""
-        where = address.split(":", 1)[1] or "corridor"
-        return cls(Simulator(load_world(where), seed=seed, **options))
-
-    def true_pose(self) -> np.ndarray:
-        """Return the true pose ``(x, y, theta)`` (for evaluation only)."""
-        return self.body.true_pose.copy()
-
-    def _send(self, command: str, value=None) -> None:
-        self.body.command(command, value)
-
-    def _update(self) -> RobotState:
-        self.simulator.step()
-        return self.body.state
-
-    def _close(self) -> None:
-        self.body.command("STOP")

@@ -1,94 +1,31 @@
-"""Worlds: wall segments in metres, bounds, a start pose, and maps made from them.
+"""`World`: wall segments in metres, bounds, a start pose, and the grids made from them.
 
-A `World` is immutable. Read one from a file with `load_world` (a short name
-such as ``"corridor"`` or a path to a ``.wld`` or ``.map`` file), or build one
-from segments. Grids (occupancy, distance field, admissible free space) are
-computed on demand and cached per resolution.
+A `World` is immutable. Build one from segments, or read one with
+`robotlib.world.load_world`. Grids (occupancy, distance field, admissible free
+space) are computed on demand and cached per resolution. Imports only the
+robot's constants and the world's own kernels; never a file reader (those
+import this module).
 """
 
 from __future__ import annotations
 
-import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-from . import _geometry
-from .geometry import as_rng
-from .p3dx import ROBOT_RADIUS
+from .._random import as_rng
+from ..p3dx import ROBOT_RADIUS
+from . import _kernels
+from .grid import Grid
 
-__all__ = ["World", "Grid", "WORLDS_DIR", "load_world", "world_names"]
+__all__ = ["World", "POINT_SIZE"]
 
-
-def _worlds_dir() -> Path:
-    """Return the folder of the shipped worlds.
-
-    The repository's ``worlds/`` (a checkout or an editable install), else
-    where a regular install put them (``share/robotlib/worlds``).
-    """
-    repo = Path(__file__).resolve().parent.parent / "worlds"
-    installed = Path(sys.prefix) / "share" / "robotlib" / "worlds"
-    return repo if repo.is_dir() or not installed.is_dir() else installed
-
-
-WORLDS_DIR = _worlds_dir()
-"""The folder of the shipped worlds (short names are looked up here)."""
 
 POINT_SIZE = 0.02
 """Side of the small cross that stands for one map DATA point, m."""
 
 _MAX_REDRAWS = 20
-
-
-@dataclass(frozen=True)
-class Grid:
-    """A regular grid over the plane.
-
-    Attributes
-    ----------
-    data : numpy.ndarray, shape (ny, nx)
-        Cell values; row ``i`` is ``y``, column ``j`` is ``x``.
-    origin : tuple of float
-        ``(x0, y0)``: world coordinates of the lower-left corner of cell
-        ``[0, 0]``, m.
-    resolution : float
-        Side of a cell, m.
-    """
-
-    data: np.ndarray
-    origin: tuple[float, float]
-    resolution: float
-
-    @property
-    def shape(self) -> tuple[int, int]:
-        """Grid shape ``(ny, nx)``."""
-        return self.data.shape
-
-    @property
-    def extent(self) -> tuple[float, float, float, float]:
-        """``(xmin, xmax, ymin, ymax)`` in m, as matplotlib's ``imshow`` wants."""
-        ny, nx = self.data.shape
-        x0, y0 = self.origin
-        return (x0, x0 + nx * self.resolution, y0, y0 + ny * self.resolution)
-
-    def cell_of(self, xy) -> tuple[np.ndarray, np.ndarray]:
-        """Return ``(i, j)`` cell indices of points ``xy`` (shape (..., 2), m).
-
-        Indices may fall outside the grid; check them against `shape`.
-        """
-        xy = np.asarray(xy, dtype=float)
-        j = np.floor((xy[..., 0] - self.origin[0]) / self.resolution).astype(np.int64)
-        i = np.floor((xy[..., 1] - self.origin[1]) / self.resolution).astype(np.int64)
-        return i, j
-
-    def centres(self) -> np.ndarray:
-        """Return the centres of all cells, shape (ny, nx, 2), m."""
-        ny, nx = self.data.shape
-        xs = self.origin[0] + (np.arange(nx) + 0.5) * self.resolution
-        ys = self.origin[1] + (np.arange(ny) + 0.5) * self.resolution
-        gx, gy = np.meshgrid(xs, ys)
-        return np.stack([gx, gy], axis=-1)
 
 
 @dataclass(frozen=True, eq=False)
@@ -207,7 +144,7 @@ class World:
         xy = np.asarray(xy, dtype=float)
         flat = np.ascontiguousarray(xy.reshape(-1, 2))
         out = np.empty(len(flat))
-        _geometry.min_distance_to_segments(flat, self.obstacles, out)
+        _kernels.min_distance_to_segments(flat, self.obstacles, out)
         return out.reshape(xy.shape[:-1])
 
     def is_free(self, xy, radius: float = ROBOT_RADIUS) -> np.ndarray:
@@ -261,7 +198,7 @@ class World:
         if key not in self._cache:
             shape, origin = self._empty_grid(resolution)
             occ = np.zeros(shape, dtype=np.bool_)
-            _geometry.rasterise_segments(
+            _kernels.rasterise_segments(
                 self.obstacles, origin[0], origin[1], float(resolution), occ
             )
             occ.setflags(write=False)
@@ -377,47 +314,5 @@ class World:
 def _flood_fill(free: np.ndarray, i0: int, j0: int) -> np.ndarray:
     """Cells of ``free`` 4-connected to ``(i0, j0)``."""
     out = np.zeros_like(free)
-    _geometry.flood_fill(free, i0, j0, out)
+    _kernels.flood_fill(free, i0, j0, out)
     return out
-
-
-def world_names() -> list[str]:
-    """Short names of the worlds shipped in `WORLDS_DIR`."""
-    names = {p.stem for p in WORLDS_DIR.glob("*.wld")}
-    names |= {p.stem for p in WORLDS_DIR.glob("*.map")}
-    return sorted(names)
-
-
-def load_world(name_or_path: str | Path) -> World:
-    """Load a world by short name (``"corridor"``) or from a file path.
-
-    Parameters
-    ----------
-    name_or_path : str or pathlib.Path
-        A name from `world_names`, or a path to a ``.wld`` or ``.map`` file.
-
-    Returns
-    -------
-    World
-
-    Raises
-    ------
-    FileNotFoundError
-        If neither a shipped world nor a file of that name exists.
-    robotlib.worldfiles.WorldFileError
-        If the file is malformed.
-    """
-    from .worldfiles import read_world
-
-    path = Path(name_or_path)
-    if not path.exists() and path.suffix == "" and path.parent == Path("."):
-        for ext in (".wld", ".map"):
-            if (WORLDS_DIR / f"{path.name}{ext}").exists():
-                path = WORLDS_DIR / f"{path.name}{ext}"
-                break
-        else:
-            raise FileNotFoundError(
-                f"no world named {str(name_or_path)!r}; "
-                f"shipped worlds: {', '.join(world_names())}"
-            )
-    return read_world(path)

@@ -1,16 +1,14 @@
-"""Notebook panels: Monte Carlo localization and teleoperation.
+"""Notebook panels for Monte Carlo localization (Lab 3).
 
 Each panel is a thin wrapper over plain, tested functions:
 
 - `mcl_filter` builds a filter from the panel's choices (or a preset of
   them, `PRESETS`: the paper's filter, or the configuration of `MCL.best`),
-  `run_mcl` runs it over a logged route (`robotlib.experiment.drive_route`)
+  `run_mcl` runs it over a logged route (`robotlib.experiments.drive_route`)
   and returns its `History`, `plot_mcl_run` draws the paper's Figs. 2-4 from
   that history; `MCLPanel` adds sliders for lambda and the particle count
   (``continuous_update=False``: a run starts when a slider is released),
   choices of sensor model, resampler, preset and world.
-- `teleop` moves a robot one step and reads its sonar; `TeleopPanel` adds
-  buttons and a map.
 
 Panels run headless (their callbacks are plain methods), so tests set their
 values programmatically and read the results.
@@ -18,12 +16,9 @@ values programmatically and read the results.
 
 from __future__ import annotations
 
-import math
-
 import matplotlib.pyplot as plt
-import numpy as np
 
-from .localization import (
+from ..localization import (
     BEST,
     MCL,
     AugmentedInjection,
@@ -36,8 +31,8 @@ from .localization import (
     PaperSensorModel,
     ThresholdResampling,
 )
-from .localization.paper import RESIZE_FLOOR
-from .plotting import plot_robot, plot_sonar, plot_trajectory, plot_world
+from ..localization.paper import RESIZE_FLOOR
+from ..plotting import plot_trajectory, plot_world
 
 __all__ = [
     "SENSORS",
@@ -47,8 +42,6 @@ __all__ = [
     "run_mcl",
     "plot_mcl_run",
     "MCLPanel",
-    "teleop",
-    "TeleopPanel",
 ]
 
 SENSORS = ("paper", "beam", "beam (tempered)", "likelihood field")
@@ -191,7 +184,7 @@ def run_mcl(
 
     Parameters
     ----------
-    route : robotlib.experiment.RouteLog
+    route : robotlib.experiments.RouteLog
         Odometry, sonar and truth per step.
     n_steps : int, optional
         Use only the first steps.
@@ -270,9 +263,9 @@ class MCLPanel:
 
     Parameters
     ----------
-    route : robotlib.experiment.RouteLog
+    route : robotlib.experiments.RouteLog
         The logged drive to localize on. Choosing another world drives the
-        robot there (`robotlib.experiment.drive_route`, with this route's
+        robot there (`robotlib.experiments.drive_route`, with this route's
         seed and length) and localizes on that route instead.
     n_steps : int, optional
         Steps to run (default: the whole route).
@@ -298,7 +291,7 @@ class MCLPanel:
     def __init__(self, route, n_steps=None, seed=0, **initial):
         import ipywidgets as w
 
-        from .world import world_names
+        from ..world import world_names
 
         unknown = set(initial) - {*_DEFAULTS, "tracking", "preset"}
         if unknown:
@@ -365,8 +358,8 @@ class MCLPanel:
         """The route of the chosen world (driven on first use)."""
         name = self.world.value
         if name not in self._routes:
-            from .experiment import drive_route
-            from .world import load_world
+            from ..experiments import drive_route
+            from ..world import load_world
 
             self._routes[name] = drive_route(
                 load_world(name), seed=self._route_seed, n_steps=self._route_len
@@ -430,126 +423,6 @@ class MCLPanel:
         with self.output:
             display(self.figure)
         return self.history
-
-    def _ipython_display_(self):
-        from IPython.display import display
-
-        display(self.widget)
-
-
-def teleop(r, command: str, distance: float = 0.5, angle: float = math.pi / 4):
-    """Move a robot one step and read its sonar.
-
-    Parameters
-    ----------
-    r : robotlib.Robot
-        The robot.
-    command : str
-        ``"forward"``, ``"back"``, ``"left"``, ``"right"`` or ``"stop"``.
-    distance : float
-        Length of a forward or backward step, m.
-    angle : float
-        Angle of a turn, rad.
-
-    Returns
-    -------
-    pose : numpy.ndarray, shape (3,)
-        Odometry pose after the step, m and rad.
-    sonar : numpy.ndarray, shape (8,)
-        Sonar ranges after the step, m.
-    """
-    if command == "forward":
-        r.move(distance)
-        r.wait_move_done()
-    elif command == "back":
-        r.move(-distance)
-        r.wait_move_done()
-    elif command in ("left", "right"):
-        r.setdeltaheading(angle if command == "left" else -angle)
-        r.wait_heading_done()
-    elif command == "stop":
-        r.stop()
-    else:
-        raise ValueError(f"unknown command {command!r}")
-    return r.pose(), r.readsonar()
-
-
-class TeleopPanel:
-    """Buttons that drive a robot step by step, with a map of its surroundings.
-
-    Parameters
-    ----------
-    r : robotlib.Robot
-        The robot; a simulated one (``robot("sim:...")``) also shows its
-        world and true pose.
-
-    Attributes
-    ----------
-    pose, sonar : numpy.ndarray
-        After the last command.
-    log : list of str
-        The commands sent.
-    """
-
-    COMMANDS = ("forward", "back", "left", "right", "stop")
-
-    def __init__(self, r, distance: float = 0.5, angle_deg: float = 45.0):
-        import ipywidgets as w
-
-        self.robot = r
-        self.log: list[str] = []
-        self.distance = w.FloatSlider(
-            value=distance, min=0.1, max=2.0, step=0.1, description="step [m]",
-            continuous_update=False,
-        )  # fmt: skip
-        self.angle = w.FloatSlider(
-            value=angle_deg, min=5.0, max=180.0, step=5.0, description="turn [deg]",
-            continuous_update=False,
-        )  # fmt: skip
-        self.buttons = {c: w.Button(description=c) for c in self.COMMANDS}
-        for c, b in self.buttons.items():
-            b.on_click(lambda _b, c=c: self.send(c))
-        self.output = w.Output()
-        self.widget = w.VBox(
-            [
-                w.HBox(list(self.buttons.values())),
-                w.HBox([self.distance, self.angle]),
-                self.output,
-            ]
-        )
-        self.figure = plt.figure(figsize=(7, 3))
-        plt.close(self.figure)
-        self.pose, self.sonar = r.pose(), r.readsonar()
-        self.draw()
-
-    def send(self, command: str):
-        """Run one command (what a button does); return ``(pose, sonar)``."""
-        self.pose, self.sonar = teleop(
-            self.robot, command, self.distance.value, math.radians(self.angle.value)
-        )
-        self.log.append(command)
-        self.draw()
-        return self.pose, self.sonar
-
-    def draw(self) -> None:
-        """Redraw the map, the robot and its sonar."""
-        from IPython.display import display
-
-        self.figure.clear()
-        ax = self.figure.add_subplot()
-        true_pose = getattr(self.robot, "true_pose", None)
-        shown = np.asarray(true_pose() if true_pose else self.pose)
-        sim = getattr(self.robot, "simulator", None)
-        if sim is not None:
-            plot_world(ax, sim.world)
-        plot_sonar(ax, shown, self.sonar)
-        plot_robot(ax, shown)
-        ax.set_xlim(shown[0] - 6, shown[0] + 6)
-        ax.set_ylim(shown[1] - 3, shown[1] + 3)
-        ax.set_title(f"odometry ({self.pose[0]:.2f}, {self.pose[1]:.2f}) m")
-        self.output.clear_output(wait=True)
-        with self.output:
-            display(self.figure)
 
     def _ipython_display_(self):
         from IPython.display import display

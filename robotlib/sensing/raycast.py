@@ -7,8 +7,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import _raycast
-from .world import Grid, World
+from ..world import Grid, World
+from . import _kernels
 
 __all__ = ["cast_rays", "cast_rays_grid", "grid_field"]
 
@@ -52,7 +52,7 @@ def cast_rays(walls, poses, angles, max_range: float = 5.0) -> np.ndarray:
     p = _poses(poses)
     a = np.ascontiguousarray(np.atleast_1d(np.asarray(angles, dtype=np.float64)))
     out = np.empty((len(p), len(a)))
-    _raycast.cast_segments(p, a, float(max_range), _segments(walls), out)
+    _kernels.cast_segments(p, a, float(max_range), _segments(walls), out)
     return out
 
 
@@ -75,7 +75,7 @@ def grid_field(grid: Grid) -> np.ndarray:
     """
     occ = np.ascontiguousarray(grid.data, dtype=np.bool_)
     out = np.empty((occ.shape[0] + 2, occ.shape[1] + 2), dtype=np.float32)
-    _raycast.clearance_field(occ, out)
+    _kernels.clearance_field(occ, out)
     return out
 
 
@@ -112,7 +112,7 @@ def cast_rays_grid(
         raise ValueError(f"field has shape {field.shape}, grid {grid.shape}")
     out = np.empty((len(p), len(a)))
     x0, y0 = grid.origin
-    _raycast.cast_grid(
+    _kernels.cast_grid(
         p,
         a,
         float(max_range),

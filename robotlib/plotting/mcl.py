@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .localization.history import History, localized_step
+from ..localization.history import History, localized_step
 
 __all__ = ["plot_trajectories", "plot_error", "plot_particle_count"]
 
@@ -34,7 +34,7 @@ def plot_trajectories(ax, history: History, world=None, **kw):
     """
     a = history.arrays()
     if world is not None:
-        from .plotting import plot_world
+        from .world import plot_world
 
         plot_world(ax, world)
     t, e = a["true_pose"], a["estimate"]

@@ -1,4 +1,4 @@
-"""``robotlib bench WHAT``: timings of robotlib's hot paths.
+"""``robotlib bench mcl``: timings of the MCL step, the cone table and a cold start.
 
 ``robotlib bench mcl [--json FILE]`` times one MCL step (predict, weight,
 estimate, systematic resampling) per particle count for the fast path (cone
@@ -33,12 +33,12 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["add_arguments", "run", "bench_mcl", "BENCHES"]
+__all__ = ["add_arguments", "run", "bench_mcl", "bench_table", "bench_first_step"]
 
 
 def _beam_norms(params, max_range: float, n: int):
     """Return the beam model's hit and short factors for ranges 0..n-1 mm."""
-    from .localization._kernels import beam_norms
+    from ..localization._kernels import beam_norms
 
     p = params
     return beam_norms(max_range, p.z_hit, p.z_short, p.sigma_hit, p.lambda_short, n)
@@ -73,7 +73,7 @@ def _numpy_step(state, odo_prev, odo_now, z, rng):
     ``beam`` None for the paper's innovation weights, else ``(params,
     max_range, hit, short)`` for the (tempered) beam model.
     """
-    from .localization.motion import _noise_std, odometry_increment
+    from ..localization.motion import _noise_std, odometry_increment
 
     p, table, sensors, origin, inv_res, beam = state
     rot1, trans, rot2 = odometry_increment(odo_prev, odo_now)
@@ -148,7 +148,7 @@ def bench_mcl(
         ``{"path", "model", "n", "ms_per_step", "ms_min"}`` (median and
         fastest step).
     """
-    from .localization import (
+    from ..localization import (
         MCL,
         BeamParameters,
         BeamSensorModel,
@@ -157,7 +157,7 @@ def bench_mcl(
         cone_table,
         expected_readings,
     )
-    from .world import load_world
+    from ..world import load_world
 
     world = load_world(world_name)
     z = expected_readings(world, np.array([world.start]))[0]
@@ -234,7 +234,7 @@ def square_world(side: float = 20.0, room: float = 4.0, door: float = 1.0):
 
     The size the table-build target is stated for (20 m x 20 m at 5 cm).
     """
-    from .world import World
+    from ..world import World
 
     segs = [
         (0, 0, side, 0),
@@ -261,8 +261,8 @@ def bench_table(world_name: str) -> dict:
 
     ``world_name`` ``"square"`` is `square_world` (20 m x 20 m).
     """
-    from .localization import ConeTable
-    from .world import load_world
+    from ..localization import ConeTable
+    from ..world import load_world
 
     world = square_world() if world_name == "square" else load_world(world_name)
     t = ConeTable(world)
@@ -341,7 +341,8 @@ def _print_mcl(results: list[dict]) -> None:
         print(f"{model:8s}{n:8d}{f:10.3f}{e:10.3f}{p:10.3f}")  # noqa: T201
 
 
-def _run_mcl(args) -> int:
+def run(args: argparse.Namespace) -> int:
+    """Run ``robotlib bench mcl``; return the exit status."""
     results = bench_mcl(args.world, tuple(args.n), tuple(args.model), reps=args.reps)
     _print_mcl(results)
     out = {"results": results}
@@ -365,13 +366,8 @@ def _run_mcl(args) -> int:
     return 0
 
 
-BENCHES = {"mcl": _run_mcl}
-"""Benchmark name to runner; others (``raycast``, ``sim``) register here."""
-
-
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    """Options of ``robotlib bench``."""
-    parser.add_argument("what", choices=sorted(BENCHES), help="what to measure")
+    """Options of ``robotlib bench mcl``."""
     parser.add_argument("--json", type=Path, default=None, help="write results here")
     parser.add_argument("--world", default="corridor", help="world for the MCL step")
     parser.add_argument(
@@ -391,8 +387,3 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="worlds for the table build, comma-separated ('square': 20 m x 20 m;"
         " '' off)",
     )
-
-
-def run(args: argparse.Namespace) -> int:
-    """Run ``robotlib bench``; return the exit status."""
-    return BENCHES[args.what](args)

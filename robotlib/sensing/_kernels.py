@@ -11,7 +11,7 @@ import math
 import numba as nb
 import numpy as np
 
-from ._config import JIT, JIT_PARALLEL
+from .._config import JIT, JIT_PARALLEL
 
 _EPS = 1e-12
 

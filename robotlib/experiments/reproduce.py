@@ -1,11 +1,8 @@
 """The paper's experiment: MCL with eight sonars in an aliased corridor.
 
-The simulated Pioneer starts at the world's start pose and drives a seeded,
-obstacle-avoiding route (steps of about 0.5 m, centring itself between the
-walls, turning around where the way ahead is blocked, so along the corridor
-and back). `drive_route` drives it once per seed and logs odometry, sonar and
-ground truth; every filter configuration then runs on that same log
-(`run_filter`), one filter step per motion step, at most 75 steps.
+Every filter configuration (`FilterConfig`: the paper's, `MCL.best`) runs on
+the same logged routes (`robotlib.experiments.routes.drive_route`), one
+filter step per motion step, at most 75 steps (`run_filter`).
 
 "Localized at step k" means the estimate stays within 0.5 m of the true
 position from step k (1-based) to the end. The tracking error is the mean
@@ -20,25 +17,21 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-from .geometry import wrap_angle
-from .localization import BEST, MCL, History
-from .localization.paper import RESIZE_FLOOR
-from .sim import Simulator
-from .world import World, load_world
+from ..localization import BEST, MCL, History
+from ..localization.paper import RESIZE_FLOOR
+from ..world import World, load_world
+from .routes import MAX_STEPS, RouteLog, drive_route
 
 __all__ = [
-    "RouteLog",
     "FilterConfig",
     "PAPER",
     "BEST_CONFIG",
-    "drive_route",
     "run_filter",
     "summarize",
     "reproduce",
@@ -46,131 +39,10 @@ __all__ = [
     "run",
 ]
 
-MAX_STEPS = 75
-"""The paper's longest run, steps."""
 SUCCESS_STEP = 25
 """The paper localized from step 25."""
 TOLERANCE = 0.5
 """Localized: position error at most this, m."""
-
-
-@dataclass
-class RouteLog:
-    """One drive of the robot, step by step (step 0 is the start).
-
-    Attributes
-    ----------
-    odometry : numpy.ndarray, shape (T, 3)
-        Odometry pose after each step, m and rad.
-    sonar : numpy.ndarray, shape (T, 8)
-        Sonar scan after each step, m.
-    truth : numpy.ndarray, shape (T, 3)
-        True pose after each step, m and rad.
-    world : World
-        Where it drove.
-    seed : int
-        The seed of the simulator and of the route.
-    """
-
-    odometry: np.ndarray
-    sonar: np.ndarray
-    truth: np.ndarray
-    world: World
-    seed: int
-
-    def __len__(self) -> int:
-        return len(self.odometry)
-
-
-def _wait(sim: Simulator, body, max_cycles: int = 150) -> None:
-    """Step until the robot has started and stopped again (bounded)."""
-    for k in range(max_cycles):
-        sim.step()
-        if k >= 2 and not body.moving:
-            return
-
-
-def drive_route(
-    world: World,
-    seed: int,
-    n_steps: int = MAX_STEPS,
-    step_length: float = 0.5,
-    clearance: float = 0.9,
-) -> RouteLog:
-    """Drive the simulated robot on a seeded, obstacle-avoiding route.
-
-    Each step: read the sonar; if the way ahead (the +-10 and +-30 degree
-    sonars) is clear beyond ``clearance``, steer back to the course (and,
-    between two side walls, a little towards the middle), add seeded noise
-    and move ``step_length`` (shorter near an obstacle); otherwise turn
-    around, or make a quarter turn towards the more open side at a bend
-    (both sonars of a side beyond 2 m) or when the previous step was blocked
-    too. Every step is a turn and/or a move, then one sonar scan.
-
-    Parameters
-    ----------
-    world : World
-        Where to drive (the robot starts at ``world.start``).
-    seed : int
-        Seeds the simulator (odometry slip, sonar noise) and the route.
-    n_steps : int
-        Scans in the log, the start's included.
-    step_length : float
-        Nominal move per step, m.
-    clearance : float
-        Distance ahead below which the robot turns instead of moving, m.
-
-    Returns
-    -------
-    RouteLog
-    """
-    sim = Simulator(world, seed=seed)
-    body = sim.add_robot()
-    rng = np.random.default_rng([seed, 1])
-    sim.step()
-    odo, sonar, truth = [], [], []
-
-    def log():
-        state = body.state
-        odo.append(state.pose)
-        sonar.append(state.sonar)
-        truth.append(body.true_pose.copy())
-
-    log()
-    course = float(body.state.pose[2])
-    blocked = False
-    for _ in range(n_steps - 1):
-        s = body.state.sonar
-        heading = float(body.state.pose[2])
-        front, diagonal = min(s[3], s[4]), min(s[2], s[5])
-        if front > clearance and diagonal > 0.6 * clearance:
-            turn = wrap_angle(course - heading)
-            if max(s[0], s[7]) < 1.5:  # walls on both sides: centre
-                turn += float(np.clip(0.2 * (s[0] - s[7]), -0.15, 0.15))
-            turn = float(np.clip(turn, -0.5, 0.5)) + 0.05 * rng.standard_normal()
-            dist = min(step_length, front - 0.6) * rng.uniform(0.9, 1.1)
-            blocked = False
-        else:
-            left, right = min(s[0], s[1]), min(s[6], s[7])
-            if blocked or max(left, right) > 2.0:  # a bend, or a dead end
-                course += math.pi / 2 if left >= right else -math.pi / 2
-            else:
-                course += math.pi
-            course = wrap_angle(course)
-            turn = wrap_angle(course - heading) + 0.1 * rng.standard_normal()
-            dist = 0.0
-            blocked = True
-        if abs(turn) > 1e-3:
-            body.command("DHEAD", turn)
-            _wait(sim, body)
-        if dist > 0.05:
-            body.command("MOVE", dist)
-            _wait(sim, body)
-            if body.stalled:
-                body.command("MOVE", -0.2)
-                _wait(sim, body)
-        log()
-    return RouteLog(np.array(odo), np.array(sonar), np.array(truth), world, seed)
 
 
 @dataclass(frozen=True)

@@ -17,7 +17,7 @@ from matplotlib.animation import FuncAnimation
 from matplotlib.collections import LineCollection, PatchCollection
 from matplotlib.patches import Polygon, Wedge
 
-from .p3dx import (
+from ..p3dx import (
     ROBOT_LENGTH_FRONT,
     ROBOT_LENGTH_REAR,
     ROBOT_WIDTH,
@@ -25,7 +25,7 @@ from .p3dx import (
     SONAR_MAX_RANGE,
     SONAR_POSES,
 )
-from .world import Grid, World
+from ..world import Grid, World
 
 __all__ = [
     "plot_world",

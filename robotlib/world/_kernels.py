@@ -9,7 +9,7 @@ import math
 import numba as nb
 import numpy as np
 
-from ._config import JIT, JIT_PARALLEL
+from .._config import JIT, JIT_PARALLEL
 
 
 @nb.njit(**JIT)

@@ -1,0 +1,35 @@
+"""``robotlib bench TOPIC [options]``: one benchmark module per topic.
+
+Each topic is a module with ``add_arguments(parser)`` and ``run(args) ->
+int``, registered in `BENCHES` and imported only when asked for. Benchmarks
+print robotlib's figures beside a peer or a plain NumPy reference measured
+in the same run; they assert nothing.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+
+__all__ = ["BENCHES", "add_arguments", "run"]
+
+BENCHES = {
+    "mcl": "robotlib.experiments.bench_mcl",
+}
+"""Topic name to the module that measures it."""
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """Options of ``robotlib bench``: the topic, then that topic's own options."""
+    parser.add_argument("topic", choices=sorted(BENCHES), help="what to measure")
+    parser.add_argument(
+        "options", nargs=argparse.REMAINDER, help="the topic's options (-h for them)"
+    )
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run ``robotlib bench TOPIC``; return the exit status."""
+    module = importlib.import_module(BENCHES[args.topic])
+    parser = argparse.ArgumentParser(prog=f"robotlib bench {args.topic}")
+    module.add_arguments(parser)
+    return int(module.run(parser.parse_args(args.options)) or 0)

@@ -1,0 +1,9 @@
+"""Notebook panels (ipywidgets), one module per topic, over plain tested functions.
+
+- `mcl`: `MCLPanel`, `mcl_filter`, `run_mcl`, `plot_mcl_run` (Lab 3)
+- `teleop`: `TeleopPanel`, `teleop` (Lab 0)
+
+Import a topic's panels from its module (``from robotlib.widgets.mcl import
+MCLPanel``); this package imports none of them, so a lab loads only what it
+uses. Widgets sit on top: they may import any layer; nothing imports them.
+"""

@@ -1,0 +1,138 @@
+"""Notebook panel for driving a robot by hand (Lab 0).
+
+`teleop` moves a robot one step and reads its sonar; `TeleopPanel` adds
+buttons and a map. The panel runs headless (its callbacks are plain
+methods), so tests press its buttons programmatically. Imports the robot API
+and plotting; never an estimator.
+"""
+
+from __future__ import annotations
+
+import math
+
+import matplotlib.pyplot as plt
+import numpy as np
+
+from ..plotting import plot_robot, plot_sonar, plot_world
+
+__all__ = ["teleop", "TeleopPanel"]
+
+
+def teleop(r, command: str, distance: float = 0.5, angle: float = math.pi / 4):
+    """Move a robot one step and read its sonar.
+
+    Parameters
+    ----------
+    r : robotlib.Robot
+        The robot.
+    command : str
+        ``"forward"``, ``"back"``, ``"left"``, ``"right"`` or ``"stop"``.
+    distance : float
+        Length of a forward or backward step, m.
+    angle : float
+        Angle of a turn, rad.
+
+    Returns
+    -------
+    pose : numpy.ndarray, shape (3,)
+        Odometry pose after the step, m and rad.
+    sonar : numpy.ndarray, shape (8,)
+        Sonar ranges after the step, m.
+    """
+    if command == "forward":
+        r.move(distance)
+        r.wait_move_done()
+    elif command == "back":
+        r.move(-distance)
+        r.wait_move_done()
+    elif command in ("left", "right"):
+        r.setdeltaheading(angle if command == "left" else -angle)
+        r.wait_heading_done()
+    elif command == "stop":
+        r.stop()
+    else:
+        raise ValueError(f"unknown command {command!r}")
+    return r.pose(), r.readsonar()
+
+
+class TeleopPanel:
+    """Buttons that drive a robot step by step, with a map of its surroundings.
+
+    Parameters
+    ----------
+    r : robotlib.Robot
+        The robot; a simulated one (``robot("sim:...")``) also shows its
+        world and true pose.
+
+    Attributes
+    ----------
+    pose, sonar : numpy.ndarray
+        After the last command.
+    log : list of str
+        The commands sent.
+    """
+
+    COMMANDS = ("forward", "back", "left", "right", "stop")
+
+    def __init__(self, r, distance: float = 0.5, angle_deg: float = 45.0):
+        import ipywidgets as w
+
+        self.robot = r
+        self.log: list[str] = []
+        self.distance = w.FloatSlider(
+            value=distance, min=0.1, max=2.0, step=0.1, description="step [m]",
+            continuous_update=False,
+        )  # fmt: skip
+        self.angle = w.FloatSlider(
+            value=angle_deg, min=5.0, max=180.0, step=5.0, description="turn [deg]",
+            continuous_update=False,
+        )  # fmt: skip
+        self.buttons = {c: w.Button(description=c) for c in self.COMMANDS}
+        for c, b in self.buttons.items():
+            b.on_click(lambda _b, c=c: self.send(c))
+        self.output = w.Output()
+        self.widget = w.VBox(
+            [
+                w.HBox(list(self.buttons.values())),
+                w.HBox([self.distance, self.angle]),
+                self.output,
+            ]
+        )
+        self.figure = plt.figure(figsize=(7, 3))
+        plt.close(self.figure)
+        self.pose, self.sonar = r.pose(), r.readsonar()
+        self.draw()
+
+    def send(self, command: str):
+        """Run one command (what a button does); return ``(pose, sonar)``."""
+        self.pose, self.sonar = teleop(
+            self.robot, command, self.distance.value, math.radians(self.angle.value)
+        )
+        self.log.append(command)
+        self.draw()
+        return self.pose, self.sonar
+
+    def draw(self) -> None:
+        """Redraw the map, the robot and its sonar."""
+        from IPython.display import display
+
+        self.figure.clear()
+        ax = self.figure.add_subplot()
+        true_pose = getattr(self.robot, "true_pose", None)
+        shown = np.asarray(true_pose() if true_pose else self.pose)
+        sim = getattr(self.robot, "simulator", None)
+        if sim is not None:
+            plot_world(ax, sim.world)
+        plot_sonar(ax, shown, self.sonar)
+        plot_robot(ax, shown)
+        ax.set_xlim(shown[0] - 6, shown[0] + 6)
+        ax.set_ylim(shown[1] - 3, shown[1] + 3)
+        ax.set_title(f"odometry ({self.pose[0]:.2f}, {self.pose[1]:.2f}) m")
+        self.output.clear_output(wait=True)
+        with self.output:
+            display(self.figure)
+
+    def _ipython_display_(self):
+        from IPython.display import display
+
+        display(self.widget)

@@ -1,0 +1,43 @@
+"""The world: walls, bounds, start pose, grids, geometry, and world files.
+
+The bottom layer of robotlib with `robotlib.sensing`: it imports nothing of
+robotlib above it (only the robot's constants in `robotlib.p3dx`, the JIT
+options and `robotlib._random`).
+
+- `World`, `Grid` (`model`, `grid`), their numba kernels in `_kernels`
+- `wrap_angle`, `compose`, `relative` (`geometry`)
+- ``.wld`` (`wld`) and MobileSim ``.map`` (`mapfile`) files; `WorldFileError`
+  and the formats' shared rules (`fileformat`)
+- `load_world`, `world_names`, `read_world`, `WORLDS_DIR` (`catalog`)
+"""
+
+from .catalog import WORLDS_DIR, load_world, read_world, world_names
+from .fileformat import MAP_MAGICS, WorldFileError
+from .geometry import compose, relative, wrap_angle
+from .grid import Grid
+from .mapfile import format_map, parse_map, read_map, write_map
+from .model import POINT_SIZE, World
+from .wld import format_wld, parse_wld, read_wld, write_wld
+
+__all__ = [
+    "MAP_MAGICS",
+    "POINT_SIZE",
+    "WORLDS_DIR",
+    "Grid",
+    "World",
+    "WorldFileError",
+    "compose",
+    "format_map",
+    "format_wld",
+    "load_world",
+    "parse_map",
+    "parse_wld",
+    "read_map",
+    "read_wld",
+    "read_world",
+    "relative",
+    "world_names",
+    "wrap_angle",
+    "write_map",
+    "write_wld",
+]

@@ -1,0 +1,93 @@
+"""The shipped worlds, and any world file: `load_world`, `world_names`, `read_world`.
+
+Imports the world's file readers and model; nothing above the world layer.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+from pathlib import Path
+
+from .fileformat import WorldFileError
+from .mapfile import read_map
+from .model import World
+from .wld import read_wld
+
+__all__ = ["WORLDS_DIR", "load_world", "read_world", "world_names"]
+
+
+def _worlds_dir() -> Path:
+    """Return the folder of the shipped worlds.
+
+    The repository's ``worlds/`` (a checkout or an editable install), else
+    where a regular install put them (``share/robotlib/worlds``).
+    """
+    repo = Path(__file__).resolve().parents[2] / "worlds"
+    installed = Path(sys.prefix) / "share" / "robotlib" / "worlds"
+    return repo if repo.is_dir() or not installed.is_dir() else installed
+
+
+WORLDS_DIR = _worlds_dir()
+"""The folder of the shipped worlds (short names are looked up here)."""
+
+
+def read_world(path: str | os.PathLike) -> World:
+    """Read a world file, choosing the format by extension (``.wld``, ``.map``).
+
+    Raises
+    ------
+    FileNotFoundError
+        If there is no such file.
+    WorldFileError
+        If the extension is unknown or the file is malformed.
+    """
+    path = Path(path)
+    ext = path.suffix.lower()
+    if ext == ".wld":
+        return read_wld(path)
+    if ext == ".map":
+        return read_map(path)
+    raise WorldFileError(
+        str(path), None, f"unknown world file extension {ext!r}: expected .wld or .map"
+    )
+
+
+def world_names() -> list[str]:
+    """Short names of the worlds shipped in `WORLDS_DIR`."""
+    names = {p.stem for p in WORLDS_DIR.glob("*.wld")}
+    names |= {p.stem for p in WORLDS_DIR.glob("*.map")}
+    return sorted(names)
+
+
+def load_world(name_or_path: str | Path) -> World:
+    """Load a world by short name (``"corridor"``) or from a file path.
+
+    Parameters
+    ----------
+    name_or_path : str or pathlib.Path
+        A name from `world_names`, or a path to a ``.wld`` or ``.map`` file.
+
+    Returns
+    -------
+    World
+
+    Raises
+    ------
+    FileNotFoundError
+        If neither a shipped world nor a file of that name exists.
+    robotlib.world.WorldFileError
+        If the file is malformed.
+    """
+    path = Path(name_or_path)
+    if not path.exists() and path.suffix == "" and path.parent == Path("."):
+        for ext in (".wld", ".map"):
+            if (WORLDS_DIR / f"{path.name}{ext}").exists():
+                path = WORLDS_DIR / f"{path.name}{ext}"
+                break
+        else:
+            raise FileNotFoundError(
+                f"no world named {str(name_or_path)!r}; "
+                f"shipped worlds: {', '.join(world_names())}"
+            )
+    return read_world(path)
