@@ -20,8 +20,8 @@ import math
 
 import numpy as np
 
-from ..geometry import wrap_angle
 from ..p3dx import SONAR_POSES
+from ..world import wrap_angle
 
 __all__ = ["pure_pursuit", "PurePursuit", "StopAndTurn", "PathFollower", "cross_track"]
 

@@ -21,11 +21,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..geometry import compose, relative
 from ..localization import BEST, MCL
 from ..p3dx import ROBOT_LENGTH_REAR, ROBOT_RADIUS, ROBOT_WIDTH
-from ..sonar import expected_ranges
-from ..world import World
+from ..sensing import expected_ranges
+from ..world import World, compose, relative
 from .cspace import CSpace, configuration_space
 from .follow import PathFollower, PurePursuit, StopAndTurn, cross_track, sonar_points
 from .grid import astar

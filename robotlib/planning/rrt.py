@@ -15,7 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..geometry import as_rng
+from .._random import as_rng
 from ..p3dx import ROBOT_RADIUS
 from ..world import World
 from . import _kernels
