@@ -15,6 +15,8 @@ __all__ = ["BENCHES", "add_arguments", "run"]
 
 BENCHES = {
     "mcl": "robotlib.experiments.bench_mcl",
+    "plan": "robotlib.experiments.bench_plan",
+    "nav": "robotlib.experiments.bench_nav",
 }
 """Topic name to the module that measures it."""
 
