@@ -113,6 +113,9 @@ class PurePursuit:
         The path is done within this distance of its end, m.
     slow_radius : float
         Slow down linearly within this distance of the end, m.
+    law : callable, optional
+        The steering law ``law(pose, target, v, w_max) -> (v, w)`` (default
+        `pure_pursuit`).
     """
 
     def __init__(
@@ -123,7 +126,9 @@ class PurePursuit:
         w_max: float = 0.8,
         goal_tolerance: float = 0.1,
         slow_radius: float = 0.6,
+        law=None,
     ):
+        self.law = pure_pursuit if law is None else law
         p = np.asarray(path, dtype=float)[:, :2]
         if p.ndim != 2 or len(p) < 1:
             raise ValueError("path must have shape (K, 2) with K >= 1")
@@ -179,11 +184,11 @@ class PurePursuit:
             return 0.0, 0.0
         target = self.target(pose)
         v = self.speed * min(1.0, max(0.25, to_end / self.slow_radius))
-        v, w = pure_pursuit(pose, target, v, self.w_max)
+        v, w = (float(u) for u in self.law(pose, target, v, self.w_max))
         if v > 0 and abs(w) > 0.5 * self.w_max:  # slow down in tight curves
             scale = 0.5 * self.w_max / abs(w)
             v *= scale
-            w = pure_pursuit(pose, target, v, self.w_max)[1]
+            w = float(self.law(pose, target, v, self.w_max)[1])
         return v, w
 
 

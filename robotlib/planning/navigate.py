@@ -151,6 +151,8 @@ def navigate(
     replan_period: float = 1.0,
     off_track: float = 0.7,
     lost_agreement: float = 0.62,
+    planner=None,
+    law=None,
 ) -> Navigation:
     """Drive ``robot`` to ``goal`` in the mapped ``world``.
 
@@ -202,6 +204,11 @@ def navigate(
         reading by ``unexplained`` is an unmapped obstacle, m.
     replan_period, off_track : float
         Re-planning limits, s and m.
+    planner : callable, optional
+        ``planner(cspace, start, goal) -> path`` ((K, 2) m, or None when
+        there is none); default A* (`astar`) with the cost map.
+    law : callable, optional
+        Pure pursuit's steering law (see `PurePursuit`).
     lost_agreement : float
         The robot counts itself lost, and localizes again from scratch, when
         the share of sonar readings that agree with the map at the estimate
@@ -280,7 +287,7 @@ def navigate(
                     off = cross_track(follower.pursuit.path, pose[:2]) > off_track
                     need_plan = need_plan or follower.done or bool(off)
                 if need_plan or (hits_dirty and now - last_plan >= replan_period):
-                    path = _plan(cs0, hits, pose, goal)
+                    path = _plan(cs0, hits, pose, goal, planner)
                     last_plan, need_plan, hits_dirty = now, False, False
                     if path is None:
                         outcome = "no_path"
@@ -336,7 +343,12 @@ def navigate(
     )
 
 
-def _plan(cs0: CSpace, hits, pose, goal) -> np.ndarray | None:
+def _astar_path(cs: CSpace, start, goal) -> np.ndarray | None:
+    plan = astar(cs, start, goal)
+    return plan.path if plan.found else None
+
+
+def _plan(cs0: CSpace, hits, pose, goal, planner=None) -> np.ndarray | None:
     """Plan with A* from the estimate to the goal around the marked echoes.
 
     Echoes near the robot or the goal are left out (the robot must be able
@@ -355,9 +367,9 @@ def _plan(cs0: CSpace, hits, pose, goal) -> np.ndarray | None:
         start = cs.nearest_free(pose[:2], 0.6)
         if start is None:
             continue
-        plan = astar(cs, start, goal)
-        if plan.found:
-            path = plan.path.copy()
+        path = (planner or _astar_path)(cs, start, goal)
+        if path is not None and len(path):
+            path = np.array(path, dtype=float).reshape(-1, 2)
             path[-1] = goal
             return np.vstack([pose[:2], path]) if len(path) > 1 else path
     return None
