@@ -72,7 +72,20 @@ def _warm_mcl() -> None:
         mcl.step(odo, odo + [0.1, 0.0, 0.0], z)
 
 
-WARMUPS = {"sim": _warm_sim, "mcl": _warm_mcl}
+def _warm_plan() -> None:
+    from .planning import CSpace, astar, dijkstra, inflate, rrt, wavefront
+    from .world import load_world
+
+    cs = CSpace.from_array(np.zeros((4, 4), dtype=bool))
+    inflate(cs.blocked, 1.0)
+    for planner in (astar, dijkstra, wavefront):
+        planner(cs, (0.5, 0.5), (3.5, 3.5))
+    world = load_world("corridor")
+    x, y, _ = world.start
+    rrt(world, (x, y), (x + 0.5, y), rng=0)
+
+
+WARMUPS = {"sim": _warm_sim, "mcl": _warm_mcl, "plan": _warm_plan}
 """What `warm_up` can compile: a name to a function that runs the kernels once."""
 
 

@@ -19,7 +19,7 @@ from robotlib.planning import (
 )
 from robotlib.planning.navigate import TURN_MARGIN
 from robotlib.robot import robot
-from robotlib.sim import OdometryNoise, Simulator, SimRobot
+from robotlib.sim import OdometryNoise, SimRobot, Simulator
 from robotlib.world import load_world
 
 

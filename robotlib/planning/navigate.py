@@ -27,7 +27,7 @@ from ..sensing import expected_ranges
 from ..world import World, compose, relative
 from .cspace import CSpace, configuration_space
 from .follow import PathFollower, PurePursuit, StopAndTurn, cross_track, sonar_points
-from .grid import astar
+from .grid import astar, path_length
 
 __all__ = ["Navigation", "navigate", "LOCALIZE", "FOLLOW", "AVOID", "MODES"]
 
@@ -151,6 +151,7 @@ def navigate(
     replan_period: float = 1.0,
     off_track: float = 0.7,
     lost_agreement: float = 0.62,
+    no_progress: float = 30.0,
     planner=None,
     law=None,
 ) -> Navigation:
@@ -204,6 +205,10 @@ def navigate(
         reading by ``unexplained`` is an unmapped obstacle, m.
     replan_period, off_track : float
         Re-planning limits, s and m.
+    no_progress : float
+        The robot counts itself lost, too, when its plans have not got
+        0.5 m shorter for this long, s (it may be driving a look-alike
+        place's plan).
     planner : callable, optional
         ``planner(cspace, start, goal) -> path`` ((K, 2) m, or None when
         there is none); default A* (`astar`) with the cost map.
@@ -238,6 +243,7 @@ def navigate(
     follower = None
     need_plan, hits_dirty, last_plan = False, False, -np.inf
     wander_until, spin_start, agree = -1.0, 0.0, 1.0
+    best_left, best_time = np.inf, np.inf
     outcome = ""
     while True:
         st = robot.state
@@ -256,6 +262,7 @@ def navigate(
             pos, head = _spread(mcl)
             if steps >= min_filter_steps and pos < spread and head < 0.15:
                 mode, need_plan, agree = FOLLOW, True, 1.0
+                best_left, best_time = np.inf, now
                 if math.isnan(localized_at):
                     localized_at = now
             elif now < wander_until:
@@ -272,7 +279,7 @@ def navigate(
             agree += 0.025 * (float(ok.mean()) - agree)
             if np.hypot(*(pose[:2] - goal)) < goal_tolerance:
                 outcome = "reached"
-            elif agree < lost_agreement:
+            elif agree < lost_agreement or now - best_time > no_progress:
                 # lost: forget the pose and the marks, localize again
                 mcl.reset()
                 mode, steps, spin_start, wander_until = LOCALIZE, 0, now, -1.0
@@ -294,9 +301,12 @@ def navigate(
                     else:
                         plans.append(path)
                         plan_times.append(now)
+                        left = path_length(path)
+                        if left < best_left - 0.5:
+                            best_left, best_time = left, now
                         was = follower is not None and follower.avoiding
                         pursuit = PurePursuit(
-                            path, lookahead, speed, goal_tolerance=0.05
+                            path, lookahead, speed, goal_tolerance=0.05, law=law
                         )
                         follower = PathFollower(
                             pursuit, avoider, unexplained=unexplained
