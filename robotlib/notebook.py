@@ -85,7 +85,30 @@ def _warm_plan() -> None:
     rrt(world, (x, y), (x + 0.5, y), rng=0)
 
 
-WARMUPS = {"sim": _warm_sim, "mcl": _warm_mcl, "plan": _warm_plan}
+def _warm_avoidance() -> None:
+    from .avoidance import (
+        VFH,
+        Bug2,
+        PotentialField,
+        WallFollower,
+        polar_histogram,
+        run_episode,
+        smooth_histogram,
+    )
+    from .world import World
+
+    box = World(segments=[[0, 0, 4, 0], [4, 0, 4, 3], [4, 3, 0, 3], [0, 3, 0, 0]])
+    for c in (VFH(), PotentialField(), Bug2(), WallFollower()):
+        run_episode(box, c, goal=(3.0, 1.5), start=(1.0, 1.5, 0.0), seed=0, max_time=1)
+    smooth_histogram(polar_histogram([[1.0, 0.0]], [1.0], [0.0, 0.0, 0.0]))
+
+
+WARMUPS = {
+    "sim": _warm_sim,
+    "mcl": _warm_mcl,
+    "avoidance": _warm_avoidance,
+    "plan": _warm_plan,
+}
 """What `warm_up` can compile: a name to a function that runs the kernels once."""
 
 
