@@ -27,12 +27,17 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Options of ``robotlib bench nav``."""
     parser.description = "Seeded navigation runs in the office with unmapped boxes."
     parser.add_argument("--runs", type=int, default=10)
+    parser.add_argument(
+        "--avoider", choices=["stop", "vfh"], default="stop",
+        help="StopAndTurn (navigate's default) or robotlib.avoidance.VFH",
+    )  # fmt: skip
     parser.add_argument("--json", metavar="FILE", help="write the results here")
 
 
 def run(args: argparse.Namespace) -> int:
     """Run the navigation benchmark; return 0."""
-    from ..planning import GOALS, navigate, office_with_boxes
+    from ..avoidance import VFH
+    from ..planning import GOALS, StopAndTurn, navigate, office_with_boxes
     from ..sim import SimRobot, Simulator
     from ..world import load_world
 
@@ -42,7 +47,9 @@ def run(args: argparse.Namespace) -> int:
     for k in range(args.runs):
         goal = goals[k % len(goals)]
         t0 = time.perf_counter()
-        nav = navigate(SimRobot(Simulator(sim_world, seed=k)), world, goal, rng=k)
+        avoider = VFH() if args.avoider == "vfh" else StopAndTurn()
+        robot = SimRobot(Simulator(sim_world, seed=k))
+        nav = navigate(robot, world, goal, rng=k, avoider=avoider)
         row = {
             "seed": k,
             "goal": list(goal),
@@ -63,7 +70,7 @@ def run(args: argparse.Namespace) -> int:
             flush=True,
         )
     n = sum(r["success"] for r in rows)
-    say(f"success: {n} of {len(rows)}")
+    say(f"success ({args.avoider}): {n} of {len(rows)}")
     if args.json:
         with open(args.json, "w") as f:
             json.dump({"runs": rows, "successes": n}, f, indent=2)

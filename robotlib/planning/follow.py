@@ -257,7 +257,8 @@ class PathFollower:
     ``unexplained`` (or any reading below ``too_close``) hands control to the
     avoider, with the look-ahead point as its ``goal`` when it has one. The
     follower takes control back once the front reads clear of
-    ``danger + release`` for ``release_cycles`` cycles.
+    ``danger + release`` for ``release_cycles`` cycles. The avoider is not
+    reset at a hand-over (a VFH keeps its certainty grid); `reset` does.
 
     Parameters
     ----------
@@ -289,10 +290,11 @@ class PathFollower:
         self.unexplained = float(unexplained)
         self.release = float(release)
         self.release_cycles = int(release_cycles)
-        self.reset()
+        self.avoiding = False
+        self._clear = 0
 
     def reset(self) -> None:
-        """Follow from the path's start, avoider idle."""
+        """Follow from the path's start; reset the avoider (its memory too)."""
         self.pursuit.reset()
         self.avoider.reset()
         self.avoiding = False
@@ -320,8 +322,6 @@ class PathFollower:
     def command(self, sonar, pose, expected=None) -> tuple[float, float]:
         """Return ``(v, w)`` for the robot at ``pose`` seeing ``sonar`` (8,), m."""
         if self.blocked(sonar, expected):
-            if not self.avoiding:
-                self.avoider.reset()
             self.avoiding = True
             self._clear = 0
         elif self.avoiding:

@@ -230,6 +230,7 @@ def navigate(
         kld = {**BEST["kld"], "n_min": 3000}  # keep look-alike places longer
         mcl = MCL.best(world, rng=rng, kld=kld)
     avoider = StopAndTurn() if avoider is None else avoider
+    avoider.reset()
     has_truth = hasattr(robot, "true_pose")
     names = ("time", "truth", "odo", "est", "cmd", "mode", "sonar", "st", "agree")
     rec = {k: [] for k in names}
@@ -282,6 +283,7 @@ def navigate(
             elif agree < lost_agreement or now - best_time > no_progress:
                 # lost: forget the pose and the marks, localize again
                 mcl.reset()
+                avoider.reset()
                 mode, steps, spin_start, wander_until = LOCALIZE, 0, now, -1.0
                 follower, hits, hits_dirty = None, [], False
                 lost_times.append(now)
