@@ -103,9 +103,18 @@ def _warm_avoidance() -> None:
     smooth_histogram(polar_histogram([[1.0, 0.0]], [1.0], [0.0, 0.0, 0.0]))
 
 
+def _warm_mapping() -> None:
+    from .mapping import record_drive, run_fastslam
+
+    log = record_drive("loop", [(3.0, 1.5)], seed=0, every=2)
+    run_fastslam(log, 4, "laser", rng=0)
+    run_fastslam(log, 4, "sonar", rng=0)
+
+
 WARMUPS = {
     "sim": _warm_sim,
     "mcl": _warm_mcl,
+    "mapping": _warm_mapping,
     "avoidance": _warm_avoidance,
     "plan": _warm_plan,
 }

@@ -282,3 +282,26 @@ def test_the_same_controller_drives_a_simrobot():
     r = SimRobot(sim, sim.add_robot(pair.start))
     ep = run_episode(r, VFH(), goal=pair.goal, max_time=10)
     assert ep.world == "clutter" and len(ep.time) == 101
+
+
+def test_fused_vfh_step_is_the_kernels_one_by_one():
+    rng = np.random.default_rng(8)
+    grid = np.where(rng.random((60, 60)) < 0.1, rng.uniform(0, 15, (60, 60)), 0.0)
+    pose = np.array([0.2, -0.3, 0.9])
+    ranges = rng.uniform(0.3, 5.0, 8)
+    common = (-3.0, -3.0, 0.1, pose, SENSORS, ranges, 5.0, math.radians(15), 2.5)
+    blocked0 = rng.random(72) < 0.3
+    g1, b1, raw1, h1 = grid.copy(), blocked0.copy(), np.zeros(72), np.zeros(72)
+    kern.fade(g1, -3.0, -3.0, 0.1, pose[0], pose[1], 5.0, 0.97)
+    kern.certainty_update(g1, *common, 3.0, 1.0, 15.0)
+    kern.histogram_grid(g1, -3.0, -3.0, 0.1, pose, 1.8, 0.3, raw1)
+    kern.smooth(raw1, 2, h1)
+    kern.hysteresis(h1, 75.0, 150.0, b1)
+    want = kern.plus_direction(b1, 0.4, -0.2, 16, 5.0, 2.0, 2.0)
+    g2, b2, raw2, h2 = grid.copy(), blocked0.copy(), np.zeros(72), np.zeros(72)
+    got = kern.vfh_step(g2, *common, 3.0, 1.0, 15.0, 0.97, 1.8, 0.3, 2, raw2, h2,
+                        75.0, 150.0, b2, 0.4, -0.2, 16, 5.0, 2.0, 2.0)  # fmt: skip
+    assert got == want
+    np.testing.assert_array_equal(g1, g2)
+    np.testing.assert_array_equal(h1, h2)
+    np.testing.assert_array_equal(b1, b2)

@@ -1,5 +1,6 @@
-"""Lab 2 graded end to end: solution full, released zero, partial partial, and
-answers that do nothing (or drive at the goal regardless) fail every outcome check."""
+"""Lab 2: answers that do nothing, or drive at the goal regardless, fail every
+outcome check (solution full, released zero and the cheats are in
+test_course_labs)."""
 
 from __future__ import annotations
 
@@ -7,7 +8,7 @@ import copy
 from pathlib import Path
 
 from robotlib.course import grade as g
-from robotlib.course.notebooks import read_notebook, release_notebook, write_notebook
+from robotlib.course.notebooks import read_notebook, write_notebook
 
 ROOT = Path(__file__).resolve().parents[1]
 LAB = "lab2_avoidance"
@@ -45,29 +46,16 @@ def _with(released, sources):
     return nb
 
 
-def test_lab2_grades_honestly(tmp_path):
-    sol = read_notebook(ROOT / "solutions" / f"{LAB}.ipynb")
+def test_do_nothing_and_constant_answers_fail_the_outcome_checks(tmp_path):
     released = read_notebook(ROOT / "labs" / f"{LAB}.ipynb")
-    assert released == release_notebook(sol, LAB)
-    answers = {c.id: c.source for c in sol.cells}
-    subs = {
-        "solution": sol,
-        "released": released,
-        "partial": _with(released, {"l2-05": answers["l2-05"]}),
-        "nothing": _with(released, NOTHING),
-        "constant": _with(released, CONSTANT),
-    }
+    subs = {"nothing": _with(released, NOTHING), "constant": _with(released, CONSTANT)}
     for name, nb in subs.items():
         (tmp_path / name).mkdir()
         write_notebook(nb, tmp_path / name / f"{LAB}.ipynb")
     opts = g.GradeOptions(cell_timeout=120, timeout=400)
     results, checks = g.grade(tmp_path, LAB, jobs=2, opts=opts, progress=False)
     rows = {r.student: r for r in results}
-    full = sum(c.points for c in checks)
-    assert rows["solution"].total == full, rows["solution"].reasons
-    assert rows["released"].total == 0
-    got = {k: v for k, v in rows["partial"].points.items() if v}
-    assert got == {"braitenberg": 2, "explorer": 2}, rows["partial"].reasons
+    assert OUTCOME_CHECKS <= {c.grade_id for c in checks}
     for name in ("nothing", "constant"):
         earned = {k for k, v in rows[name].points.items() if v}
         assert not earned & OUTCOME_CHECKS, (name, earned, rows[name].reasons)

@@ -12,6 +12,10 @@ references live in ``tests/naive_avoidance.py``.
   plus a safety distance), in the robot frame.
 - `histogram_points`: the same density from a list of weighted points.
 - `smooth`: the circular moving average of a histogram (weights 1..l+1..1).
+- `hysteresis`, `plus_direction`, `follow_direction`: the binary histogram
+  and VFH+'s choice of direction; boundary following on it.
+- `vfh_step`: one whole cycle (grid, histogram, choice) in one call.
+- `potential_force`: the potential field's force from sonar and a goal.
 """
 
 import math
@@ -335,3 +339,29 @@ def hysteresis(hist, low, high, blocked):
             blocked[k] = True
         elif hist[k] < low:
             blocked[k] = False
+
+
+@nb.njit(**JIT)
+def vfh_step(
+    grid, x0, y0, res, pose, sensors, ranges, max_range, half_cone, clear_range,
+    inc, dec, cmax, fade_factor, window, enlarge, half, raw, hist, low, high,
+    blocked, target, previous, wide, mu_goal, mu_heading, mu_previous,
+):  # fmt: skip
+    """Run one VFH+ cycle in one call (the same numbers as the calls one by one).
+
+    `fade` (if ``fade_factor < 1``), `certainty_update`, `histogram_grid`
+    into ``raw``, `smooth` into ``hist``, `hysteresis` on ``blocked``, then
+    `plus_direction`. Returns the chosen direction (rad, robot frame).
+    """
+    if fade_factor < 1.0:
+        fade(grid, x0, y0, res, pose[0], pose[1], max_range, fade_factor)
+    certainty_update(
+        grid, x0, y0, res, pose, sensors, ranges, max_range, half_cone,
+        clear_range, inc, dec, cmax,
+    )  # fmt: skip
+    histogram_grid(grid, x0, y0, res, pose, window, enlarge, raw)
+    smooth(raw, half, hist)
+    hysteresis(hist, low, high, blocked)
+    return plus_direction(
+        blocked, target, previous, wide, mu_goal, mu_heading, mu_previous
+    )

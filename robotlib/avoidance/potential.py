@@ -181,7 +181,7 @@ class PotentialField(Controller):
 
 
 def force_field(
-    world, goal, resolution: float = 0.4, heading: str = "goal", **gains
+    world, goal, resolution: float = 0.4, heading: str = "goal", force=None, **gains
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Return the potential field's force over a world, as the sonars feel it.
 
@@ -199,8 +199,11 @@ def force_field(
         Grid spacing, m.
     heading : str
         ``"goal"``: each pose faces the goal.
+    force : callable, optional
+        ``force(sonar, pose, goal) -> (fx, fy)`` (robot frame) instead of
+        `potential_force`.
     **gains
-        ``k_att``, ``k_rep``, ``d0`` for `potential_force`.
+        ``k_att``, ``k_rep``, ``d0`` for `potential_force` (or ``force``).
 
     Returns
     -------
@@ -219,8 +222,12 @@ def force_field(
     theta = np.arctan2(goal[1] - gy, goal[0] - gx)
     poses = np.column_stack([gx.ravel(), gy.ravel(), theta.ravel()])
     z = expected_ranges(world, poses)
+    fn = potential_force if force is None else force
     f = np.array(
-        [potential_force(zi, p, goal, **gains) for zi, p in zip(z, poses, strict=True)]
+        [
+            np.asarray(fn(zi, p, goal, **gains), dtype=float)
+            for zi, p in zip(z, poses, strict=True)
+        ]
     )
     c, s = np.cos(poses[:, 2]), np.sin(poses[:, 2])
     fx, fy = c * f[:, 0] - s * f[:, 1], s * f[:, 0] + c * f[:, 1]

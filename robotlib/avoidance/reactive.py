@@ -170,7 +170,8 @@ class WallFollower(Controller):
         if ahead < self.front:
             return 0.0, -s * 0.6 * self.max_turn  # turn away from the wall
         if min(side, diag * math.cos(math.radians(40.0))) > 2.0 * self.distance:
-            return self.speed * 0.6, s * 0.6  # lost the wall: curve towards it
+            # lost the wall: round its end on a circle of the wanted distance
+            return self.speed * 0.6, s * self.speed * 0.6 / self.distance
         # the wall's angle from the side and diagonal (50 deg) sonars
         est = diag * math.cos(math.radians(40.0))
         angle = math.atan2(est - side, diag * math.sin(math.radians(40.0)))

@@ -459,18 +459,42 @@ class VFH(Controller):
             self._blocked, target, self.following, self.follow_margin
         )
 
+    def _fused(self, sonar, pose, window: float, target: float) -> float:
+        """Grid, histogram and choice in one kernel call (the default parts)."""
+        if self.origin is None:
+            half = 0.5 * self.n_cells * self.resolution
+            self.origin = np.array([pose[0] - half, pose[1] - half])
+        previous = 0.0
+        if self._has_previous:
+            previous = _wrap(self._previous - self._heading)
+        hist = np.empty(self.n_sectors)
+        steer = _kernels.vfh_step(
+            self.grid, self.origin[0], self.origin[1], self.resolution, pose,
+            self.sensors, sonar, self.max_range, self.half_cone, self.clear_range,
+            self.increment, self.decrement, self.cmax, self.fade, window,
+            self.enlarge, 2, self._raw, hist, self.threshold_low,
+            self.threshold_high, self._blocked, target, previous, self.wide,
+            self.mu_goal, self.mu_heading, self.mu_previous,
+        )  # fmt: skip
+        self.histogram = hist
+        return steer
+
     def _command(self, sonar: np.ndarray, pose: np.ndarray) -> tuple[float, float]:
-        self.update_grid(sonar, pose)
         if self.goal is None:
             target, window, dist = 0.0, self.window, math.inf
         else:
             # what lies beyond the goal does not block the way to it
             target, dist = self.goal_direction(pose)
             window = min(self.window, dist + self.enlarge)
-        hist = self.polar(pose, window)
-        self.histogram = hist
         self._heading = float(pose[2])
-        steer = self._choose(hist, target)
+        if self.histogram_fn is None and self.direction_fn is None:
+            steer = self._fused(sonar, pose, window, target)
+            hist = self.histogram
+        else:
+            self.update_grid(sonar, pose)
+            hist = self.polar(pose, window)
+            self.histogram = hist
+            steer = self._choose(hist, target)
         if self.goal is not None and self.escape:
             steer = self._escape(pose, dist, target, steer)
         self.steer = steer

@@ -16,6 +16,8 @@ __all__ = ["BENCHES", "add_arguments", "run"]
 BENCHES = {
     "mcl": "robotlib.experiments.bench_mcl",
     "avoid": "robotlib.experiments.bench_avoid",
+    "map": "robotlib.experiments.bench_map",
+    "slam": "robotlib.experiments.bench_map",
     "plan": "robotlib.experiments.bench_plan",
     "nav": "robotlib.experiments.bench_nav",
 }

@@ -18,6 +18,7 @@ values programmatically and read the results.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import partial
 
 import matplotlib.pyplot as plt
 import numpy as np
@@ -49,26 +50,49 @@ KINDS = ("VFH", "potential field", "Braitenberg explorer", "Bug2")
 _DEFAULTS = {"threshold": 150.0, "k_rep": 0.5, "d0": 1.2, "reach": 1.5}
 
 
-def make_controller(kind: str, threshold=150.0, k_rep=0.5, d0=1.2, reach=1.5):
+def make_controller(
+    kind: str,
+    threshold=150.0,
+    k_rep=0.5,
+    d0=1.2,
+    reach=1.5,
+    histogram=None,
+    direction=None,
+    force=None,
+    weights=None,
+):
     """Build a controller of `KINDS` with the panel's gains.
 
     ``threshold``: VFH's upper threshold (the lower one is half of it);
     ``k_rep``, ``d0``: the potential field's repulsion; ``reach``: the range
     at which a Braitenberg vehicle's sonars start to respond, m.
+    ``histogram``, ``direction`` (VFH), ``force`` (potential field) and
+    ``weights`` (the explorer's matrix) replace the library's parts (Lab 2
+    passes the student's).
     """
     if kind == "VFH":
-        return VFH(threshold_high=threshold, threshold_low=threshold / 2)
+        return VFH(
+            threshold_high=threshold,
+            threshold_low=threshold / 2,
+            histogram=histogram,
+            direction=direction,
+        )
     if kind == "potential field":
+        if force is not None:
+            return PotentialField(force=partial(force, k_rep=k_rep, d0=d0))
         return PotentialField(k_rep=k_rep, d0=d0)
     if kind == "Braitenberg explorer":
-        return Braitenberg("explorer", reach=reach)
+        return Braitenberg("explorer" if weights is None else weights, reach=reach)
     if kind == "Bug2":
         return Bug2()
     raise ValueError(f"unknown controller {kind!r}; choose from {KINDS}")
 
 
 def episode_for(world: str, pair: int, kind: str, seed: int = 0, **gains):
-    """Run one episode of ``kind`` on pair ``pair`` of ``start_goal_pairs(world)``."""
+    """Run one episode of ``kind`` on pair ``pair`` of ``start_goal_pairs(world)``.
+
+    ``gains``: `make_controller` keywords.
+    """
     p = start_goal_pairs(world, pair + 1, seed=seed)[pair]
     c = make_controller(kind, **gains)
     return run_episode(world, c, p.goal, start=p.start, seed=seed)
@@ -87,6 +111,10 @@ class EpisodePanel:
         Initial start/goal pair (index into ``start_goal_pairs(world, .., seed)``).
     seed : int
         Seed of the pairs and of the simulator.
+    **gains
+        Initial ``threshold``, ``k_rep``, ``d0``, ``reach``; and parts that
+        replace the library's (``histogram``, ``direction``, ``force``,
+        ``weights``: see `make_controller`).
 
     Attributes
     ----------
@@ -99,6 +127,8 @@ class EpisodePanel:
     def __init__(self, world="utrap", kind="VFH", pair=0, seed=0, **gains):
         import ipywidgets as w
 
+        parts = ("histogram", "direction", "force", "weights")
+        self.parts = {k: gains.pop(k) for k in parts if k in gains}
         start = {**_DEFAULTS, **gains}
         self.world_name, self.seed = world, seed
         self.world = load_world(world)
@@ -160,7 +190,7 @@ class EpisodePanel:
 
         self.episode = ep = episode_for(
             self.world_name, int(self.pair.value), self.kind.value, self.seed,
-            **self.settings(),
+            **self.settings(), **self.parts,
         )  # fmt: skip
         self.figure.clf()
         a, b = self.figure.subplots(1, 2, gridspec_kw={"width_ratios": [1.3, 1]})
