@@ -270,6 +270,7 @@ def release_notebook(nb: NotebookNode, name: str = "notebook") -> NotebookNode:
         new.id = cid
         if meta is not None:
             new.metadata = {META_KEY: meta, "deletable": False, "editable": False}
+            new.metadata["tags"] = ["graded"]  # JupyterLab shows it: a graded check
         cells.append(new)
     out = nbformat.v4.new_notebook(cells=cells)
     out.metadata = {"kernelspec": dict(KERNELSPEC), "language_info": {"name": "python"}}
