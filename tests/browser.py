@@ -34,9 +34,7 @@ LAB_SETTINGS = {
         "fetchNews": "false",
         "checkForUpdates": False,
     },
-    "@jupyterlab/docmanager-extension/plugin.jupyterlab-settings": {
-        "autosave": False
-    },
+    "@jupyterlab/docmanager-extension/plugin.jupyterlab-settings": {"autosave": False},
 }
 
 _HASH_IMAGES = """(root) => {
@@ -121,7 +119,8 @@ class Lab:
         base = f"http://127.0.0.1:{self.port}/api/kernels"
         auth = {"Authorization": f"token {self.token}"}
         try:
-            with urllib.request.urlopen(urllib.request.Request(base, headers=auth)) as r:
+            listing = urllib.request.Request(base, headers=auth)
+            with urllib.request.urlopen(listing, timeout=10) as r:
                 kernels = json.load(r)
             for k in kernels:
                 req = urllib.request.Request(
@@ -277,7 +276,8 @@ def run_notebook(
     page.wait_for_timeout(1500)
     saved = lab.root / path
     run.notebook = json.loads(saved.read_text())
-    for i, cell in enumerate(c for c in run.notebook["cells"] if c["cell_type"] == "code"):
+    code = [c for c in run.notebook["cells"] if c["cell_type"] == "code"]
+    for i, cell in enumerate(code):
         for out in cell.get("outputs", []):
             if out.get("output_type") == "error":
                 text = "\n".join(out.get("traceback", []))

@@ -1,4 +1,4 @@
-"""Every solution and released lab, run in a real browser: JupyterLab in headless Chromium.
+"""Every solution and released lab, run in JupyterLab in headless Chromium.
 
 Starts JupyterLab on a copy of ``solutions/`` and ``labs/`` (found by glob,
 so new labs are covered as they land), opens each notebook in Debian's
@@ -79,7 +79,8 @@ def problems(run, solution: bool) -> list[str]:
         if p["redraw_s"] is None or p["redraw_s"] > PANEL_REDRAW:
             out.append(f"panel {p['panel']} did not redraw after '{p['slider']}'")
         elif p["feedback_s"] is None or p["feedback_s"] > PANEL_FEEDBACK:
-            out.append(f"panel {p['panel']} showed no feedback within {PANEL_FEEDBACK} s")
+            late = f"panel {p['panel']} showed no feedback within {PANEL_FEEDBACK} s"
+            out.append(late)
     for a in run.animations:
         if a["after"] <= a["start"]:
             out.append(f"animation {a['player']} did not advance")
@@ -117,8 +118,12 @@ def test_notebook_in_a_real_browser(lab, browser, path):
 SELFTEST = {
     "cells": [
         {
-            "cell_type": "code", "metadata": {}, "outputs": [], "execution_count": None,
-            "id": f"c{i}", "source": src,
+            "cell_type": "code",
+            "metadata": {},
+            "outputs": [],
+            "execution_count": None,
+            "id": f"c{i}",
+            "source": src,
         }  # fmt: skip
         for i, src in enumerate(
             [
@@ -127,7 +132,8 @@ SELFTEST = {
                 "    fig.add_subplot().plot([0, 1], [0, v])\n    buf = io.BytesIO()\n"
                 "    fig.savefig(buf, format='png')\n    return buf.getvalue()\n\n\n"
                 "def panel(live):\n    s = w.FloatSlider(value=1.0, min=0, max=5,"
-                " step=0.1, continuous_update=False)\n    img = w.Image(value=png(1.0))\n"
+                " step=0.1, continuous_update=False)\n"
+                "    img = w.Image(value=png(1.0))\n"
                 "    label = w.Label('ready')\n\n    def changed(c):\n"
                 "        label.value = 'running'\n        if live:\n"
                 "            img.value = png(c['new'])\n\n"
@@ -139,7 +145,11 @@ SELFTEST = {
         )
     ],
     "metadata": {
-        "kernelspec": {"name": "python3", "display_name": "Python 3", "language": "python"}
+        "kernelspec": {
+            "name": "python3",
+            "display_name": "Python 3",
+            "language": "python",
+        }
     },
     "nbformat": 4,
     "nbformat_minor": 5,

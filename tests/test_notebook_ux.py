@@ -1,4 +1,4 @@
-"""What a student sees, tested headless: warm-up, progress, plain unsolved errors, panels."""
+"""What a student sees, headless: warm-up, progress, unsolved errors, panels."""
 
 from __future__ import annotations
 
@@ -60,7 +60,8 @@ def test_warmup_command_lists_and_warms(capsys):
 def _run(cells, tmp_path):
     book = nbformat.v4.new_notebook()
     for kind, src in cells:
-        make = nbformat.v4.new_code_cell if kind == "code" else nbformat.v4.new_markdown_cell
+        v4 = nbformat.v4
+        make = v4.new_code_cell if kind == "code" else v4.new_markdown_cell
         book.cells.append(make(src))
     (tmp_path / "lab.ipynb").write_text(nbformat.writes(book))
     client = NotebookClient(
@@ -79,7 +80,7 @@ def test_an_unsolved_exercise_is_said_plainly_and_still_fails(tmp_path):
         [
             ("code", "import robotlib.notebook\nrobotlib.notebook.explain_unsolved()"),
             ("markdown", "### Exercise 3\nWrite `resize`."),
-            ("code", "def resize(n):\n    # YOUR CODE HERE\n    raise NotImplementedError()"),
+            ("code", "def resize(n):\n    raise NotImplementedError()"),
             ("code", "resize(3)"),
             ("code", "from robotlib.robot import Robot\nRobot.move(None, 1.0)"),
         ],
