@@ -58,6 +58,7 @@ def test_warmup_command_lists_and_warms(capsys):
 
 
 def _run(cells, tmp_path):
+    (tmp_path / "lib.py").write_text("def later():\n    raise NotImplementedError\n")
     book = nbformat.v4.new_notebook()
     for kind, src in cells:
         v4 = nbformat.v4
@@ -82,7 +83,7 @@ def test_an_unsolved_exercise_is_said_plainly_and_still_fails(tmp_path):
             ("markdown", "### Exercise 3\nWrite `resize`."),
             ("code", "def resize(n):\n    raise NotImplementedError()"),
             ("code", "resize(3)"),
-            ("code", "from robotlib.robot import Robot\nRobot.move(None, 1.0)"),
+            ("code", "import lib\nlib.later()"),
         ],
         tmp_path,
     )
