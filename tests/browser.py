@@ -114,19 +114,24 @@ class Lab:
             f"?reset&token={self.token}"
         )
 
-    def shutdown_kernels(self) -> None:
-        """End every kernel the server started (one notebook at a time)."""
-        base = f"http://127.0.0.1:{self.port}/api/kernels"
+    def _api(self, path: str, method: str = "GET"):
+        url = f"http://127.0.0.1:{self.port}/api/{path}"
         auth = {"Authorization": f"token {self.token}"}
+        req = urllib.request.Request(url, headers=auth, method=method)
+        with urllib.request.urlopen(req, timeout=10) as r:
+            body = r.read()
+        return json.loads(body) if body else None
+
+    def shutdown_kernels(self, notebook: str | None = None) -> None:
+        """End the kernel of ``notebook`` (a path in the copy), or every kernel."""
         try:
-            listing = urllib.request.Request(base, headers=auth)
-            with urllib.request.urlopen(listing, timeout=10) as r:
-                kernels = json.load(r)
-            for k in kernels:
-                req = urllib.request.Request(
-                    f"{base}/{k['id']}", headers=auth, method="DELETE"
-                )
-                urllib.request.urlopen(req, timeout=10).read()
+            if notebook is None:
+                for k in self._api("kernels"):
+                    self._api(f"kernels/{k['id']}", "DELETE")
+                return
+            for session in self._api("sessions"):
+                if session.get("path") == notebook:
+                    self._api(f"sessions/{session['id']}", "DELETE")
         except OSError:
             pass
 
@@ -226,64 +231,105 @@ def _prompts(page) -> list[str]:
     )
 
 
-def run_notebook(
-    lab: Lab, browser: Browser, path: str, timeout: float, panel_bound: float = 60.0
-) -> Run:
-    """Open ``path``, Run All Cells, wait until done (or ``timeout`` s), save.
+class _Session:
+    """One notebook open in its own page, from Run All to its saved file."""
 
-    Returns the `Run`; its ``notebook`` is the saved file (outputs and all)
-    and ``errors`` the error outputs in it.
-    """
-    run = Run(path)
-    page = browser.page(run)
-    page.goto(lab.url(path))
-    page.wait_for_selector(".jp-Notebook .jp-CodeCell", timeout=60_000)
-    page.wait_for_selector(".jp-Notebook-ExecutionIndicator", timeout=60_000)
-    page.wait_for_function(  # the kernel has started and answers
-        "() => /\\|\\s*Idle/.test("
-        "document.querySelector('#jp-main-statusbar')?.innerText || '')",
-        timeout=90_000,
-    )
-    t0 = time.monotonic()
-    for _attempt in range(3):
-        page.locator(".jp-Notebook").first.click()
-        _menu(page, "Run", "Run All Cells")
-        started = time.monotonic() + 15
-        while time.monotonic() < started:  # until a cell is queued or done
-            if any(p not in ("[ ]:", "") for p in _prompts(page)):
-                break
-            time.sleep(0.05)
-        else:
-            continue  # the kernel was not listening yet: ask again
-        break
-    deadline = t0 + timeout
-    while time.monotonic() < deadline:
+    def __init__(self, lab: Lab, browser: Browser, path: str):
+        self.lab, self.browser, self.path = lab, browser, path
+        self.run = Run(path)
+        self.page = page = browser.page(self.run)
+        page.goto(lab.url(path))
+        page.wait_for_selector(".jp-Notebook .jp-CodeCell", timeout=60_000)
+        page.wait_for_selector(".jp-Notebook-ExecutionIndicator", timeout=60_000)
+        page.wait_for_function(  # the kernel has started and answers
+            "() => /\\|\\s*Idle/.test("
+            "document.querySelector('#jp-main-statusbar')?.innerText || '')",
+            timeout=90_000,
+        )
+        self.t0 = time.monotonic()
+        for _attempt in range(3):
+            page.locator(".jp-Notebook").first.click()
+            _menu(page, "Run", "Run All Cells")
+            started = time.monotonic() + 15
+            while time.monotonic() < started:  # until a cell is queued or done
+                if any(p not in ("[ ]:", "") for p in _prompts(page)):
+                    break
+                time.sleep(0.05)
+            else:
+                continue  # the kernel was not listening yet: ask again
+            break
+
+    def poll(self) -> bool:
+        """Note the first cell's time; return True once every cell has run."""
+        run, page = self.run, self.page
         prompts = _prompts(page)
         if run.first_cell_s is None and prompts and prompts[0] not in ("[*]:", "[ ]:"):
-            run.first_cell_s = time.monotonic() - t0
+            run.first_cell_s = time.monotonic() - self.t0
         status = page.get_attribute(".jp-Notebook-ExecutionIndicator", "data-status")
         if status == "idle" and not any("*" in p for p in prompts):
             run.finished = True
-            break
-        time.sleep(0.25)
-    run.run_all_s = time.monotonic() - t0
-    stem = path.replace("/", "_").removesuffix(".ipynb")
-    page.screenshot(path=str(browser.screenshots / f"{stem}.png"))
-    if run.finished:
-        run.panels = check_panels(page, browser.screenshots / stem, panel_bound)
-        run.animations = check_animations(page)
-    page.keyboard.press("Control+s")
-    page.wait_for_timeout(1500)
-    saved = lab.root / path
-    run.notebook = json.loads(saved.read_text())
-    code = [c for c in run.notebook["cells"] if c["cell_type"] == "code"]
-    for i, cell in enumerate(code):
-        for out in cell.get("outputs", []):
-            if out.get("output_type") == "error":
-                text = "\n".join(out.get("traceback", []))
-                run.errors.append((i, out.get("ename"), text))
-    page.context.close()
-    return run
+        run.run_all_s = time.monotonic() - self.t0
+        return run.finished
+
+    def finish(self, panel_bound: float) -> Run:
+        """Screenshot, check panels and animations, save, read the errors."""
+        run, page = self.run, self.page
+        stem = self.path.replace("/", "_").removesuffix(".ipynb")
+        page.screenshot(path=str(self.browser.screenshots / f"{stem}.png"))
+        if run.finished:
+            shots = self.browser.screenshots / stem
+            run.panels = check_panels(page, shots, panel_bound)
+            run.animations = check_animations(page)
+        page.keyboard.press("Control+s")
+        page.wait_for_timeout(1500)
+        run.notebook = json.loads((self.lab.root / self.path).read_text())
+        code = [c for c in run.notebook["cells"] if c["cell_type"] == "code"]
+        for i, cell in enumerate(code):
+            for out in cell.get("outputs", []):
+                if out.get("output_type") == "error":
+                    text = "\n".join(out.get("traceback", []))
+                    run.errors.append((i, out.get("ename"), text))
+        page.context.close()
+        self.lab.shutdown_kernels(self.path)  # the next notebooks get the cores
+        return run
+
+
+def run_notebooks(
+    lab: Lab,
+    browser: Browser,
+    paths: list[str],
+    timeout: float,
+    panel_bound: float = 60.0,
+    at_once: int = 2,
+) -> list[Run]:
+    """Open each notebook, Run All Cells, wait (``timeout`` s each), check, save.
+
+    Up to ``at_once`` notebooks run at the same time (one kernel per core);
+    panels are checked once a notebook is done, while no other notebook of
+    the batch is running. Returns the `Run` of each path, in order; its
+    ``notebook`` is the saved file (outputs and all), ``errors`` the error
+    outputs in it.
+    """
+    runs: dict[str, Run] = {}
+    todo = list(paths)
+    while todo:
+        batch = [_Session(lab, browser, p) for p in todo[:at_once]]
+        todo = todo[at_once:]
+        waiting = list(batch)
+        while waiting:
+            for session in list(waiting):
+                late = time.monotonic() - session.t0 > timeout
+                if session.poll() or late:
+                    waiting.remove(session)
+            time.sleep(0.25)
+        for session in batch:
+            runs[session.path] = session.finish(panel_bound)
+    return [runs[p] for p in paths]
+
+
+def run_notebook(lab, browser, path, timeout, panel_bound: float = 60.0) -> Run:
+    """Run one notebook (see `run_notebooks`)."""
+    return run_notebooks(lab, browser, [path], timeout, panel_bound)[0]
 
 
 def check_panels(page, stem: Path, bound: float = 60.0) -> list[dict]:
