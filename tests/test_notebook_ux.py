@@ -159,3 +159,47 @@ def test_mcl_panel_answers_at_once_and_runs_the_newest_in_the_background(route):
     assert "robotlib-stale" not in panel.image._dom_classes
     assert panel.timings["feedback_s"] < 0.1
     assert json.dumps(panel.timings)
+
+
+def test_run_mcl_keeps_snapshots_and_times_and_they_plot(route):
+    from matplotlib.figure import Figure
+
+    from robotlib.plotting.mcl import plot_particle_snapshots
+
+    seen = []
+    h = widgets.run_mcl(
+        route, n=200, seed=0, snapshot_steps=(1, 5), on_step=lambda k, n: seen.append(k)
+    )
+    assert seen == list(range(1, len(route) + 1))
+    assert sorted(h.snapshots) == [1, 5]
+    assert h.snapshots[1]["particles"].shape == (h.n_particles[0], 3)
+    assert abs(h.snapshots[5]["weights"].sum() - 1) < 1e-9
+    assert all(t > 0 for t in h.time_ms)
+    again = widgets.run_mcl(route, n=200, seed=0)  # snapshots change nothing
+    assert again.estimate[-1].tolist() == h.estimate[-1].tolist()
+    fig = Figure()
+    axes = plot_particle_snapshots(fig, route.world, h.snapshots)
+    assert [a.get_title(loc="left") for a in axes[:2]] == [
+        f"step 1: {h.n_particles[0]} particles",
+        f"step 5: {len(h.snapshots[5]['particles'])} particles",
+    ]
+    assert all(a.get_aspect() == 1.0 for a in axes[:2])
+
+
+def test_legends_go_outside_the_map():
+    from matplotlib.figure import Figure
+
+    from robotlib.plotting import plot_world
+    from robotlib.plotting.style import PALETTE, legend_outside, map_figsize
+
+    fig = Figure(figsize=map_figsize(load_world("corridor").bounds))
+    ax = fig.add_subplot()
+    plot_world(ax, load_world("corridor"))
+    ax.plot([1, 2], [4, 4], label="path")
+    legend = legend_outside(ax)  # a wide map: the legend goes above it
+    fig.canvas.draw()
+    box, axbox = legend.get_window_extent(), ax.get_window_extent()
+    assert box.y0 >= axbox.y1 - 1
+    assert len(set(PALETTE)) == 8
+    w, h = map_figsize((0, 0, 29, 8))
+    assert w == 9.0 and 1.8 <= h <= 6.0

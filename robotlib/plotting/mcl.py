@@ -176,8 +176,10 @@ def plot_mcl_run(
     return fig
 
 
-def plot_particle_snapshots(fig, world, snapshots, title_fmt="step {step}"):
-    """Draw the particle cloud at a few steps, one map per row.
+def plot_particle_snapshots(
+    fig, world, snapshots, title_fmt: str = "step {step}: {n} particles"
+):
+    """Draw the particle cloud at a few steps, two maps per row.
 
     Parameters
     ----------
@@ -200,15 +202,22 @@ def plot_particle_snapshots(fig, world, snapshots, title_fmt="step {step}"):
 
     fig.clear()
     steps = sorted(snapshots)
-    axes = fig.subplots(len(steps), 1, squeeze=False)[:, 0]
-    for ax, step in zip(axes, steps, strict=True):
+    ncols = 2 if len(steps) > 2 else 1
+    nrows = -(-len(steps) // ncols)
+    axes = fig.subplots(nrows, ncols, squeeze=False).ravel()
+    for ax in axes[len(steps) :]:
+        ax.set_axis_off()
+    for ax, step in zip(axes, steps, strict=False):
         snap = snapshots[step]
-        plot_world(ax, world, linewidth=1)
+        plot_world(ax, world, linewidth=0.8)
         plot_particles(ax, snap["particles"], snap["weights"], arrows=False)
-        plot_robot(ax, snap["truth"], color=COLORS["true"], alpha=0.3, label="true")
-        e = snap["estimate"]
-        mark = {"color": COLORS["estimate"], "ms": 8, "mew": 2}
+        t, e = snap["truth"], snap["estimate"]
+        plot_robot(ax, t, color=COLORS["robot"], alpha=0.9)
+        ring = {"mfc": "none", "mec": COLORS["robot"], "ms": 11, "mew": 1.5}
+        ax.plot(t[0], t[1], "o", label="true pose", **ring)
+        mark = {"color": COLORS["estimate"], "ms": 9, "mew": 2}
         ax.plot(e[0], e[1], "x", label="estimate", **mark)
         ax.set_title(title_fmt.format(step=step, n=len(snap["particles"])), loc="left")
-    legend_outside(axes[0], "top")
+    handles, labels = axes[0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="outside upper right", ncols=len(labels))
     return list(axes)
