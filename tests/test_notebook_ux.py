@@ -172,7 +172,8 @@ def test_run_mcl_keeps_snapshots_and_times_and_they_plot(route):
     )
     assert seen == list(range(1, len(route) + 1))
     assert sorted(h.snapshots) == [1, 5]
-    assert h.snapshots[1]["particles"].shape == (h.n_particles[0], 3)
+    first = h.snapshots[1]  # after step 1's resampling
+    assert first["particles"].shape == (len(first["weights"]), 3)
     assert abs(h.snapshots[5]["weights"].sum() - 1) < 1e-9
     assert all(t > 0 for t in h.time_ms)
     again = widgets.run_mcl(route, n=200, seed=0)  # snapshots change nothing
@@ -180,7 +181,7 @@ def test_run_mcl_keeps_snapshots_and_times_and_they_plot(route):
     fig = Figure()
     axes = plot_particle_snapshots(fig, route.world, h.snapshots)
     assert [a.get_title(loc="left") for a in axes[:2]] == [
-        f"step 1: {h.n_particles[0]} particles",
+        f"step 1: {len(first['particles'])} particles",
         f"step 5: {len(h.snapshots[5]['particles'])} particles",
     ]
     assert all(a.get_aspect() == 1.0 for a in axes[:2])
