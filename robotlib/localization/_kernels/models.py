@@ -84,63 +84,6 @@ def _beam_loglik(
 beam_loglik, beam_loglik_parallel = serial_and_parallel(_beam_loglik)
 
 
-@nb.njit(**JIT)
-def _field_one(
-    j,
-    particles,
-    sensors,
-    z,
-    max_range,
-    z_hit,
-    z_rand,
-    sigma,
-    field,
-    segments,
-    x0,
-    y0,
-    inv_res,
-    far,
-    out,
-):
-    c = math.cos(particles[j, 2])
-    s = math.sin(particles[j, 2])
-    ny, nx = field.shape
-    ll = 0.0
-    for i in range(sensors.shape[0]):
-        if z[i] >= max_range - 1e-3:
-            continue
-        sx = particles[j, 0] + c * sensors[i, 0] - s * sensors[i, 1]
-        sy = particles[j, 1] + s * sensors[i, 0] + c * sensors[i, 1]
-        a = particles[j, 2] + sensors[i, 2]
-        ex = sx + z[i] * math.cos(a)
-        ey = sy + z[i] * math.sin(a)
-        if segments.shape[0] > 0:
-            d = np.inf
-            for m in range(segments.shape[0]):
-                dm = point_segment_distance(
-                    ex,
-                    ey,
-                    segments[m, 0],
-                    segments[m, 1],
-                    segments[m, 2],
-                    segments[m, 3],
-                )
-                if dm < d:
-                    d = dm
-        else:
-            col = int(math.floor((ex - x0) * inv_res))
-            row = int(math.floor((ey - y0) * inv_res))
-            if 0 <= row < ny and 0 <= col < nx:
-                d = field[row, col]
-            else:
-                d = far
-        u = d / sigma
-        ll += math.log(
-            z_hit * math.exp(-0.5 * u * u - _LOG_SQRT_2PI) / sigma + z_rand / max_range
-        )
-    out[j] = ll
-
-
 def _field_loglik(
     particles,
     sensors,
@@ -166,23 +109,44 @@ def _field_loglik(
     (``far`` outside the grid). Max readings are skipped.
     """
     for j in nb.prange(particles.shape[0]):
-        _field_one(
-            j,
-            particles,
-            sensors,
-            z,
-            max_range,
-            z_hit,
-            z_rand,
-            sigma,
-            field,
-            segments,
-            x0,
-            y0,
-            inv_res,
-            far,
-            out,
-        )
+        c = math.cos(particles[j, 2])
+        s = math.sin(particles[j, 2])
+        ny, nx = field.shape
+        ll = 0.0
+        for i in range(sensors.shape[0]):
+            if z[i] >= max_range - 1e-3:
+                continue
+            sx = particles[j, 0] + c * sensors[i, 0] - s * sensors[i, 1]
+            sy = particles[j, 1] + s * sensors[i, 0] + c * sensors[i, 1]
+            a = particles[j, 2] + sensors[i, 2]
+            ex = sx + z[i] * math.cos(a)
+            ey = sy + z[i] * math.sin(a)
+            if segments.shape[0] > 0:
+                d = np.inf
+                for m in range(segments.shape[0]):
+                    dm = point_segment_distance(
+                        ex,
+                        ey,
+                        segments[m, 0],
+                        segments[m, 1],
+                        segments[m, 2],
+                        segments[m, 3],
+                    )
+                    if dm < d:
+                        d = dm
+            else:
+                col = int(math.floor((ex - x0) * inv_res))
+                row = int(math.floor((ey - y0) * inv_res))
+                if 0 <= row < ny and 0 <= col < nx:
+                    d = field[row, col]
+                else:
+                    d = far
+            u = d / sigma
+            ll += math.log(
+                z_hit * math.exp(-0.5 * u * u - _LOG_SQRT_2PI) / sigma
+                + z_rand / max_range
+            )
+        out[j] = ll
 
 
 field_loglik, field_loglik_parallel = serial_and_parallel(_field_loglik)

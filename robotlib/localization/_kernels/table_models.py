@@ -56,18 +56,6 @@ def _beam_mm(i, mm, z, e_short, is_max, hit, short, z_max, p_rand, inv_sigma):
 
 
 @nb.njit(**JIT)
-def _beam_table_one(
-    j, particles, sensors, table, x0, y0, inv_res, z, e_short, is_max, hit, short,
-    z_max, p_rand, inv_sigma, exponent, out,
-):  # fmt: skip
-    _beam_table_cs(
-        j, particles, math.cos(particles[j, 2]), math.sin(particles[j, 2]), sensors,
-        table, x0, y0, inv_res, z, e_short, is_max, hit, short, z_max, p_rand,
-        inv_sigma, exponent, np.inf, out,
-    )  # fmt: skip
-
-
-@nb.njit(**JIT)
 def _beam_table_cs(
     j, particles, c, s, sensors, table, x0, y0, inv_res, z, e_short, is_max, hit,
     short, z_max, p_rand, inv_sigma, exponent, u2_skip, out,
@@ -138,25 +126,11 @@ def _beam_table_loglik(
     reading); ``p_rand = z_rand / max_range``.
     """
     for j in nb.prange(particles.shape[0]):
-        _beam_table_one(
-            j,
-            particles,
-            sensors,
-            table,
-            x0,
-            y0,
-            inv_res,
-            z,
-            e_short,
-            is_max,
-            hit,
-            short,
-            z_max,
-            p_rand,
-            inv_sigma,
-            exponent,
-            out,
-        )
+        _beam_table_cs(
+            j, particles, math.cos(particles[j, 2]), math.sin(particles[j, 2]), sensors,
+            table, x0, y0, inv_res, z, e_short, is_max, hit, short, z_max, p_rand,
+            inv_sigma, exponent, np.inf, out,
+        )  # fmt: skip
 
 
 beam_table_loglik, beam_table_loglik_parallel = serial_and_parallel(_beam_table_loglik)
@@ -174,13 +148,6 @@ def beam_scan_lut(z, e_short, is_max, hit, short, z_max, p_rand, inv_sigma, lut)
             lut[i, mm] = _beam_mm(
                 i, mm, z, e_short, is_max, hit, short, z_max, p_rand, inv_sigma
             )
-
-
-@nb.njit(**JIT)
-def _lut_one(j, particles, sensors, table, x0, y0, inv_res, lut, exponent, out):
-    c = math.cos(particles[j, 2])
-    s = math.sin(particles[j, 2])
-    _lut_cs(j, particles, c, s, sensors, table, x0, y0, inv_res, lut, exponent, out)
 
 
 @nb.njit(**JIT)
@@ -206,14 +173,9 @@ def lut_table_loglik_parallel(
     Gives the same numbers as `beam_table_loglik`.
     """
     for j in nb.prange(particles.shape[0]):
-        _lut_one(j, particles, sensors, table, x0, y0, inv_res, lut, exponent, out)
-
-
-@nb.njit(**JIT)
-def _paper_table_one(j, particles, sensors, table, x0, y0, inv_res, z, inv_n, out):
-    c = math.cos(particles[j, 2])
-    s = math.sin(particles[j, 2])
-    _paper_cs(j, particles, c, s, sensors, table, x0, y0, inv_res, z, inv_n, out)
+        c = math.cos(particles[j, 2])
+        s = math.sin(particles[j, 2])
+        _lut_cs(j, particles, c, s, sensors, table, x0, y0, inv_res, lut, exponent, out)
 
 
 @nb.njit(**JIT)
@@ -228,7 +190,9 @@ def _paper_cs(j, particles, c, s, sensors, table, x0, y0, inv_res, z, inv_n, out
 def _paper_table_loglik(particles, sensors, table, x0, y0, inv_res, z, inv_n, out):
     """`expected_table` then `paper_loglik` (``inv_n = 1/n``) in one pass."""
     for j in nb.prange(particles.shape[0]):
-        _paper_table_one(j, particles, sensors, table, x0, y0, inv_res, z, inv_n, out)
+        c = math.cos(particles[j, 2])
+        s = math.sin(particles[j, 2])
+        _paper_cs(j, particles, c, s, sensors, table, x0, y0, inv_res, z, inv_n, out)
 
 
 paper_table_loglik, paper_table_loglik_parallel = serial_and_parallel(
