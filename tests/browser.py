@@ -160,6 +160,7 @@ class Run:
     blocked: list = field(default_factory=list)
     panels: list = field(default_factory=list)
     animations: list = field(default_factory=list)
+    figures: list = field(default_factory=list)  # (natural, shown) widths, px
     notebook: dict = field(default_factory=dict)
 
 
@@ -278,6 +279,11 @@ class _Session:
         run, page = self.run, self.page
         stem = self.path.replace("/", "_").removesuffix(".ipynb")
         page.screenshot(path=str(self.browser.screenshots / f"{stem}.png"))
+        run.figures = page.eval_on_selector_all(
+            ".jp-OutputArea-output img",
+            "els => els.filter(e => e.naturalWidth).map("
+            "e => [e.naturalWidth, e.getBoundingClientRect().width])",
+        )
         if run.finished:
             shots = self.browser.screenshots / stem
             run.panels = check_panels(page, shots, panel_bound)

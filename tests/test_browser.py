@@ -44,6 +44,7 @@ RUN_ALL_LIMIT = 300.0  # s per notebook (a solution runs in ~60 s under nbval)
 PANEL_REDRAW = 60.0  # s from a slider change to the new figure
 PANEL_FEEDBACK = 1.0  # s to the first sign of a run (100 ms on an idle laptop)
 UNSOLVED_LINES = 4
+SHRUNK = 0.7  # a figure shown below 70 % of its own width is too wide for the page
 
 _have = importlib.util.find_spec("playwright") is not None and Path(CHROMIUM).exists()
 if not _have and os.environ.get("ROBOTLIB_BROWSER_TEST") == "1":
@@ -82,6 +83,9 @@ def problems(run, solution: bool) -> list[str]:
         elif p["feedback_s"] is None or p["feedback_s"] > PANEL_FEEDBACK:
             late = f"panel {p['panel']} showed no feedback within {PANEL_FEEDBACK} s"
             out.append(late)
+    for natural, shown in run.figures:
+        if shown < SHRUNK * natural:
+            out.append(f"a {natural} px figure is shrunk to {shown / natural:.0%}")
     for a in run.animations:
         if a["after"] <= a["start"]:
             out.append(f"animation {a['player']} did not advance")
@@ -100,6 +104,7 @@ def _record(run) -> None:
         "panels": run.panels,
         "animations": run.animations,
         "errors": len(run.errors),
+        "figures": run.figures,
     }
     path.write_text(json.dumps(timings, indent=1))
 
