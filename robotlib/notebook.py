@@ -199,7 +199,7 @@ def progress(iterable=None, desc: str = "", total: int | None = None, **kw):
     return tqdm(iterable, desc=desc, total=total, **kw)
 
 
-_BAR = "{desc}: {n}/{total} steps |{bar}| {elapsed} {postfix}"
+_BAR = "{desc}: {n}/{total} steps |{bar}| {elapsed}{postfix}"
 
 
 def _stamp_file() -> Path:
@@ -379,7 +379,7 @@ def _notice_compiling() -> None:
                 state["t0"], state["n"] = time.perf_counter(), 0
                 state["bar"] = progress(
                     desc="compiling kernels (once, then cached)",
-                    bar_format="{desc}: {n} done {postfix}",
+                    bar_format="{desc}: {n} done{postfix}",
                 )
             state["n"] += 1
             state["bar"].set_postfix_str(
