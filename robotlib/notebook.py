@@ -84,6 +84,14 @@ def _warm_filter(make: Callable) -> Callable[[], None]:
     return warm
 
 
+def _warm_mapping() -> None:
+    from .mapping import record_drive, run_fastslam
+
+    log = record_drive("loop", [(3.0, 1.5)], seed=0, every=2)
+    run_fastslam(log, 4, "laser", rng=0)
+    run_fastslam(log, 4, "sonar", rng=0)
+
+
 def _paper(world):
     from .localization import MCL
 
@@ -118,6 +126,7 @@ WARMUPS: dict[str, Callable[[], None] | list[tuple[str, Callable[[], None]]]] = 
         ("beam + KLD", _warm_filter(_beam_kld)),
         ("MCL.best (threads)", _warm_filter(_best)),
     ],
+    "mapping": _warm_mapping,
 }
 """What `warm_up` can compile: a name to a function that runs its kernels
 once, or to a list of ``(label, function)`` steps (the progress bar counts

@@ -15,6 +15,8 @@ __all__ = ["BENCHES", "add_arguments", "run"]
 
 BENCHES = {
     "mcl": "robotlib.experiments.bench_mcl",
+    "map": "robotlib.experiments.bench_map",
+    "slam": "robotlib.experiments.bench_map",
 }
 """Topic name to the module that measures it."""
 
