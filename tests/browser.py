@@ -28,7 +28,8 @@ from pathlib import Path
 CHROMIUM = "/usr/bin/chromium"
 LAB_SETTINGS = {
     "@jupyterlab/notebook-extension/tracker.jupyterlab-settings": {
-        "windowingMode": "none"
+        "windowingMode": "none",
+        "recordTiming": True,  # each cell's start and end in the saved file
     },
     "@jupyterlab/apputils-extension/notification.jupyterlab-settings": {
         "fetchNews": "false",
@@ -161,6 +162,7 @@ class Run:
     panels: list = field(default_factory=list)
     animations: list = field(default_factory=list)
     figures: list = field(default_factory=list)  # (natural, shown) widths, px
+    cells_s: list = field(default_factory=list)  # each code cell's run time, s
     notebook: dict = field(default_factory=dict)
 
 
@@ -234,6 +236,21 @@ def _prompts(page) -> list[str]:
     )
 
 
+def _cell_seconds(cell) -> float | None:
+    """A code cell's run time from JupyterLab's timing metadata (None: not run)."""
+    from datetime import datetime
+
+    t = cell.get("metadata", {}).get("execution", {})
+    start = t.get("iopub.execute_input") or t.get("iopub.status.busy")
+    end = t.get("shell.execute_reply")
+    if not (start and end):
+        return None
+    parse = datetime.fromisoformat
+    return (
+        parse(end.replace("Z", "+00:00")) - parse(start.replace("Z", "+00:00"))
+    ).total_seconds()
+
+
 class _Session:
     """One notebook open in its own page, from Run All to its saved file."""
 
@@ -292,6 +309,9 @@ class _Session:
         page.wait_for_timeout(1500)
         run.notebook = json.loads((self.lab.root / self.path).read_text())
         code = [c for c in run.notebook["cells"] if c["cell_type"] == "code"]
+        run.cells_s = [_cell_seconds(c) for c in code]
+        if run.cells_s and run.cells_s[0] is not None:
+            run.first_cell_s = run.cells_s[0]  # as JupyterLab timed it
         for i, cell in enumerate(code):
             for out in cell.get("outputs", []):
                 if out.get("output_type") == "error":

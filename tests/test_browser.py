@@ -105,6 +105,7 @@ def _record(run) -> None:
         "animations": run.animations,
         "errors": len(run.errors),
         "figures": run.figures,
+        "cells_s": run.cells_s,
     }
     path.write_text(json.dumps(timings, indent=1))
 
