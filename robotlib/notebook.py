@@ -84,6 +84,24 @@ def _warm_filter(make: Callable) -> Callable[[], None]:
     return warm
 
 
+def _warm_avoidance() -> None:
+    from .avoidance import (
+        VFH,
+        Bug2,
+        PotentialField,
+        WallFollower,
+        polar_histogram,
+        run_episode,
+        smooth_histogram,
+    )
+    from .world import World
+
+    box = World(segments=[[0, 0, 4, 0], [4, 0, 4, 3], [4, 3, 0, 3], [0, 3, 0, 0]])
+    for c in (VFH(), PotentialField(), Bug2(), WallFollower()):
+        run_episode(box, c, goal=(3.0, 1.5), start=(1.0, 1.5, 0.0), seed=0, max_time=1)
+    smooth_histogram(polar_histogram([[1.0, 0.0]], [1.0], [0.0, 0.0, 0.0]))
+
+
 def _warm_mapping() -> None:
     from .mapping import record_drive, run_fastslam
 
@@ -127,6 +145,7 @@ WARMUPS: dict[str, Callable[[], None] | list[tuple[str, Callable[[], None]]]] = 
         ("MCL.best (threads)", _warm_filter(_best)),
     ],
     "mapping": _warm_mapping,
+    "avoidance": _warm_avoidance,
 }
 """What `warm_up` can compile: a name to a function that runs its kernels
 once, or to a list of ``(label, function)`` steps (the progress bar counts
