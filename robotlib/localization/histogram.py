@@ -46,7 +46,7 @@ def shift_kernel(
 
     Weight ``k`` is the Gaussian's mass over cell offset ``kmin + k``, that
     is over ``[(kmin + k - 1/2) r, (kmin + k + 1/2) r]`` for the cell side
-    ``r``; offsets cover ``shift +- 4 sigma`` (at least the nearest cell).
+    ``r``; offsets cover ``shift +- 6 sigma`` (at least the nearest cell).
 
     Parameters
     ----------
@@ -72,8 +72,8 @@ def shift_kernel(
     if sigma == 0:
         return int(math.floor(centre + 0.5)), np.ones(1)
     s = sigma / resolution
-    kmin = int(math.floor(centre - 4 * s + 0.5))
-    kmax = int(math.floor(centre + 4 * s + 0.5))
+    kmin = int(math.floor(centre - 6 * s + 0.5))
+    kmax = int(math.floor(centre + 6 * s + 0.5))
     edges = (np.arange(kmin, kmax + 2) - 0.5 - centre) / (s * math.sqrt(2.0))
     cdf = 0.5 * (1.0 + np.array([math.erf(e) for e in edges]))
     w = np.diff(cdf)
