@@ -27,7 +27,8 @@ def naive_predict(belief, shift, sigma, res):
         for j in range(n):
             lo = ((j - i) - 0.5) * res - shift
             hi = ((j - i) + 0.5) * res - shift
-            w = 0.5 * (math.erf(hi / (sigma * 2**0.5)) - math.erf(lo / (sigma * 2**0.5)))
+            s2 = sigma * 2**0.5
+            w = 0.5 * (math.erf(hi / s2) - math.erf(lo / s2))
             out[j] += belief[i] * w
     return out / out.sum()
 
