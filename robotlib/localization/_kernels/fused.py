@@ -10,8 +10,8 @@ import numba as nb
 import numpy as np
 
 from ..._config import JIT, JIT_PARALLEL, serial_and_parallel
-from .common import _TWO_PI
 from .motion import _odometry_one
+from .tables import table_bin
 from .weights import _finish_weights, _pose_mean
 
 # -- one fused step: predict, weigh, normalise, estimate ---------------------------
@@ -65,7 +65,7 @@ def _move_cells(
 ):
     """Move particle ``j``; its sensors' flat table indexes into ``cells[j]``.
 
-    The same cell and bin as `_table_mm` (0 where ``skip[i]``: not read);
+    The cell and bin of `table_bin` (0 where ``skip[i]``: not read);
     ``cells`` is int32 (`ConeTable` keeps below 2^31 entries).
     """
     x0, y0, inv_res = where
@@ -75,21 +75,10 @@ def _move_cells(
         if skip[i]:
             cells[j, i] = 0
             continue
-        sx = out[j, 0] + c * sensors[i, 0] - s * sensors[i, 1]
-        sy = out[j, 1] + s * sensors[i, 0] + c * sensors[i, 1]
-        col = int(math.floor((sx - x0) * inv_res))
-        row = int(math.floor((sy - y0) * inv_res))
-        col = min(max(col, 0), nx - 1)
-        row = min(max(row, 0), ny - 1)
-        b = int(math.floor((out[j, 2] + sensors[i, 2]) * (n_bins / _TWO_PI) + 0.5))
-        if b < 0:
-            b += n_bins
-            if b < 0:
-                b %= n_bins
-        elif b >= n_bins:
-            b -= n_bins
-            if b >= n_bins:
-                b %= n_bins
+        row, col, b = table_bin(
+            out[j, 0], out[j, 1], out[j, 2], c, s, sensors, i, ny, nx, n_bins,
+            x0, y0, inv_res,
+        )  # fmt: skip
         cells[j, i] = (row * nx + col) * n_bins + b
 
 
@@ -150,6 +139,29 @@ def _lut_mm_row(j, mm, lut, exponent, out):
     out[j] = (ll + math.log(prod)) * exponent
 
 
+def _move_and_read(particles, normals, motion, sensors, table, where, skip, out_p):
+    """Move every particle, then read its sensors' cone-table entries.
+
+    Passes one and two of a fused step: particles are moved into ``out_p``
+    (`_move_cells`), and their sensors' entries (mm) read into ``mm`` (N, S)
+    int32, with the cosine and sine of each new heading in ``cs`` (N, 2).
+    Returns ``(cs, mm)``.
+    """
+    n = particles.shape[0]
+    cs = np.empty((n, 2))
+    mm = np.empty((n, sensors.shape[0]), dtype=np.int32)
+    for j in nb.prange(n):
+        _move_cells(j, particles, motion, normals, sensors, table, where, skip,
+                    out_p, cs, mm)  # fmt: skip
+    flat = table.reshape(table.size)
+    for j in nb.prange(n):
+        _gather_mm(j, flat, mm)
+    return cs, mm
+
+
+move_and_read, move_and_read_parallel = serial_and_parallel(_move_and_read)
+
+
 # The fused steps run in three passes: move and compute every table index,
 # read the table (independent reads the processor overlaps: the table is
 # larger than its caches), then the model. The same arithmetic as one pass.
@@ -161,15 +173,10 @@ def paper_table_step(
 ):
     """Fused step with the paper's model (`paper_table_loglik`)."""
     n = particles.shape[0]
-    cs = np.empty((n, 2))
-    mm = np.empty((n, sensors.shape[0]), dtype=np.int32)
     skip = np.zeros(sensors.shape[0], dtype=np.bool_)
-    for j in range(n):
-        _move_cells(j, particles, motion, normals, sensors, table, where, skip,
-                    out_p, cs, mm)  # fmt: skip
-    flat = table.reshape(table.size)
-    for j in range(n):
-        _gather_mm(j, flat, mm)
+    cs, mm = move_and_read(
+        particles, normals, motion, sensors, table, where, skip, out_p
+    )
     for j in range(n):
         _paper_mm(j, mm, z, inv_n, out_w)
     return _weigh_estimate(weights, out_p, cs, out_w)
@@ -188,15 +195,10 @@ def paper_lut_step_parallel(
     """
     n = particles.shape[0]
     s_count = sensors.shape[0]
-    cs = np.empty((n, 2))
-    mm = np.empty((n, s_count), dtype=np.int32)
     skip = np.zeros(s_count, dtype=np.bool_)
-    for j in nb.prange(n):
-        _move_cells(j, particles, motion, normals, sensors, table, where, skip,
-                    out_p, cs, mm)  # fmt: skip
-    flat = table.reshape(table.size)
-    for j in nb.prange(n):
-        _gather_mm(j, flat, mm)
+    cs, mm = move_and_read_parallel(
+        particles, normals, motion, sensors, table, where, skip, out_p
+    )
     for j in nb.prange(n):
         d = 0.0
         for i in range(s_count):
@@ -216,14 +218,9 @@ def beam_table_step(
     """
     z_max, p_rand, inv_sigma, exponent, u2_skip = beam
     n = particles.shape[0]
-    cs = np.empty((n, 2))
-    mm = np.empty((n, sensors.shape[0]), dtype=np.int32)
-    for j in range(n):
-        _move_cells(j, particles, motion, normals, sensors, table, where, is_max,
-                    out_p, cs, mm)  # fmt: skip
-    flat = table.reshape(table.size)
-    for j in range(n):
-        _gather_mm(j, flat, mm)
+    cs, mm = move_and_read(
+        particles, normals, motion, sensors, table, where, is_max, out_p
+    )
     for j in range(n):
         _beam_mm_row(
             j, mm, z, e_short, is_max, hit, short, z_max, p_rand, inv_sigma,
@@ -243,14 +240,9 @@ def lut_table_step_parallel(
     (``lut[i]`` is constant there: the table is not read).
     """
     n = particles.shape[0]
-    cs = np.empty((n, 2))
-    mm = np.empty((n, sensors.shape[0]), dtype=np.int32)
-    for j in nb.prange(n):
-        _move_cells(j, particles, motion, normals, sensors, table, where, skip,
-                    out_p, cs, mm)  # fmt: skip
-    flat = table.reshape(table.size)
-    for j in nb.prange(n):
-        _gather_mm(j, flat, mm)
+    cs, mm = move_and_read_parallel(
+        particles, normals, motion, sensors, table, where, skip, out_p
+    )
     for j in nb.prange(n):
         _lut_mm_row(j, mm, lut, exponent, out_w)
     return _weigh_estimate_parallel(weights, out_p, cs, out_w)

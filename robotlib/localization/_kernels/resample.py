@@ -69,6 +69,18 @@ def kld_bound(k, epsilon, z):
     return (k - 1) / (2.0 * epsilon) * b * b * b
 
 
+@nb.njit(**JIT, inline="always")
+def _pose_bin(particles, lo, x0, y0, bin_xy, bin_theta, nbx, nby, nbt):
+    """Flat ``(y, x, theta)`` bin of particle ``lo``, clamped to the bin grid."""
+    bx = int(math.floor((particles[lo, 0] - x0) / bin_xy))
+    by = int(math.floor((particles[lo, 1] - y0) / bin_xy))
+    bt = int(math.floor((particles[lo, 2] + math.pi) / bin_theta))
+    bx = min(max(bx, 0), nbx - 1)
+    by = min(max(by, 0), nby - 1)
+    bt = min(max(bt, 0), nbt - 1)
+    return (by * nbx + bx) * nbt + bt
+
+
 @nb.njit(**JIT)
 def kld_resample(
     particles,
@@ -111,13 +123,7 @@ def kld_resample(
             else:
                 lo = mid + 1
         out[n] = lo
-        bx = int(math.floor((particles[lo, 0] - x0) / bin_xy))
-        by = int(math.floor((particles[lo, 1] - y0) / bin_xy))
-        bt = int(math.floor((particles[lo, 2] + math.pi) / bin_theta))
-        bx = min(max(bx, 0), nbx - 1)
-        by = min(max(by, 0), nby - 1)
-        bt = min(max(bt, 0), nbt - 1)
-        cell = (by * nbx + bx) * nbt + bt
+        cell = _pose_bin(particles, lo, x0, y0, bin_xy, bin_theta, nbx, nby, nbt)
         if not occupied[cell]:
             occupied[cell] = True
             k += 1
@@ -125,14 +131,9 @@ def kld_resample(
         if n >= n_min and n >= kld_bound(k, epsilon, z):
             break
     for m in range(n):
-        lo = out[m]
-        bx = int(math.floor((particles[lo, 0] - x0) / bin_xy))
-        by = int(math.floor((particles[lo, 1] - y0) / bin_xy))
-        bt = int(math.floor((particles[lo, 2] + math.pi) / bin_theta))
-        bx = min(max(bx, 0), nbx - 1)
-        by = min(max(by, 0), nby - 1)
-        bt = min(max(bt, 0), nbt - 1)
-        occupied[(by * nbx + bx) * nbt + bt] = False
+        occupied[
+            _pose_bin(particles, out[m], x0, y0, bin_xy, bin_theta, nbx, nby, nbt)
+        ] = False
     return n
 
 

@@ -142,16 +142,19 @@ def build_cone_table(
 
 
 @nb.njit(**JIT, inline="always")
-def _table_mm(particles, j, c, s, sensors, i, table, x0, y0, inv_res):
-    """Table entry (mm) for sensor ``i`` of particle ``j`` (heading cos, sin)."""
-    ny, nx, n_bins = table.shape
-    sx = particles[j, 0] + c * sensors[i, 0] - s * sensors[i, 1]
-    sy = particles[j, 1] + s * sensors[i, 0] + c * sensors[i, 1]
+def table_bin(x, y, th, c, s, sensors, i, ny, nx, n_bins, x0, y0, inv_res):
+    """Cone table ``(row, col, bin)`` of sensor ``i`` on a robot at ``(x, y, th)``.
+
+    ``c, s`` are the cosine and sine of ``th``; the sensor's position selects
+    the cell (clamped to the grid) and its heading the nearest direction bin.
+    """
+    sx = x + c * sensors[i, 0] - s * sensors[i, 1]
+    sy = y + s * sensors[i, 0] + c * sensors[i, 1]
     col = int(math.floor((sx - x0) * inv_res))
     row = int(math.floor((sy - y0) * inv_res))
     col = min(max(col, 0), nx - 1)
     row = min(max(row, 0), ny - 1)
-    b = int(math.floor((particles[j, 2] + sensors[i, 2]) * (n_bins / _TWO_PI) + 0.5))
+    b = int(math.floor((th + sensors[i, 2]) * (n_bins / _TWO_PI) + 0.5))
     # b % n_bins, without an integer division for headings in (-2 pi, 4 pi)
     if b < 0:
         b += n_bins
@@ -161,6 +164,17 @@ def _table_mm(particles, j, c, s, sensors, i, table, x0, y0, inv_res):
         b -= n_bins
         if b >= n_bins:
             b %= n_bins
+    return row, col, b
+
+
+@nb.njit(**JIT, inline="always")
+def _table_mm(particles, j, c, s, sensors, i, table, x0, y0, inv_res):
+    """Table entry (mm) for sensor ``i`` of particle ``j`` (heading cos, sin)."""
+    ny, nx, n_bins = table.shape
+    row, col, b = table_bin(
+        particles[j, 0], particles[j, 1], particles[j, 2], c, s, sensors, i,
+        ny, nx, n_bins, x0, y0, inv_res,
+    )  # fmt: skip
     return table[row, col, b]
 
 
