@@ -16,6 +16,7 @@ __all__ = ["BENCHES", "add_arguments", "run"]
 BENCHES = {
     "mcl": "robotlib.experiments.bench_mcl",
     "logs": "robotlib.experiments.bench_logs",
+    "histogram": "robotlib.experiments.bench_histogram",
 }
 """Topic name to the module that measures it."""
 
