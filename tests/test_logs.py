@@ -192,3 +192,11 @@ def test_carmen_flaser_line_round_trip(ranges, pose, t):
     assert v["pose"] == list(pose) and v["time"] == t
     with pytest.raises(ValueError):
         parse_carmen_line(f"FLASER {len(ranges) + 30} {nums}")
+
+
+def test_the_logs_bench_runs(tmp_path):
+    from robotlib.experiments.bench_logs import bench_logs
+
+    r = bench_logs(polls=60, folder=tmp_path)
+    assert r["polls"] == 61 and r["mcap_bytes"] > r["npz_bytes"] > 0
+    assert r["replay_polls_per_s"] > r["read_polls_per_s"] > 0

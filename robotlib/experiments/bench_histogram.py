@@ -85,9 +85,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     """Run the benchmark and print a table; return the exit status."""
     rows = bench_histogram(args.routes, args.steps)
-    print(
-        f"{'world':9s} {'seed':>4s} {'filter':14s} {'settled':>7s} {'error':>7s} {'ms/step':>8s}"
-    )  # noqa: T201, E501
+    head = ("world", "seed", "filter", "settled", "error", "ms/step")
+    print("{:9s} {:>4s} {:14s} {:>7s} {:>7s} {:>8s}".format(*head))  # noqa: T201
     for r in rows:
         err = r["mean_error_from_20"]
         print(  # noqa: T201 - a benchmark prints

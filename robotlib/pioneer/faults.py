@@ -171,3 +171,38 @@ class FaultyLink:
                     except OSError:
                         return
                     self.forwarded += 1
+
+
+# -- the command line -------------------------------------------------------------
+def add_arguments(parser) -> None:
+    """Arguments of ``robotlib faulty-link``."""
+    parser.add_argument("--target", type=int, default=8101, help="the server's port")
+    parser.add_argument("--port", type=int, default=8102, help="port to listen on")
+    parser.add_argument("--delay", type=float, default=0.05, help="delay per packet, s")
+    parser.add_argument("--jitter", type=float, default=0.05, help="extra delay, s")
+    parser.add_argument("--loss", type=float, default=0.1, help="share of SIPs lost")
+    parser.add_argument("--seed", type=int, default=None, help="the faults' seed")
+    parser.add_argument(
+        "--duration", type=float, default=None, help="stop after this many s"
+    )
+
+
+def run(args) -> int:
+    """Proxy until interrupted (or ``--duration``); return the exit status."""
+    import logging
+
+    logging.basicConfig(level=logging.INFO, format="faulty-link: %(message)s")
+    link = FaultyLink(
+        args.target, delay=args.delay, jitter=args.jitter, loss=args.loss,
+        seed=args.seed, port=args.port,
+    ).start()  # fmt: skip
+    logging.getLogger(__name__).info("serving %s -> port %d", link.address, args.target)
+    try:
+        end = None if args.duration is None else time.monotonic() + args.duration
+        while end is None or time.monotonic() < end:
+            time.sleep(0.2)
+    except KeyboardInterrupt:
+        pass
+    finally:
+        link.stop()
+    return 0 if link.error is None else 1
