@@ -198,5 +198,45 @@ def test_the_logs_bench_runs(tmp_path):
     from robotlib.experiments.bench_logs import bench_logs
 
     r = bench_logs(polls=60, folder=tmp_path)
-    assert r["polls"] == 61 and r["mcap_bytes"] > r["npz_bytes"] > 0
+    assert r["polls"] == 60 and r["mcap_bytes"] > r["npz_bytes"] > 0
     assert r["replay_polls_per_s"] > r["read_polls_per_s"] > 0
+
+
+def test_the_fast_encoders_write_what_mcap_ros2_writes():
+    from mcap_ros2._dynamic import serialize_dynamic
+    from mcap_ros2.decoder import DecoderFactory  # noqa: F401 - the reader's side
+
+    from robotlib.logs import _cdr
+    from robotlib.logs import _messages as m
+    from robotlib.p3dx import SONAR_POSES
+
+    def enc(name, msg):
+        return bytes(serialize_dynamic(name, m.msgdef(name))[name](msg))
+
+    row = np.random.default_rng(0).normal(size=19)
+    label = m.state_msg(row)["layout"]["dim"][0]["label"]
+    state = enc("std_msgs/Float64MultiArray", m.state_msg(row))
+    assert state == _cdr.encode_state(row, label)
+    assert np.array_equal(_cdr.decode_state(state), row)
+    pose, vel = (1.0, -2.0, 2.5), (0.3, -0.2)
+    assert enc("nav_msgs/Odometry", m.odometry_msg(12.3, pose, vel)) == (
+        _cdr.encode_odometry(12.3, pose, vel)
+    )
+    cloud = m.sonar_cloud_msg(1.5, np.linspace(0.2, 5, 8), SONAR_POSES)
+    assert enc("sensor_msgs/PointCloud2", cloud) == _cdr.encode_cloud(
+        1.5, cloud["fields"], cloud["data"], 8, 32
+    )
+    stamped = {"header": m.header(2.5, "map"), "pose": m.pose_msg(pose)}
+    assert enc("geometry_msgs/PoseStamped", stamped) == (
+        _cdr.encode_pose_stamped(2.5, "map", pose)
+    )
+    assert enc("std_msgs/String", {"data": "MOVE 0.5"}) == _cdr.encode_string(
+        "MOVE 0.5"
+    )
+    assert enc("geometry_msgs/Twist", m.twist_msg(0.2, 0.1)) == _cdr.encode_twist(
+        0.2, 0.1
+    )
+    scan = m.laser_msg(3.0, [1.0, 2.5, 3.25], -1.5, 1.5, 80.0)
+    assert enc("sensor_msgs/LaserScan", scan) == _cdr.encode_laser(
+        3.0, [1.0, 2.5, 3.25], -1.5, 1.5, 80.0
+    )

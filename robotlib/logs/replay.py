@@ -23,6 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from ..robot import Robot, RobotState
+from . import _cdr
 from . import _messages as m
 
 __all__ = [
@@ -148,8 +149,7 @@ def _read_mcap(run: RecordedRun) -> None:
                         )
                     topic = ch.topic
                     if topic == "/robotlib/state":
-                        msg = decoders[ch.id](rec.data)
-                        st, truth = _state_from_row(msg.data, {})
+                        st, truth = _state_from_row(_cdr.decode_state(rec.data), {})
                         run.states.append(st)
                         run.truth.append(truth)
                     elif topic == "/scan" and run.states:
