@@ -72,6 +72,14 @@ def _warm_mcl() -> None:
         mcl.step(odo, odo + [0.1, 0.0, 0.0], z)
 
 
+def _warm_mapping() -> None:
+    from .mapping import record_drive, run_fastslam
+
+    log = record_drive("loop", [(3.0, 1.5)], seed=0, every=2)
+    run_fastslam(log, 4, "laser", rng=0)
+    run_fastslam(log, 4, "sonar", rng=0)
+
+
 def _warm_models() -> None:
     from .localization import BeamParameters, BeamSensorModel
     from .sensing import SonarModel, simulate_ranges
@@ -87,7 +95,12 @@ def _warm_models() -> None:
     fast.log_likelihood(np.tile(poses, (100, 1)), z)
 
 
-WARMUPS = {"sim": _warm_sim, "mcl": _warm_mcl, "models": _warm_models}
+WARMUPS = {
+    "sim": _warm_sim,
+    "mcl": _warm_mcl,
+    "mapping": _warm_mapping,
+    "models": _warm_models,
+}
 """What `warm_up` can compile: a name to a function that runs the kernels once."""
 
 

@@ -15,6 +15,8 @@ __all__ = ["BENCHES", "add_arguments", "run"]
 
 BENCHES = {
     "mcl": "robotlib.experiments.bench_mcl",
+    "map": "robotlib.experiments.bench_map",
+    "slam": "robotlib.experiments.bench_map",
     "logs": "robotlib.experiments.bench_logs",
     "histogram": "robotlib.experiments.bench_histogram",
 }
