@@ -139,7 +139,7 @@ def setup(
         student code that uses them) and the returned generator.
     warm : iterable of str
         Kernels to compile or load now (keys of `WARMUPS`: ``"sim"``,
-        ``"mcl"``, ``"models"``); empty for none.
+        ``"mcl"``, ``"mapping"``, ``"models"``); empty for none.
     style : bool
         Apply the labs' matplotlib style (`STYLE`). The backend is left to
         Jupyter (inline) or to ``MPLBACKEND`` (``Agg`` in CI and grading).
