@@ -110,6 +110,21 @@ def _warm_mapping() -> None:
     run_fastslam(log, 4, "sonar", rng=0)
 
 
+def _warm_models() -> None:
+    from .localization import BeamParameters, BeamSensorModel
+    from .sensing import SonarModel, simulate_ranges
+    from .world import load_world
+
+    world = load_world("corridor")
+    poses = np.tile(np.asarray(world.start, dtype=float), (3, 1))
+    simulate_ranges(world, poses, SonarModel(), rng=0)
+    simulate_ranges(world, poses, SonarModel(sensors=np.zeros((1, 3))), rng=0)
+    z = np.full(8, 2.0)
+    BeamSensorModel(world).log_likelihood(poses, z)
+    fast = BeamSensorModel(world, fast=True, params=BeamParameters(exponent=0.2))
+    fast.log_likelihood(np.tile(poses, (100, 1)), z)
+
+
 def _paper(world):
     from .localization import MCL
 
@@ -146,6 +161,7 @@ WARMUPS: dict[str, Callable[[], None] | list[tuple[str, Callable[[], None]]]] = 
     ],
     "mapping": _warm_mapping,
     "avoidance": _warm_avoidance,
+    "models": _warm_models,
 }
 """What `warm_up` can compile: a name to a function that runs its kernels
 once, or to a list of ``(label, function)`` steps (the progress bar counts
@@ -347,7 +363,7 @@ def setup(
         student code that uses them) and the returned generator.
     warm : iterable of str
         Kernels to compile or load now (keys of `WARMUPS`: ``"sim"``,
-        ``"mcl"``, ...); empty for none.
+        ``"mcl"``, ``"mapping"``, ``"models"``, ...); empty for none.
     style : bool
         Apply the course's figure style (`robotlib.plotting.style`). The
         backend is left to Jupyter (inline) or to ``MPLBACKEND`` (``Agg``
