@@ -9,6 +9,14 @@ simulated time; the simulator runs in real time, or ``speed`` times faster.
 selector. Garbage, bad checksums, truncated or malformed packets are skipped;
 a client that vanishes or misbehaves is dropped, its robot stopped, and the
 next client is accepted on the same port.
+
+Every connection is accepted at once (the backlog fits a class connecting
+together) and runs its own handshake; the first to OPEN drives the robot,
+a second one is refused (closed) while the first is alive, and one that
+does not open within ``handshake_timeout`` is closed, so a silent socket
+cannot hold a port. Each session starts from a freshly opened Pioneer's
+state: defaults for speeds and accelerations, odometry (0, 0, 0); the true
+pose is the simulator's (``SIM_SET_POSE``, ``SIM_RESET``).
 """
 
 from __future__ import annotations
@@ -64,6 +72,10 @@ class Session:
         Stop the robot after this long without a packet from the client, s.
     clock : callable
         Wall-clock time, s (for the watchdog).
+    claim : callable, optional
+        ``claim(session) -> bool``, asked when the client sends OPEN: whether
+        this session may take the robot (the server refuses a second client
+        while another one drives it). Default: always.
     """
 
     def __init__(
@@ -77,6 +89,7 @@ class Session:
         config: dict | None = None,
         watchdog: float = 2.0,
         clock=time.monotonic,
+        claim=None,
     ):
         self.sim = sim
         self.body = body
@@ -93,6 +106,9 @@ class Session:
         self.open = False
         self.ignored = 0
         self.last_packet = clock()
+        self.refused = False
+        self.was_open = False
+        self._claim = claim
         self._watchdog_fired = False
 
     def receive(self, data: bytes) -> bytes:
@@ -137,6 +153,8 @@ class Session:
             self.body.set_true_pose(value)
         elif name == "SIM_RESET":
             self.sim.reset()
+            for body in self.sim.bodies:  # every client's odometry restarts too
+                body.reset_odometry()
         elif name == "CLOSE":
             self.close()
         # PULSE, OPEN again, HOSTBAUD and unknown commands: nothing to do
@@ -153,12 +171,20 @@ class Session:
             self.expect = 3
             return encode_sync2_reply(*self.ident)
         if packet_id == 1 and self.expect == 3:  # OPEN
-            self.open = True
-            self.body.command("STOP")
+            if self._claim is not None and not self._claim(self):
+                self.refused = True
+                return b""
+            self.open = self.was_open = True
+            self.body.begin_session()
             return b""
         if packet_id in (SYNC0, SYNC1, SYNC2):
             self.expect = SYNC0  # out of order: start again
         return b""
+
+    @property
+    def silent_for(self) -> float:
+        """Seconds since the client's last valid packet."""
+        return self.clock() - self.last_packet
 
     def close(self) -> None:
         """End the connection's open state: stop the robot, wait for a new SYNC."""
@@ -191,25 +217,51 @@ class Session:
         return encode_sip(sip)
 
 
+class _Conn:
+    """One accepted TCP connection: its socket, session and unsent bytes."""
+
+    def __init__(self, sock: socket.socket, session: Session, now: float):
+        self.sock = sock
+        self.session = session
+        self.outbox = bytearray()
+        self.accepted = now
+
+
 class _Endpoint:
-    """One robot's link: a TCP listener or a pseudo-terminal, and its session."""
+    """One robot's link: a TCP listener or a pseudo-terminal, and its sessions.
+
+    A TCP robot accepts every connection; each runs its own handshake, and
+    the first to send OPEN drives the robot (`owner`) until it leaves, goes
+    silent or closes. Connections that do not open within the handshake
+    timeout are dropped, so none can hold the port.
+    """
 
     def __init__(self, server: SimServer, body, kind: str):
         self.server = server
         self.body = body
         self.kind = kind
         self.listener: socket.socket | None = None
-        self.conn: socket.socket | None = None
+        self.conns: list[_Conn] = []
+        self.owner: _Conn | None = None
         self.fd: int | None = None  # pty master
         self.slave_fd: int | None = None
         self.path: str | None = None
         self.port: int | None = None
-        self.session: Session | None = None
-        self.outbox = bytearray()
+        self.session: Session | None = None  # the pty's
         self.clients = 0
 
-    def new_session(self) -> Session:
-        return Session(self.server.sim, self.body, **self.server.session_options)
+    def new_session(self, claim=None) -> Session:
+        return Session(
+            self.server.sim, self.body, claim=claim, **self.server.session_options
+        )
+
+    @property
+    def active(self) -> Session | None:
+        """The open session driving this robot, if any."""
+        if self.kind == "pty":
+            return self.session if self.session and self.session.open else None
+        owner = self.owner
+        return owner.session if owner is not None and owner.session.open else None
 
 
 class SimServer:
@@ -233,6 +285,16 @@ class SimServer:
         The simulator's randomness.
     sim : robotlib.sim.Simulator, optional
         Serve robots of this simulator (new bodies are added to it).
+    drop_after : float
+        Close an open session whose client sent nothing for this long, s.
+    handshake_timeout : float
+        Close a connection that has not opened (SYNC0-2, OPEN) this long
+        after it was accepted, s.
+    max_pending : int
+        Connections per robot at most at once; one more is accepted and
+        closed at once (a clean refusal rather than a hang).
+    backlog : int
+        The listening sockets' backlog (a class connecting at once).
     session_options
         Passed to each `Session` (``name``, ``subclass``, ``watchdog``...).
     """
@@ -249,6 +311,9 @@ class SimServer:
         seed=None,
         sim=None,
         drop_after: float = 10.0,
+        handshake_timeout: float = 3.0,
+        max_pending: int = 64,
+        backlog: int = 128,
         **session_options,
     ):
         if not speed > 0 or not math.isfinite(speed):
@@ -269,6 +334,9 @@ class SimServer:
         self.host = host
         self.period = CYCLE / float(speed)
         self.drop_after = drop_after
+        self.handshake_timeout = float(handshake_timeout)
+        self.max_pending = int(max_pending)
+        self.backlog = int(backlog)
         self.session_options = session_options
         self.error: BaseException | None = None
         self._stop = threading.Event()
@@ -297,10 +365,10 @@ class SimServer:
         ep.listener = s
         s.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
         s.bind((self.host, port))
-        s.listen(4)
+        s.listen(self.backlog)
         s.setblocking(False)
         ep.port = s.getsockname()[1]
-        self._sel.register(s, selectors.EVENT_READ, ("accept", ep))
+        self._sel.register(s, selectors.EVENT_READ, ("accept", ep, None))
 
     def _open_pty(self, ep: _Endpoint) -> None:
         master, slave = os.openpty()
@@ -308,7 +376,7 @@ class SimServer:
         os.set_blocking(master, False)
         ep.fd, ep.slave_fd, ep.path = master, slave, os.ttyname(slave)
         ep.session = ep.new_session()
-        self._sel.register(master, selectors.EVENT_READ, ("pty", ep))
+        self._sel.register(master, selectors.EVENT_READ, ("pty", ep, None))
 
     @property
     def ports(self) -> list[int]:
@@ -362,76 +430,121 @@ class SimServer:
             while not self._stop.is_set():
                 wait = max(0.0, min(0.1, next_tick - time.monotonic()))
                 for key, _ in self._sel.select(wait):
-                    kind, ep = key.data
+                    kind, ep, conn = key.data
                     try:
                         if kind == "accept":
                             self._accept(ep)
                         elif kind == "conn":
-                            self._read_conn(ep)
+                            self._read_conn(ep, conn)
                         else:
                             self._read_pty(ep)
                     except Exception as exc:  # a misbehaving client, not the server
                         log.warning("robot %s: dropping client: %s", ep.port, exc)
-                        self._drop(ep)
+                        if conn is not None:
+                            self._drop(ep, conn)
+                        elif ep.session is not None:
+                            ep.session.close()
                 now = time.monotonic()
+                self._expire(now)
                 if now >= next_tick:
                     self._tick()
                     next_tick += self.period
                     if now - next_tick > 5 * self.period:  # fell behind: do not burst
                         next_tick = now + self.period
+        except KeyboardInterrupt:
+            log.info("interrupted: stopping")
         except BaseException as exc:
             self.error = exc
             log.exception("sim-server stopped on an error")
         finally:
             self._close_all()
 
+    def _expire(self, now: float) -> None:
+        """Drop connections that did not open in time, or that closed."""
+        for ep in self.endpoints:
+            for c in list(ep.conns):
+                s = c.session
+                if s.open:
+                    continue
+                if s.refused or s.was_open:  # refused, or sent CLOSE
+                    self._drop(ep, c)
+                elif now - c.accepted > self.handshake_timeout:
+                    log.info("robot %s: no handshake in time, closing", ep.port)
+                    self._drop(ep, c)
+
     def _tick(self) -> None:
-        active = [ep for ep in self.endpoints if ep.session and ep.session.open]
+        active = [ep for ep in self.endpoints if ep.active is not None]
         if not active:
             return
         self.sim.step()
         now = time.monotonic()
         for ep in active:
-            s = ep.session
+            s = ep.active
             if now - s.last_packet > self.drop_after:
                 log.info("robot %s: client silent, closing its session", ep.port)
                 if ep.kind == "tcp":
-                    self._drop(ep)
+                    self._drop(ep, ep.owner)
                 else:
                     s.close()
                 continue
-            self._send(ep, s.tick())
+            if ep.kind == "tcp":
+                self._send(ep, s.tick(), ep.owner)
+            else:
+                self._send(ep, s.tick())
 
     # -- TCP ------------------------------------------------------------------
-    def _accept(self, ep: _Endpoint) -> None:
-        if ep.conn is not None:
-            return
-        try:
-            conn, _ = ep.listener.accept()
-        except BlockingIOError:
-            return
-        conn.setblocking(False)
-        conn.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
-        ep.conn = conn
+    def _claim(self, ep: _Endpoint, conn_ref: list) -> bool:
+        """May the connection in ``conn_ref`` take the robot? (on its OPEN)."""
+        conn = conn_ref[0]
+        owner = ep.owner
+        if owner is not None and owner is not conn:
+            if owner.session.silent_for <= owner.session.watchdog:
+                log.info("robot %s: busy, refusing a second client", ep.port)
+                return False
+            log.info("robot %s: previous client silent, replacing it", ep.port)
+            self._drop(ep, owner)
+        ep.owner = conn
         ep.clients += 1
-        ep.session = ep.new_session()
-        ep.outbox.clear()
-        self._sel.unregister(ep.listener)  # one client at a time; others wait
-        self._sel.register(conn, selectors.EVENT_READ, ("conn", ep))
+        return True
 
-    def _read_conn(self, ep: _Endpoint) -> None:
+    def _accept(self, ep: _Endpoint) -> None:
+        for _ in range(self.backlog):
+            try:
+                sock, _ = ep.listener.accept()
+            except (BlockingIOError, InterruptedError):
+                return
+            except OSError as exc:  # e.g. out of file descriptors: try later
+                log.warning("robot %s: accept failed: %s", ep.port, exc)
+                return
+            if len(ep.conns) >= self.max_pending:
+                log.info("robot %s: too many connections, refusing one", ep.port)
+                sock.close()
+                continue
+            sock.setblocking(False)
+            sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+            ref: list = []
+            conn = _Conn(
+                sock,
+                ep.new_session(lambda _s, r=ref: self._claim(ep, r)),
+                time.monotonic(),
+            )
+            ref.append(conn)
+            ep.conns.append(conn)
+            self._sel.register(sock, selectors.EVENT_READ, ("conn", ep, conn))
+
+    def _read_conn(self, ep: _Endpoint, conn: _Conn) -> None:
         try:
-            data = ep.conn.recv(4096)
+            data = conn.sock.recv(4096)
         except BlockingIOError:
             return
         except OSError:
             data = b""
         if not data:
-            self._drop(ep)
+            self._drop(ep, conn)
             return
-        self._send(ep, ep.session.receive(data))
+        self._send(ep, conn.session.receive(data), conn)
 
-    def _send(self, ep: _Endpoint, data: bytes) -> None:
+    def _send(self, ep: _Endpoint, data: bytes, conn: _Conn | None = None) -> None:
         if not data:
             return
         if ep.kind == "pty":
@@ -440,37 +553,34 @@ class SimServer:
             except BlockingIOError:
                 pass  # nobody reads the line: the bytes are lost, as on a cable
             return
-        if ep.conn is None:
+        if conn is None or conn not in ep.conns:
             return
-        ep.outbox += data
+        conn.outbox += data
         try:
-            sent = ep.conn.send(ep.outbox)
-            del ep.outbox[:sent]
+            sent = conn.sock.send(conn.outbox)
+            del conn.outbox[:sent]
         except BlockingIOError:
             pass
         except OSError:
-            self._drop(ep)
+            self._drop(ep, conn)
             return
-        if len(ep.outbox) > _MAX_OUTBOX:
+        if len(conn.outbox) > _MAX_OUTBOX:
             log.info("robot %s: client does not read, dropping it", ep.port)
-            self._drop(ep)
+            self._drop(ep, conn)
 
-    def _drop(self, ep: _Endpoint) -> None:
-        """Forget the client: stop its robot, close its socket, accept the next."""
-        if ep.session is not None:
-            ep.session.close()
-        if ep.kind == "pty":
+    def _drop(self, ep: _Endpoint, conn: _Conn | None) -> None:
+        """Forget one client: stop its robot if it drove it, close its socket."""
+        if conn is None or conn not in ep.conns:
             return
-        ep.session = None
-        if ep.conn is not None:
-            try:
-                self._sel.unregister(ep.conn)
-            except (KeyError, ValueError):
-                pass
-            ep.conn.close()
-            ep.conn = None
-            if ep.listener is not None and not self._stop.is_set():
-                self._sel.register(ep.listener, selectors.EVENT_READ, ("accept", ep))
+        conn.session.close()
+        ep.conns.remove(conn)
+        if ep.owner is conn:
+            ep.owner = None
+        try:
+            self._sel.unregister(conn.sock)
+        except (KeyError, ValueError):
+            pass
+        conn.sock.close()
 
     # -- pty --------------------------------------------------------------------
     def _read_pty(self, ep: _Endpoint) -> None:
@@ -484,14 +594,17 @@ class SimServer:
 
     def _close_all(self) -> None:
         for ep in self.endpoints:
-            for sock in (ep.conn, ep.listener):
+            socks = [c.sock for c in ep.conns] + [ep.listener]
+            ep.conns.clear()
+            ep.owner = None
+            for sock in socks:
                 if sock is not None:
                     try:
                         self._sel.unregister(sock)
                     except (KeyError, ValueError):
                         pass
                     sock.close()
-            ep.conn = ep.listener = None
+            ep.listener = None
             for fd in (ep.fd, ep.slave_fd):
                 if fd is not None:
                     try:
@@ -565,8 +678,8 @@ def run(args: argparse.Namespace) -> int:
         log.info("serving %s", addr)
     try:
         server.serve(args.duration)
-    except KeyboardInterrupt:
-        pass
+    except KeyboardInterrupt:  # Ctrl-C between two select calls: a clean stop
+        log.info("interrupted: stopping")
     finally:
         server.stop()
     return 0 if server.error is None else 1
