@@ -15,6 +15,7 @@ __all__ = ["BENCHES", "add_arguments", "run"]
 
 BENCHES = {
     "mcl": "robotlib.experiments.bench_mcl",
+    "maps": "robotlib.experiments.bench_maps",
 }
 """Topic name to the module that measures it."""
 
