@@ -31,6 +31,28 @@ y1 x2 y2`` a rectangle, four walls (the rectangle ``x1..x2, y1..y2`` rotated by
 ``NumPoints``), ``Resolution`` and every other key, cairn type and section are
 ignored.
 
+MobileSim objects: simulated, or only read
+    robotlib builds its world from the walls and obstacles MobileSim puts
+    in the simulation, and reads (but does not simulate) the rest:
+
+    ============================  ==============================================
+    ``LINES``, ``DATA``           simulated: walls, and points (small crosses)
+    ``Cairn: Sim.BoxObstacle``    simulated: a static box of four walls
+                                  (MobileSim's box can be pushed; robotlib's
+                                  cannot)
+    ``Cairn: RobotHome``          used: the start pose (else the first ``Dock``)
+    ``Cairn: Dock``               used as the start only without a RobotHome;
+                                  no docking or charging
+    ``ForbiddenLine``,            read and ignored: navigation hints, not
+    ``ForbiddenArea``,            obstacles (MobileSim does not simulate them
+    ``Goal``, ``GoalWithHeading``  either)
+    other ``Sim.*`` cairns        ignored (e.g. MobileSim's ``Sim.Robot``
+                                  poses and custom simulated object types
+                                  declared by ``MapInfo: ObjectType``)
+    ``MapInfo``, ``Resolution``,  read and ignored (counts are advisory)
+    ``NumPoints``, ``NumLines``
+    ============================  ==============================================
+
 Decisions
 ---------
 Strictness
