@@ -1,7 +1,43 @@
-"""Numba options shared by every kernel in robotlib (one place to change them)."""
+"""Numba options shared by every kernel in robotlib (one place to change them).
+
+Also `serial_and_parallel`, which compiles one kernel body both ways. Only
+kernels import this module; it imports nothing of robotlib.
+"""
+
+import types
+
+import numba as nb
 
 JIT = {"cache": True, "nogil": True, "fastmath": False, "error_model": "numpy"}
 """Options for ``numba.njit`` on serial kernels."""
 
 JIT_PARALLEL = {**JIT, "parallel": True}
 """Options for ``numba.njit`` on kernels that loop with ``prange``."""
+
+
+def serial_and_parallel(body):
+    """Compile one kernel body twice: serially, and over threads.
+
+    ``body`` loops over its particles (or poses) with ``numba.prange``, which
+    numba runs as ``range`` when it compiles without ``parallel``. Each
+    iteration must write only its own slots and every sum must run in a
+    plain ``range`` loop, so the two compilations give the same bits.
+
+    Parameters
+    ----------
+    body : function
+        The plain Python function (not yet compiled).
+
+    Returns
+    -------
+    tuple of numba dispatchers
+        ``(serial, parallel)``. The parallel one compiles a copy of ``body``
+        named ``<name>_parallel``, so numba caches the two apart.
+    """
+    twin = types.FunctionType(
+        body.__code__, body.__globals__, body.__name__ + "_parallel",
+        body.__defaults__, body.__closure__,
+    )  # fmt: skip
+    twin.__qualname__ = body.__qualname__ + "_parallel"
+    twin.__doc__ = body.__doc__
+    return nb.njit(**JIT)(body), nb.njit(**JIT_PARALLEL)(twin)

@@ -21,7 +21,7 @@ COMMANDS = {
     ),
     "bench": ("robotlib.experiments.benchmarks", "measure a topic against its peers"),
     "release": ("robotlib.course.release", "write labs/ from solutions/"),
-    "grade": ("robotlib.course.grade", "grade a folder of submissions with nbval"),
+    "grade": ("robotlib.course.grade", "grade a folder of submissions in a sandbox"),
 }
 """Subcommand name to (module, one-line help)."""
 

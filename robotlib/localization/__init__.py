@@ -9,18 +9,17 @@ augmented MCL's `AugmentedInjection`. `History` records a run from outside.
 """
 
 from . import paper
+from .cones import ConeTable, cone_table, expected_readings
 from .history import History, localized_step
 from .kld import kld_bound, kld_resample
-from .mcl import (
-    BEST,
-    MCL,
+from .mcl import BEST, MCL, StepInfo
+from .motion import OdometryMotionModel, odometry_increment, sample_motion_odometry
+from .policies import (
     AugmentedInjection,
     KLDResampling,
     PaperResampling,
-    StepInfo,
     ThresholdResampling,
 )
-from .motion import OdometryMotionModel, odometry_increment, sample_motion_odometry
 from .resampling import (
     RESAMPLERS,
     effective_sample_size,
@@ -32,11 +31,8 @@ from .resampling import (
 from .sensors import (
     BeamParameters,
     BeamSensorModel,
-    ConeTable,
     LikelihoodFieldSensorModel,
     PaperSensorModel,
-    cone_table,
-    expected_readings,
     innovation_loglik,
 )
 

@@ -26,9 +26,10 @@ from .._random import as_rng
 from ..sensing import SonarModel
 from ..world import World
 from . import _kernels
+from .cones import ConeTable, expected_readings
 from .motion import _particles, sample_motion_odometry
 from .resampling import _weights, multinomial_resample
-from .sensors import ConeTable, expected_readings, innovation_loglik
+from .sensors import innovation_loglik
 
 __all__ = [
     "ADMISSIBLE_RADIUS",

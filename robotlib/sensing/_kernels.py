@@ -11,7 +11,7 @@ import math
 import numba as nb
 import numpy as np
 
-from .._config import JIT, JIT_PARALLEL
+from .._config import JIT, JIT_PARALLEL, serial_and_parallel
 
 _EPS = 1e-12
 
@@ -279,52 +279,7 @@ def _sensor_cone(
     )
 
 
-@nb.njit(**JIT)
-def _scan_pose(
-    k,
-    poses,
-    sensors,
-    segments,
-    n_rays,
-    cone,
-    max_range,
-    min_range,
-    cos_specular,
-    noise_std,
-    multipath_prob,
-    dropout_prob,
-    uniforms,
-    normals,
-    out,
-):
-    for i in range(sensors.shape[0]):
-        echo, multipath = _sensor_cone(
-            k, i, poses, sensors, segments, n_rays, cone, max_range, cos_specular, True
-        )
-        z = max_range
-        if echo < max_range:
-            z = echo * (1.0 + noise_std * normals[k, i])
-        elif multipath < max_range and uniforms[k, i, 0] < multipath_prob:
-            z = multipath * (1.0 + noise_std * normals[k, i])
-        if uniforms[k, i, 1] < dropout_prob:
-            z = max_range
-        out[k, i] = min(max(z, min_range), max_range)
-
-
-@nb.njit(**JIT)
-def _expected_pose(
-    k, poses, sensors, segments, n_rays, cone, max_range, min_range, cos_specular, out
-):
-    for i in range(sensors.shape[0]):
-        echo, _ = _sensor_cone(
-            k, i, poses, sensors, segments, n_rays, cone, max_range, cos_specular, False
-        )
-        z = echo if echo < max_range else max_range
-        out[k, i] = min(max(z, min_range), max_range)
-
-
-@nb.njit(**JIT)
-def expected_scan(
+def _expected_scan(
     poses, sensors, segments, n_rays, cone, max_range, min_range, cos_specular, out
 ):
     """Noise-free sonar readings ``out`` (K, S) for poses (K, 3), sensors (S, 3).
@@ -333,43 +288,28 @@ def expected_scan(
     nothing echoes, clipped to ``[min_range, max_range]``: `sonar_scan` with
     no noise, multipath or dropouts.
     """
-    for k in range(poses.shape[0]):
-        _expected_pose(
-            k,
-            poses,
-            sensors,
-            segments,
-            n_rays,
-            cone,
-            max_range,
-            min_range,
-            cos_specular,
-            out,
-        )
-
-
-@nb.njit(**JIT_PARALLEL)
-def expected_scan_parallel(
-    poses, sensors, segments, n_rays, cone, max_range, min_range, cos_specular, out
-):
-    """`expected_scan` with the poses spread over threads (for many poses)."""
     for k in nb.prange(poses.shape[0]):
-        _expected_pose(
-            k,
-            poses,
-            sensors,
-            segments,
-            n_rays,
-            cone,
-            max_range,
-            min_range,
-            cos_specular,
-            out,
-        )
+        for i in range(sensors.shape[0]):
+            echo, _ = _sensor_cone(
+                k,
+                i,
+                poses,
+                sensors,
+                segments,
+                n_rays,
+                cone,
+                max_range,
+                cos_specular,
+                False,
+            )
+            z = echo if echo < max_range else max_range
+            out[k, i] = min(max(z, min_range), max_range)
 
 
-@nb.njit(**JIT)
-def sonar_scan(
+expected_scan, expected_scan_parallel = serial_and_parallel(_expected_scan)
+
+
+def _sonar_scan(
     poses,
     sensors,
     segments,
@@ -394,62 +334,31 @@ def sonar_scan(
     ``[min_range, max_range]``. ``uniforms`` (K, S, 2) in [0, 1) and
     ``normals`` (K, S) are drawn by the caller, so a seed fixes the result.
     """
-    for k in range(poses.shape[0]):
-        _scan_pose(
-            k,
-            poses,
-            sensors,
-            segments,
-            n_rays,
-            cone,
-            max_range,
-            min_range,
-            cos_specular,
-            noise_std,
-            multipath_prob,
-            dropout_prob,
-            uniforms,
-            normals,
-            out,
-        )
-
-
-@nb.njit(**JIT_PARALLEL)
-def sonar_scan_parallel(
-    poses,
-    sensors,
-    segments,
-    n_rays,
-    cone,
-    max_range,
-    min_range,
-    cos_specular,
-    noise_std,
-    multipath_prob,
-    dropout_prob,
-    uniforms,
-    normals,
-    out,
-):
-    """`sonar_scan` with the poses spread over threads (for many poses)."""
     for k in nb.prange(poses.shape[0]):
-        _scan_pose(
-            k,
-            poses,
-            sensors,
-            segments,
-            n_rays,
-            cone,
-            max_range,
-            min_range,
-            cos_specular,
-            noise_std,
-            multipath_prob,
-            dropout_prob,
-            uniforms,
-            normals,
-            out,
-        )
+        for i in range(sensors.shape[0]):
+            echo, multipath = _sensor_cone(
+                k,
+                i,
+                poses,
+                sensors,
+                segments,
+                n_rays,
+                cone,
+                max_range,
+                cos_specular,
+                True,
+            )
+            z = max_range
+            if echo < max_range:
+                z = echo * (1.0 + noise_std * normals[k, i])
+            elif multipath < max_range and uniforms[k, i, 0] < multipath_prob:
+                z = multipath * (1.0 + noise_std * normals[k, i])
+            if uniforms[k, i, 1] < dropout_prob:
+                z = max_range
+            out[k, i] = min(max(z, min_range), max_range)
+
+
+sonar_scan, sonar_scan_parallel = serial_and_parallel(_sonar_scan)
 
 
 @nb.njit(**JIT)

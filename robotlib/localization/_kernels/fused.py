@@ -1,0 +1,248 @@
+"""The fused MCL steps: predict, read the cone table, weigh, normalise and estimate.
+
+Numba kernels: contiguous arrays and scalars in, no Python objects; they
+import nothing of robotlib but the JIT options and other kernels.
+"""
+
+import math
+
+import numba as nb
+import numpy as np
+
+from ..._config import JIT, JIT_PARALLEL, serial_and_parallel
+from .motion import _odometry_one
+from .tables import table_bin
+from .weights import _finish_weights, _pose_mean
+
+# -- one fused step: predict, weigh, normalise, estimate ---------------------------
+#
+# `MCL.step` on a cone table in one call: each particle is moved
+# (`sample_odometry`), weighed by the table model from the cosine and sine of
+# its new heading, which the estimate reuses; then the weights are updated
+# and normalised (`update_weights`) and the pose estimated
+# (`weighted_pose_mean`). Same numbers as those kernels one after the other.
+# ``motion`` is ``(rot1, trans, rot2, sd1, sdt, sd2)``, ``where`` the table's
+# ``(x0, y0, inv_res)``; ``out_p`` (N, 3) receives the moved particles and
+# ``out_w`` (N,) their weights. Each returns ``(log_mean, ess, estimate)``.
+
+
+@nb.njit(**JIT)
+def _move(j, particles, motion, normals, out, cs):
+    """Move particle ``j`` into ``out``; return (and keep) its heading's cos, sin."""
+    rot1, trans, rot2, sd1, sdt, sd2 = motion
+    _odometry_one(j, particles, rot1, trans, rot2, sd1, sdt, sd2, normals, out)
+    c = math.cos(out[j, 2])
+    s = math.sin(out[j, 2])
+    cs[j, 0] = c
+    cs[j, 1] = s
+    return c, s
+
+
+@nb.njit(**JIT)
+def _top(loglik):
+    top = -np.inf
+    for j in range(loglik.shape[0]):
+        if loglik[j] > top:
+            top = loglik[j]
+    return top
+
+
+def _weigh_estimate(weights, particles, cs, out_w):
+    """`update_weights` with ``out_w`` holding log-likelihoods, then the estimate."""
+    top = _top(out_w)
+    for j in nb.prange(out_w.shape[0]):
+        out_w[j] = weights[j] * math.exp(out_w[j] - top)
+    log_mean, ess = _finish_weights(weights, top, out_w)
+    return log_mean, ess, _pose_mean(particles, out_w, cs)
+
+
+_weigh_estimate, _weigh_estimate_parallel = serial_and_parallel(_weigh_estimate)
+
+
+@nb.njit(**JIT)
+def _move_cells(
+    j, particles, motion, normals, sensors, table, where, skip, out, cs, cells
+):
+    """Move particle ``j``; its sensors' flat table indexes into ``cells[j]``.
+
+    The cell and bin of `table_bin` (0 where ``skip[i]``: not read);
+    ``cells`` is int32 (`ConeTable` keeps below 2^31 entries).
+    """
+    x0, y0, inv_res = where
+    ny, nx, n_bins = table.shape
+    c, s = _move(j, particles, motion, normals, out, cs)
+    for i in range(sensors.shape[0]):
+        if skip[i]:
+            cells[j, i] = 0
+            continue
+        row, col, b = table_bin(
+            out[j, 0], out[j, 1], out[j, 2], c, s, sensors, i, ny, nx, n_bins,
+            x0, y0, inv_res,
+        )  # fmt: skip
+        cells[j, i] = (row * nx + col) * n_bins + b
+
+
+@nb.njit(**JIT)
+def _gather_mm(j, flat, cells):
+    """Replace particle ``j``'s flat indexes by the table's entries (mm)."""
+    for i in range(cells.shape[1]):
+        cells[j, i] = flat[cells[j, i]]
+
+
+@nb.njit(**JIT)
+def _paper_mm(j, mm, z, inv_n, out):
+    """`_paper_cs` on looked-up entries ``mm[j]``."""
+    d = 0.0
+    for i in range(mm.shape[1]):
+        d += abs((z[i] - mm[j, i] * 0.001) / z[i])
+    out[j] = math.log(math.exp(-d / mm.shape[1]) + inv_n)
+
+
+@nb.njit(**JIT)
+def _beam_mm_row(
+    j, mm, z, e_short, is_max, hit, short, z_max, p_rand, inv_sigma, exponent,
+    u2_skip, out,
+):  # fmt: skip
+    """`_beam_table_cs` on looked-up entries ``mm[j]``."""
+    ll = 0.0
+    prod = 1.0
+    for i in range(mm.shape[1]):
+        if i % 16 == 15:
+            ll += math.log(prod)
+            prod = 1.0
+        if is_max[i]:
+            prod *= z_max
+            continue
+        k = mm[j, i]
+        zhat = k * 0.001
+        u = (z[i] - zhat) * inv_sigma
+        if u * u < u2_skip:
+            p = hit[k] * math.exp(-0.5 * u * u) + p_rand
+        else:
+            p = p_rand
+        if z[i] <= zhat:
+            p += short[k] * e_short[i]
+        prod *= p
+    out[j] = (ll + math.log(prod)) * exponent
+
+
+@nb.njit(**JIT)
+def _lut_mm_row(j, mm, lut, exponent, out):
+    """`_lut_cs` on looked-up entries ``mm[j]``."""
+    ll = 0.0
+    prod = 1.0
+    for i in range(mm.shape[1]):
+        if i % 16 == 15:
+            ll += math.log(prod)
+            prod = 1.0
+        prod *= lut[i, mm[j, i]]
+    out[j] = (ll + math.log(prod)) * exponent
+
+
+def _move_and_read(particles, normals, motion, sensors, table, where, skip, out_p):
+    """Move every particle, then read its sensors' cone-table entries.
+
+    Passes one and two of a fused step: particles are moved into ``out_p``
+    (`_move_cells`), and their sensors' entries (mm) read into ``mm`` (N, S)
+    int32, with the cosine and sine of each new heading in ``cs`` (N, 2).
+    Returns ``(cs, mm)``.
+    """
+    n = particles.shape[0]
+    cs = np.empty((n, 2))
+    mm = np.empty((n, sensors.shape[0]), dtype=np.int32)
+    for j in nb.prange(n):
+        _move_cells(j, particles, motion, normals, sensors, table, where, skip,
+                    out_p, cs, mm)  # fmt: skip
+    flat = table.reshape(table.size)
+    for j in nb.prange(n):
+        _gather_mm(j, flat, mm)
+    return cs, mm
+
+
+move_and_read, move_and_read_parallel = serial_and_parallel(_move_and_read)
+
+
+# The fused steps run in three passes: move and compute every table index,
+# read the table (independent reads the processor overlaps: the table is
+# larger than its caches), then the model. The same arithmetic as one pass.
+
+
+@nb.njit(**JIT)
+def paper_table_step(
+    particles, normals, motion, sensors, table, where, z, inv_n, weights, out_p, out_w
+):
+    """Fused step with the paper's model (`paper_table_loglik`)."""
+    n = particles.shape[0]
+    skip = np.zeros(sensors.shape[0], dtype=np.bool_)
+    cs, mm = move_and_read(
+        particles, normals, motion, sensors, table, where, skip, out_p
+    )
+    for j in range(n):
+        _paper_mm(j, mm, z, inv_n, out_w)
+    return _weigh_estimate(weights, out_p, cs, out_w)
+
+
+@nb.njit(**JIT_PARALLEL)
+def paper_lut_step_parallel(
+    particles, normals, motion, sensors, table, where, terms, inv_n, weights, out_p,
+    out_w,
+):  # fmt: skip
+    """`paper_table_step` over threads, each term read from a table (same result).
+
+    ``terms[i, k]`` is ``|(z_i - k / 1000) / z_i|`` for every millimetre ``k``
+    a table entry can hold (as `beam_scan_lut` for the beam model): a lookup
+    instead of a division per beam. Sums serial.
+    """
+    n = particles.shape[0]
+    s_count = sensors.shape[0]
+    skip = np.zeros(s_count, dtype=np.bool_)
+    cs, mm = move_and_read_parallel(
+        particles, normals, motion, sensors, table, where, skip, out_p
+    )
+    for j in nb.prange(n):
+        d = 0.0
+        for i in range(s_count):
+            d += terms[i, mm[j, i]]
+        out_w[j] = math.log(math.exp(-d / s_count) + inv_n)
+    return _weigh_estimate_parallel(weights, out_p, cs, out_w)
+
+
+@nb.njit(**JIT)
+def beam_table_step(
+    particles, normals, motion, sensors, table, where, z, e_short, is_max, hit,
+    short, beam, weights, out_p, out_w,
+):  # fmt: skip
+    """Fused step with the beam model (`beam_table_loglik`).
+
+    ``beam`` is ``(z_max, p_rand, inv_sigma, exponent, u2_skip)`` (`beam_skip`).
+    """
+    z_max, p_rand, inv_sigma, exponent, u2_skip = beam
+    n = particles.shape[0]
+    cs, mm = move_and_read(
+        particles, normals, motion, sensors, table, where, is_max, out_p
+    )
+    for j in range(n):
+        _beam_mm_row(
+            j, mm, z, e_short, is_max, hit, short, z_max, p_rand, inv_sigma,
+            exponent, u2_skip, out_w,
+        )  # fmt: skip
+    return _weigh_estimate(weights, out_p, cs, out_w)
+
+
+@nb.njit(**JIT_PARALLEL)
+def lut_table_step_parallel(
+    particles, normals, motion, sensors, table, where, lut, skip, exponent, weights,
+    out_p, out_w,
+):  # fmt: skip
+    """Fused step with the beam model read from `beam_scan_lut`'s table, over threads.
+
+    The same numbers as `beam_table_step`; ``skip`` marks the max readings
+    (``lut[i]`` is constant there: the table is not read).
+    """
+    n = particles.shape[0]
+    cs, mm = move_and_read_parallel(
+        particles, normals, motion, sensors, table, where, skip, out_p
+    )
+    for j in nb.prange(n):
+        _lut_mm_row(j, mm, lut, exponent, out_w)
+    return _weigh_estimate_parallel(weights, out_p, cs, out_w)

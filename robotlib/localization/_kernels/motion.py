@@ -1,0 +1,36 @@
+"""Motion sampling: particles moved by an odometry increment plus drawn noise.
+
+Numba kernels: contiguous arrays and scalars in, no Python objects; they
+import nothing of robotlib but the JIT options and other kernels.
+"""
+
+import math
+
+import numba as nb
+
+from ..._config import JIT, serial_and_parallel
+from .common import wrap
+
+
+@nb.njit(**JIT)
+def _odometry_one(j, particles, rot1, trans, rot2, sd1, sdt, sd2, normals, out):
+    r1 = rot1 + sd1 * normals[j, 0]
+    t = trans + sdt * normals[j, 1]
+    r2 = rot2 + sd2 * normals[j, 2]
+    th = particles[j, 2]
+    out[j, 0] = particles[j, 0] + t * math.cos(th + r1)
+    out[j, 1] = particles[j, 1] + t * math.sin(th + r1)
+    out[j, 2] = wrap(th + r1 + r2)
+
+
+def _sample_odometry(particles, rot1, trans, rot2, sd1, sdt, sd2, normals, out):
+    """Move particles (N, 3) by ``rot1, trans, rot2`` plus noise into ``out``.
+
+    Each increment gets its standard deviation (``sd1, sdt, sd2``) times the
+    caller's standard normals ``normals`` (N, 3).
+    """
+    for j in nb.prange(particles.shape[0]):
+        _odometry_one(j, particles, rot1, trans, rot2, sd1, sdt, sd2, normals, out)
+
+
+sample_odometry, sample_odometry_parallel = serial_and_parallel(_sample_odometry)

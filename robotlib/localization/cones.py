@@ -1,0 +1,252 @@
+"""Expected sonar readings for many particles: exact cone casts, or a `ConeTable`.
+
+- exact: every particle casts its sonar cones against the walls as
+  `robotlib.sensing._kernels.sonar_cone` does, the simulator's own model
+  (each cone only against the walls it may reach);
+- fast: a `ConeTable` precomputed once per world holds, per grid cell and
+  per direction bin, the cone range from the cell's centre, in millimetres;
+  a particle's reading is looked up at its sensor's cell and nearest
+  direction.
+
+Imports the world, sensing and the localization's kernels; never a sensor
+model or the filter.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+import weakref
+
+import numpy as np
+
+from ..sensing import SonarModel
+from ..world import World
+from ..world.index import INDEX_MIN_SEGMENTS
+from . import _kernels
+from .motion import PARALLEL_MIN, _particles
+
+__all__ = ["ConeTable", "cone_table", "expected_readings"]
+
+
+class ConeTable:
+    """Precomputed sonar cone ranges per grid cell and direction bin.
+
+    ``table[i, j, b]`` (uint16, mm) is what a sonar of ``sonar``'s cone
+    model at the centre of cell ``(i, j)``, pointing along
+    ``b * 2 pi / n_bins``, reads without noise. Built in parallel; when the
+    cone's rays are a whole number of bins apart (the default: 7 rays over
+    30 degrees, 72 bins of 5 degrees) each direction's ray is cast once per
+    cell and shared by the cones that contain it.
+
+    Parameters
+    ----------
+    world : World
+        Walls and bounds (the grid covers the bounds).
+    sonar : SonarModel, optional
+        Cone, rays, range limits and specular angle (default: a Pioneer's).
+    resolution : float
+        Cell side, m.
+    n_bins : int
+        Direction bins over the full turn.
+
+    Attributes
+    ----------
+    table : numpy.ndarray, shape (ny, nx, n_bins), uint16
+        Ranges, mm.
+    origin : tuple of float
+        Lower-left corner of cell ``[0, 0]``, m.
+    build_seconds : float
+        Wall time the build took, s.
+    """
+
+    def __init__(
+        self,
+        world: World,
+        sonar: SonarModel | None = None,
+        resolution: float = 0.05,
+        n_bins: int = 72,
+    ):
+        sonar = SonarModel() if sonar is None else sonar
+        if sonar.max_range * 1000 > np.iinfo(np.uint16).max:
+            raise ValueError("max_range too large for a uint16 mm table")
+        if n_bins < 4 or not resolution > 0:
+            raise ValueError("need n_bins >= 4 and resolution > 0")
+        self.sonar = sonar
+        self.resolution = float(resolution)
+        self.n_bins = int(n_bins)
+        xmin, ymin, xmax, ymax = world.bounds
+        nx = max(1, math.ceil((xmax - xmin) / resolution - 1e-9))
+        ny = max(1, math.ceil((ymax - ymin) / resolution - 1e-9))
+        self.origin = (float(xmin), float(ymin))
+        bin_width = 2 * math.pi / n_bins
+        ray_step = 0
+        if sonar.n_rays == 1:
+            ray_step = 1
+        elif sonar.n_rays % 2 == 1:
+            steps = sonar.cone / (sonar.n_rays - 1) / bin_width
+            if abs(steps - round(steps)) < 1e-9 and round(steps) >= 1:
+                ray_step = int(round(steps))
+        if ny * nx * n_bins >= 2**31:  # the fused steps index it with int32
+            raise ValueError("cone table too large: use a coarser resolution")
+        self.table = np.empty((ny, nx, n_bins), dtype=np.uint16)
+        t0 = time.perf_counter()
+        model = (
+            self.resolution,
+            self.n_bins,
+            ray_step,
+            int(sonar.n_rays),
+            float(sonar.cone),
+            float(sonar.max_range),
+            float(sonar.min_range),
+            sonar.cos_specular,
+        )
+        if len(world.obstacles) >= INDEX_MIN_SEGMENTS:
+            # a large map: rays through the walls' bucket index, jumping over
+            # clear space by the distance field (the same table, much sooner)
+            index = world.segment_index()
+            field = world.distance_field(self.resolution)
+            _kernels.build_cone_table_indexed(
+                index.segments, *self.origin, *model, *index.args, field.data,
+                self.table,
+            )  # fmt: skip
+        else:
+            _kernels.build_cone_table(
+                np.ascontiguousarray(world.obstacles), *self.origin, *model, 16,
+                self.table,
+            )  # fmt: skip
+        self.build_seconds = time.perf_counter() - t0
+        self.table.setflags(write=False)
+
+    @property
+    def nbytes(self) -> int:
+        """Memory the table takes, bytes."""
+        return self.table.nbytes
+
+    def lookup(self, particles) -> np.ndarray:
+        """Look up the expected readings of particles.
+
+        Parameters
+        ----------
+        particles : array_like, shape (N, 3)
+            Poses, m and rad.
+
+        Returns
+        -------
+        numpy.ndarray, shape (N, S)
+            Ranges, m.
+        """
+        p = _particles(particles)
+        out = np.empty((len(p), len(self.sonar.sensors)))
+        kernel = (
+            _kernels.expected_table_parallel
+            if len(p) >= PARALLEL_MIN
+            else _kernels.expected_table
+        )
+        kernel(
+            p,
+            self.sonar.sensors,
+            self.table,
+            self.origin[0],
+            self.origin[1],
+            1.0 / self.resolution,
+            out,
+        )
+        return out
+
+
+_TABLES: dict = {}
+
+
+def cone_table(
+    world: World,
+    sonar: SonarModel | None = None,
+    resolution: float = 0.05,
+    n_bins: int = 72,
+) -> ConeTable:
+    """Return the `ConeTable` for a world, built on first use and then reused.
+
+    Tables are kept while their world is alive, one per sonar geometry,
+    resolution and bin count.
+    """
+    sonar = SonarModel() if sonar is None else sonar
+    key = (
+        id(world),
+        sonar.sensors.tobytes(),
+        sonar.n_rays,
+        sonar.cone,
+        sonar.max_range,
+        sonar.min_range,
+        sonar.cos_specular,
+        float(resolution),
+        int(n_bins),
+    )
+    entry = _TABLES.get(key)
+    if entry is not None and entry[0]() is world:
+        return entry[1]
+    table = ConeTable(world, sonar, resolution, n_bins)
+    _TABLES[key] = (weakref.ref(world, lambda _: _TABLES.pop(key, None)), table)
+    return table
+
+
+def expected_readings(
+    world: World,
+    particles,
+    sonar: SonarModel | None = None,
+    table: ConeTable | None = None,
+) -> np.ndarray:
+    """Noise-free sonar readings of every particle.
+
+    Parameters
+    ----------
+    world : World
+        The map.
+    particles : array_like, shape (N, 3)
+        Poses, m and rad.
+    sonar : SonarModel, optional
+        The sonar ring (default: a Pioneer's eight front sonars).
+    table : ConeTable, optional
+        If given, look the readings up (fast path) instead of casting cones.
+
+    Returns
+    -------
+    numpy.ndarray, shape (N, S)
+        Ranges, m, in ``[min_range, max_range]``.
+    """
+    if table is not None:
+        return table.lookup(particles)
+    sonar = SonarModel() if sonar is None else sonar
+    p = _particles(particles)
+    out = np.empty((len(p), len(sonar.sensors)))
+    kernel = (
+        _kernels.expected_scan_blocks_parallel
+        if len(p) >= 64
+        else _kernels.expected_scan_blocks
+    )
+    kernel(
+        p,
+        sonar.sensors,
+        *_wall_blocks(world, float(sonar.max_range)),
+        int(sonar.n_rays),
+        float(sonar.cone),
+        float(sonar.max_range),
+        float(sonar.min_range),
+        sonar.cos_specular,
+        out,
+    )
+    return out
+
+
+_BLOCKS: dict = {}
+
+
+def _wall_blocks(world: World, max_range: float) -> tuple:
+    """Walls, and the walls near each 1 m block (`_kernels.wall_blocks`), cached."""
+    key = (id(world), max_range)
+    entry = _BLOCKS.get(key)
+    if entry is not None and entry[0]() is world:
+        return entry[1]
+    segments = np.ascontiguousarray(world.obstacles, dtype=np.float64).reshape(-1, 4)
+    blocks = (segments, *_kernels.wall_blocks(segments, world.bounds, max_range))
+    _BLOCKS[key] = (weakref.ref(world, lambda _: _BLOCKS.pop(key, None)), blocks)
+    return blocks

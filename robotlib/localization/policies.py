@@ -1,0 +1,214 @@
+"""When and how `MCL` resamples: the resampling policies, and augmented MCL's injection.
+
+Each policy is a small frozen dataclass with ``indexes(mcl)``, returning the
+indexes of the particles to keep (or ``None``: no resampling this step):
+
+- `PaperResampling`: every step, multinomial selection, then the paper's
+  resize ``N = int(N exp(-lambda Ip))`` with a floor;
+- `ThresholdResampling`: a resampler from `robotlib.localization.resampling`
+  run only when the effective sample size falls below a share of ``N``;
+- `KLDResampling`: KLD-sampling, every step (or below an ESS threshold).
+
+`AugmentedInjection` adds augmented MCL's random particles (Thrun, table 8.3).
+Imports the localization's own pieces; never `robotlib.localization.mcl`
+(which imports this module) except for type hints.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from . import _kernels
+from .kld import kld_resample
+from .motion import _particles
+from .paper import RESIZE_FLOOR, resize
+from .resampling import RESAMPLERS, multinomial_resample
+
+if TYPE_CHECKING:
+    from .mcl import MCL
+
+__all__ = [
+    "PaperResampling",
+    "ThresholdResampling",
+    "KLDResampling",
+    "AugmentedInjection",
+]
+
+
+def _plain(a, ndim: int) -> bool:
+    """Whether ``a`` is a C-contiguous float64 array of ``ndim`` dimensions."""
+    return (
+        type(a) is np.ndarray
+        and a.dtype == np.float64
+        and a.ndim == ndim
+        and a.flags.c_contiguous
+    )
+
+
+def _gather(particles: np.ndarray, idx) -> np.ndarray:
+    new = np.empty((len(idx), 3))
+    _kernels.gather(particles, np.ascontiguousarray(idx), new)
+    return new
+
+
+@dataclass(frozen=True)
+class PaperResampling:
+    """The paper's resampling: select (multinomial) then resize.
+
+    Attributes
+    ----------
+    lam : float
+        The paper's lambda in ``N = int(N exp(-lambda Ip))``; 0 keeps ``N``.
+    floor : int
+        Smallest population the resize leaves (the paper gives none).
+    """
+
+    lam: float = 0.5
+    floor: int = RESIZE_FLOOR
+
+    def indexes(self, mcl: MCL) -> np.ndarray:
+        """Indexes of the new particle set (the resize truncates i.i.d. draws)."""
+        p, w = mcl.particles, mcl.weights
+        idx = multinomial_resample(w, mcl.rng)
+        ip = _kernels.position_spread(p, idx) / mcl.map_diagonal
+        n = resize(len(idx), ip, self.lam, self.floor)
+        return idx[:n]
+
+
+@dataclass(frozen=True)
+class ThresholdResampling:
+    """Resample with a named resampler when ``ESS < threshold * N``.
+
+    Attributes
+    ----------
+    method : str
+        A key of `robotlib.localization.resampling.RESAMPLERS`
+        (``"systematic"`` / ``"low_variance"``, ``"stratified"``,
+        ``"multinomial"``, ``"residual"``).
+    threshold : float
+        Share of ``N``; 1.0 (or more) resamples every step.
+    """
+
+    method: str = "systematic"
+    threshold: float = 0.5
+
+    def __post_init__(self):
+        if self.method not in RESAMPLERS:
+            raise ValueError(f"unknown resampler {self.method!r}")
+
+    def indexes(self, mcl: MCL) -> np.ndarray | None:
+        """Indexes of the new set, or None to keep the weighted set."""
+        n = len(mcl.weights)
+        if mcl.ess >= self.threshold * n and self.threshold < 1.0:
+            return None
+        return RESAMPLERS[self.method](mcl.weights, mcl.rng)
+
+    def _resample(self, mcl: MCL) -> np.ndarray | None:
+        """Return the new particles (`indexes`, gathered), or None to keep them."""
+        if self.method not in ("systematic", "low_variance"):
+            idx = self.indexes(mcl)
+            return None if idx is None else _gather(mcl.particles, idx)
+        n = len(mcl.weights)
+        if mcl.ess >= self.threshold * n and self.threshold < 1.0:
+            return None
+        p, w = mcl.particles, mcl.weights
+        if not (_plain(p, 2) and _plain(w, 1) and p.shape == (n, 3)):
+            idx = self.indexes(mcl)  # set from outside: the checked path
+            return None if idx is None else _gather(_particles(p), idx)
+        out = np.empty((n, 3))  # the same draw as `systematic_resample`
+        _kernels.systematic_gather(p, w, mcl.rng.random(), out)
+        return out
+
+
+@dataclass(frozen=True)
+class KLDResampling:
+    """KLD-sampling (see `robotlib.localization.kld`).
+
+    Attributes
+    ----------
+    n_min, n_max : int
+        Fewest and most particles.
+    epsilon, delta : float
+        KL bound and its confidence.
+    bin_xy, bin_theta : float
+        Bin sizes, m and rad.
+    threshold : float
+        Resample when ``ESS < threshold * N``; 1.0 resamples every step.
+    """
+
+    n_min: int = 300
+    n_max: int = 10_000
+    epsilon: float = 0.05
+    delta: float = 0.01
+    bin_xy: float = 0.5
+    bin_theta: float = math.radians(15.0)
+    threshold: float = 1.0
+
+    def indexes(self, mcl: MCL) -> np.ndarray | None:
+        """Indexes of the new set, or None to keep the weighted set."""
+        n = len(mcl.weights)
+        if self.threshold < 1.0 and mcl.ess >= self.threshold * n:
+            return None
+        return kld_resample(
+            mcl.particles,
+            mcl.weights,
+            mcl.world.bounds,
+            mcl.rng,
+            self.n_min,
+            self.n_max,
+            self.epsilon,
+            self.delta,
+            self.bin_xy,
+            self.bin_theta,
+        )
+
+
+@dataclass
+class AugmentedInjection:
+    """Augmented MCL: inject random particles when the likelihood drops.
+
+    Short- and long-term averages of the mean likelihood ``w_avg`` of each
+    scan, ``w_fast += alpha_fast (w_avg - w_fast)`` and ``w_slow +=
+    alpha_slow (w_avg - w_slow)``, with ``alpha_slow << alpha_fast``; when
+    resampling, each new particle is replaced by a uniformly drawn one with
+    probability ``max(0, 1 - w_fast / w_slow)``. Both averages start at the
+    first scan's ``w_avg``.
+
+    Attributes
+    ----------
+    alpha_slow, alpha_fast : float
+        Smoothing rates, ``0 < alpha_slow < alpha_fast <= 1``.
+    """
+
+    alpha_slow: float = 0.05
+    alpha_fast: float = 0.5
+    w_slow: float = float("nan")
+    w_fast: float = float("nan")
+
+    def __post_init__(self):
+        if not 0 < self.alpha_slow < self.alpha_fast <= 1:
+            raise ValueError("need 0 < alpha_slow < alpha_fast <= 1")
+
+    def update(self, log_mean_likelihood: float) -> None:
+        """Feed one scan's log mean likelihood."""
+        w_avg = math.exp(log_mean_likelihood)
+        if math.isnan(self.w_slow):
+            self.w_slow = self.w_fast = w_avg
+        else:
+            self.w_slow += self.alpha_slow * (w_avg - self.w_slow)
+            self.w_fast += self.alpha_fast * (w_avg - self.w_fast)
+
+    @property
+    def probability(self) -> float:
+        """Probability that a resampled particle is replaced by a random one."""
+        if not self.w_slow > 0:
+            return 0.0
+        return max(0.0, 1.0 - self.w_fast / self.w_slow)
+
+    def reset(self) -> None:
+        """Forget the averages."""
+        self.w_slow = self.w_fast = float("nan")
