@@ -72,7 +72,15 @@ def _warm_mcl() -> None:
         mcl.step(odo, odo + [0.1, 0.0, 0.0], z)
 
 
-WARMUPS = {"sim": _warm_sim, "mcl": _warm_mcl}
+def _warm_mapping() -> None:
+    from .mapping import record_drive, run_fastslam
+
+    log = record_drive("loop", [(3.0, 1.5)], seed=0, every=2)
+    run_fastslam(log, 4, "laser", rng=0)
+    run_fastslam(log, 4, "sonar", rng=0)
+
+
+WARMUPS = {"sim": _warm_sim, "mcl": _warm_mcl, "mapping": _warm_mapping}
 """What `warm_up` can compile: a name to a function that runs the kernels once."""
 
 

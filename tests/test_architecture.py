@@ -45,6 +45,8 @@ ALLOWED_SIDEWAYS = {
     # Navigation localizes, plans, follows and avoids.
     ("robotlib.planning", "robotlib.localization"),
     ("robotlib.planning", "robotlib.avoidance"),
+    # Grid FastSLAM resamples its map-carrying particles with MCL's resamplers.
+    ("robotlib.mapping", "robotlib.localization"),
 }
 """Imports between packages of one layer that the design allows."""
 

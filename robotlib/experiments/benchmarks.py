@@ -15,7 +15,9 @@ __all__ = ["BENCHES", "add_arguments", "run"]
 
 BENCHES = {
     "mcl": "robotlib.experiments.bench_mcl",
-    "maps": "robotlib.experiments.bench_maps",
+    "map": "robotlib.experiments.bench_map",
+    "slam": "robotlib.experiments.bench_map",
+    "large-map": "robotlib.experiments.bench_large_map",
 }
 """Topic name to the module that measures it."""
 

@@ -256,6 +256,27 @@ class Robot(ABC):
         """Poll once; the eight front sonar ranges, shape (8,), m (5 m: no echo)."""
         return self._poll().sonar.copy()
 
+    def readlaser(self) -> np.ndarray:
+        """Poll once; the laser scan, shape (n_beams,), m, right to left.
+
+        Raises
+        ------
+        NotImplementedError
+            If this backend has no laser (before polling).
+        """
+        if not self._has_laser():
+            raise NotImplementedError(f"{type(self).__name__} has no laser")
+        self._poll()
+        return self._read_laser()
+
+    def _has_laser(self) -> bool:
+        """Whether `readlaser` works on this backend (default: no laser)."""
+        return False
+
+    def _read_laser(self) -> np.ndarray:
+        """Return the laser scan of the last cycle (backends with a laser)."""
+        raise NotImplementedError(f"{type(self).__name__} has no laser")
+
     def pose(self) -> np.ndarray:
         """Poll once; the odometry pose ``(x, y, theta)``, m and rad."""
         return self._poll().pose.copy()

@@ -4,8 +4,10 @@
 integrates what the wheels did, the truth adds slip drawn from an
 `OdometryNoise` model. Walls (and other robots) stop a body and set its stall
 flag. Sonar readings come from `robotlib.sensing`'s cone model at the true
-pose. Imports the world, sensing and the robot's state record; never a
-backend or anything above the simulator.
+pose; a laser scan (`robotlib.sensing.laser`), only when asked for, from its
+own random stream, so reading the laser changes no sonar or odometry number.
+Imports the world, sensing and the robot's state record; never a backend or
+anything above the simulator.
 """
 
 from __future__ import annotations
@@ -33,6 +35,7 @@ from ..p3dx import (
 from ..robot import RobotState
 from ..robot.base import check_argument
 from ..sensing import _kernels as _sensing_kernels
+from ..sensing.laser import simulate_laser
 from ..world import _kernels as _world_kernels
 from ..world.geometry import wrap_angle
 
@@ -144,6 +147,7 @@ class SimBody:
         self._sim = sim
         self._rng = rng
         self._initial = np.array(pose, dtype=float)
+        self._laser_rng: np.random.Generator | None = None
         self._reset()
 
     def _reset(self) -> None:
@@ -263,6 +267,20 @@ class SimBody:
         self._sonar_on = bool(on)
         if not on:
             self._sonar[:] = self._sim.sonar.max_range
+
+    def scan_laser(self) -> np.ndarray:
+        """Return a laser scan at the true pose now, shape (n_beams,), m.
+
+        The noise comes from a stream of its own (spawned from this body's
+        on first use), so scanning leaves the sonar and odometry noise as
+        they would be without a laser.
+        """
+        if self._laser_rng is None:
+            self._laser_rng = self._rng.spawn(1)[0]
+        obstacles = self._sim._obstacles_for(self)
+        return simulate_laser(
+            obstacles, self.true_pose, self._sim.laser, self._laser_rng
+        )[0]
 
     # -- reports ----------------------------------------------------------
     @property

@@ -1,6 +1,6 @@
-"""``robotlib bench maps``: how fast a large map becomes ready for MCL.
+"""``robotlib bench large-map``: how fast a large map becomes ready for MCL.
 
-``robotlib bench maps [--map FILE] [--resolution M]`` loads a map and times
+``robotlib bench large-map [--map FILE] [--resolution M]`` loads a map and times
 what MCL needs before its first step: the distance field, the admissible
 free space and the cone table (`robotlib.localization.ConeTable`), each in
 wall time and in CPU time, and the same work by the plain kernels that
@@ -28,7 +28,7 @@ __all__ = ["add_arguments", "run", "bench_maps"]
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    """Options of ``robotlib bench maps``."""
+    """Options of ``robotlib bench large-map``."""
     parser.add_argument("--map", default=None, help="map file (default: large_map)")
     parser.add_argument("--resolution", type=float, default=0.05, help="cell side, m")
     parser.add_argument(
