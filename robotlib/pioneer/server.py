@@ -6,8 +6,8 @@ runs the SYNC handshake, sends OPEN and then gets a SIP every 100 ms of
 simulated time; the simulator runs in real time, or ``speed`` times faster.
 `robotlib.pioneer.session.Session` is the protocol of one link, bytes in
 and bytes out, with no I/O (re-exported here); `SimServer` moves bytes
-between sessions and sockets in one thread with a selector. Garbage, bad checksums, truncated or malformed packets are skipped;
-a client that vanishes or misbehaves is dropped, its robot stopped, and the
+between sessions and sockets in one thread with a selector. Garbage, bad
+checksums, truncated or malformed packets are skipped; a client that vanishes or misbehaves is dropped, its robot stopped, and the
 next client is accepted on the same port.
 
 Every connection is accepted at once (the backlog fits a class connecting
