@@ -7,8 +7,9 @@ simulated time; the simulator runs in real time, or ``speed`` times faster.
 `robotlib.pioneer.session.Session` is the protocol of one link, bytes in
 and bytes out, with no I/O (re-exported here); `SimServer` moves bytes
 between sessions and sockets in one thread with a selector. Garbage, bad
-checksums, truncated or malformed packets are skipped; a client that vanishes or misbehaves is dropped, its robot stopped, and the
-next client is accepted on the same port.
+checksums, truncated or malformed packets are skipped; a client that
+vanishes or misbehaves is dropped, its robot stopped, and the next client
+is accepted on the same port.
 
 Every connection is accepted at once (the backlog fits a class connecting
 together) and runs its own handshake; the first to OPEN drives the robot,
