@@ -117,7 +117,9 @@ def test_heading_done_never_flickers_whatever_the_limits(angle, rate, accel):
     r._send("SETRA", accel)
     r._send("SETRA", -accel)
     r.setdeltaheading(angle)
-    seen = [r.isheadingdone() for _ in range(int(60 / CYCLE))]
+    # long enough for the slowest turn: the trapezoid's time, and some
+    duration = abs(angle) / rate + 2 * rate / accel + 5.0
+    seen = [r.isheadingdone() for _ in range(int(duration / CYCLE))]
     assert seen[-1]
     first = seen.index(True)
     assert all(seen[first:])

@@ -326,10 +326,15 @@ class SimServer:
         conn = conn_ref[0]
         owner = ep.owner
         if owner is not None and owner is not conn:
-            if owner.session.silent_for <= owner.session.watchdog:
+            # a CLOSE or a hang-up the previous client already sent comes first
+            self._read_conn(ep, owner)
+            owner = ep.owner
+        if owner is not None and owner is not conn:
+            s = owner.session
+            if s.open and s.silent_for <= s.watchdog:
                 log.info("robot %s: busy, refusing a second client", ep.port)
                 return False
-            log.info("robot %s: previous client silent, replacing it", ep.port)
+            log.info("robot %s: previous client gone or silent, replacing it", ep.port)
             self._drop(ep, owner)
         ep.owner = conn
         ep.clients += 1
