@@ -72,6 +72,24 @@ def _warm_mcl() -> None:
         mcl.step(odo, odo + [0.1, 0.0, 0.0], z)
 
 
+def _warm_avoidance() -> None:
+    from .avoidance import (
+        VFH,
+        Bug2,
+        PotentialField,
+        WallFollower,
+        polar_histogram,
+        run_episode,
+        smooth_histogram,
+    )
+    from .world import World
+
+    box = World(segments=[[0, 0, 4, 0], [4, 0, 4, 3], [4, 3, 0, 3], [0, 3, 0, 0]])
+    for c in (VFH(), PotentialField(), Bug2(), WallFollower()):
+        run_episode(box, c, goal=(3.0, 1.5), start=(1.0, 1.5, 0.0), seed=0, max_time=1)
+    smooth_histogram(polar_histogram([[1.0, 0.0]], [1.0], [0.0, 0.0, 0.0]))
+
+
 def _warm_mapping() -> None:
     from .mapping import record_drive, run_fastslam
 
@@ -80,7 +98,12 @@ def _warm_mapping() -> None:
     run_fastslam(log, 4, "sonar", rng=0)
 
 
-WARMUPS = {"sim": _warm_sim, "mcl": _warm_mcl, "mapping": _warm_mapping}
+WARMUPS = {
+    "sim": _warm_sim,
+    "mcl": _warm_mcl,
+    "mapping": _warm_mapping,
+    "avoidance": _warm_avoidance,
+}
 """What `warm_up` can compile: a name to a function that runs the kernels once."""
 
 

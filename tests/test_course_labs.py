@@ -33,6 +33,7 @@ LABS = sorted(p.stem for p in (ROOT / "solutions").glob("*.ipynb"))
 # lab -> the solution cells a "partial" student copied (and the checks they pass)
 PARTIAL = {
     "lab0_getting_started": ({"l0-14"}, {"sonar": 2}),
+    "lab2_avoidance": ({"l2-05"}, {"braitenberg": 2, "explorer": 2}),
     "lab3_mcl": (
         {"l3-05", "l3-10", "l3-13", "l3-37"},
         {"weights": 2, "select": 1, "resize": 2, "low_variance": 2, "global": 2},

@@ -15,6 +15,7 @@ __all__ = ["BENCHES", "add_arguments", "run"]
 
 BENCHES = {
     "mcl": "robotlib.experiments.bench_mcl",
+    "avoid": "robotlib.experiments.bench_avoid",
     "map": "robotlib.experiments.bench_map",
     "slam": "robotlib.experiments.bench_map",
     "large-map": "robotlib.experiments.bench_large_map",
