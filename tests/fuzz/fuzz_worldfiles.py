@@ -8,8 +8,13 @@ target is for a developer with time::
     pip install -e ".[fuzz]"
     python tests/fuzz/fuzz_worldfiles.py -max_total_time=600 -rss_limit_mb=4096
 
-libFuzzer's options follow the script (``-runs=N``, ``-jobs=2``, a corpus
-folder such as ``worlds/``). A crash writes the input to ``crash-*``:
+libFuzzer's options follow the script (``-runs=N``, ``-jobs=2``) and then
+corpus folders: the first one receives the new inputs, so give a scratch
+folder first and ``worlds/`` (read only as seeds) after it::
+
+    mkdir -p .fuzz-corpus
+    python tests/fuzz/fuzz_worldfiles.py -max_total_time=600 .fuzz-corpus worlds/
+ A crash writes the input to ``crash-*``:
 replay it with ``python tests/fuzz/fuzz_worldfiles.py crash-...``.
 """
 
