@@ -98,11 +98,27 @@ def _warm_mapping() -> None:
     run_fastslam(log, 4, "sonar", rng=0)
 
 
+def _warm_models() -> None:
+    from .localization import BeamParameters, BeamSensorModel
+    from .sensing import SonarModel, simulate_ranges
+    from .world import load_world
+
+    world = load_world("corridor")
+    poses = np.tile(np.asarray(world.start, dtype=float), (3, 1))
+    simulate_ranges(world, poses, SonarModel(), rng=0)
+    simulate_ranges(world, poses, SonarModel(sensors=np.zeros((1, 3))), rng=0)
+    z = np.full(8, 2.0)
+    BeamSensorModel(world).log_likelihood(poses, z)
+    fast = BeamSensorModel(world, fast=True, params=BeamParameters(exponent=0.2))
+    fast.log_likelihood(np.tile(poses, (100, 1)), z)
+
+
 WARMUPS = {
     "sim": _warm_sim,
     "mcl": _warm_mcl,
     "mapping": _warm_mapping,
     "avoidance": _warm_avoidance,
+    "models": _warm_models,
 }
 """What `warm_up` can compile: a name to a function that runs the kernels once."""
 
@@ -142,7 +158,7 @@ def setup(
         student code that uses them) and the returned generator.
     warm : iterable of str
         Kernels to compile or load now (keys of `WARMUPS`: ``"sim"``,
-        ``"mcl"``); empty for none.
+        ``"mcl"``, ``"mapping"``, ``"models"``); empty for none.
     style : bool
         Apply the labs' matplotlib style (`STYLE`). The backend is left to
         Jupyter (inline) or to ``MPLBACKEND`` (``Agg`` in CI and grading).
