@@ -26,6 +26,7 @@ COMMANDS = {
     ),
     "release": ("robotlib.course.release", "write labs/ from solutions/"),
     "grade": ("robotlib.course.grade", "grade a folder of submissions in a sandbox"),
+    "warmup": ("robotlib.notebook", "compile the numba kernels the labs use, once"),
 }
 """Subcommand name to (module, one-line help)."""
 
