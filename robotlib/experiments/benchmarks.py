@@ -18,6 +18,8 @@ BENCHES = {
     "avoid": "robotlib.experiments.bench_avoid",
     "map": "robotlib.experiments.bench_map",
     "slam": "robotlib.experiments.bench_map",
+    "logs": "robotlib.experiments.bench_logs",
+    "histogram": "robotlib.experiments.bench_histogram",
 }
 """Topic name to the module that measures it."""
 

@@ -61,6 +61,10 @@ class OdometryNoise:
     - rotation: ``var = rot_per_rad**2 * |dtheta| + rot_per_m**2 * |ds|``
       (rad^2)
 
+    On top of that random walk, ``ed`` and ``eb`` set Borenstein's
+    systematic errors (unequal wheels, a wrong track; see `true_increment`),
+    off (1.0) by default.
+
     Attributes
     ----------
     trans_per_m : float
@@ -69,16 +73,62 @@ class OdometryNoise:
         Heading error after turning 1 rad, standard deviation, rad.
     rot_per_m : float
         Heading error after 1 m of travel, standard deviation, rad.
+    ed : float
+        Right wheel diameter over left wheel diameter, ``D_R / D_L``
+        (1: equal wheels).
+    eb : float
+        Real wheel track over the nominal one the odometry assumes
+        (1: exact).
     """
 
     trans_per_m: float = 0.03
     rot_per_rad: float = 0.03
     rot_per_m: float = 0.02
+    ed: float = 1.0
+    eb: float = 1.0
+
+    def __post_init__(self):
+        if not (self.ed > 0 and self.eb > 0):
+            raise ValueError(f"ed and eb must be positive, got {self.ed}, {self.eb}")
 
     @classmethod
     def none(cls) -> OdometryNoise:
         """Return a model with perfect odometry."""
         return cls(0.0, 0.0, 0.0)
+
+    @property
+    def systematic(self) -> bool:
+        """Whether the wheels differ from the odometry's nominal geometry."""
+        return self.ed != 1.0 or self.eb != 1.0
+
+    def true_increment(self, ds: float, dth: float) -> tuple[float, float]:
+        """Return the motion the wheels really make for a measured increment.
+
+        The odometry counts encoder ticks and assumes two equal wheels of
+        the nominal diameter and the nominal track `robotlib.p3dx.AXLE_TRACK`.
+        With Borenstein's systematic errors (UMBmark, 1996) the right wheel's
+        diameter is ``ed`` times the left's (their mean is nominal) and the
+        real track is ``eb`` times the nominal one, so the same ticks move the
+        robot differently.
+
+        Parameters
+        ----------
+        ds : float
+            Measured translation, m.
+        dth : float
+            Measured rotation, rad.
+
+        Returns
+        -------
+        tuple of float
+            The true translation (m) and rotation (rad), before random slip;
+            ``(ds, dth)`` unchanged when there is no systematic error.
+        """
+        if not self.systematic:
+            return ds, dth
+        left = (ds - 0.5 * AXLE_TRACK * dth) * 2.0 / (self.ed + 1.0)
+        right = (ds + 0.5 * AXLE_TRACK * dth) * 2.0 * self.ed / (self.ed + 1.0)
+        return 0.5 * (left + right), (right - left) / (self.eb * AXLE_TRACK)
 
 
 def _arc(pose: np.ndarray, ds: float, dth: float) -> None:
@@ -294,8 +344,9 @@ class SimBody:
         v, w = self._control()
         ds, dth = v * CYCLE, w * CYCLE
         model = self._sim.odometry
-        true_ds = ds + noise[0] * model.trans_per_m * math.sqrt(abs(ds))
-        true_dth = dth + noise[1] * math.sqrt(
+        wheel_ds, wheel_dth = model.true_increment(ds, dth)
+        true_ds = wheel_ds + noise[0] * model.trans_per_m * math.sqrt(abs(ds))
+        true_dth = wheel_dth + noise[1] * math.sqrt(
             model.rot_per_rad**2 * abs(dth) + model.rot_per_m**2 * abs(ds)
         )
         fraction = self._free_fraction(true_ds, true_dth, obstacles, others)
