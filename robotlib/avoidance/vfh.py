@@ -279,7 +279,7 @@ class VFH(Controller):
         fade: float = 1.0,
         mu: tuple[float, float, float] = (5.0, 2.0, 2.0),
         escape: bool = True,
-        patience: float = 10.0,
+        patience: float = 8.0,
         progress: float = 0.3,
         follow_margin: int = 4,
         max_speed: float = 0.5,
