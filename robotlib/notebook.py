@@ -84,6 +84,19 @@ def _warm_filter(make: Callable) -> Callable[[], None]:
     return warm
 
 
+def _warm_plan() -> None:
+    from .planning import CSpace, astar, dijkstra, inflate, rrt, wavefront
+    from .world import load_world
+
+    cs = CSpace.from_array(np.zeros((4, 4), dtype=bool))
+    inflate(cs.blocked, 1.0)
+    for planner in (astar, dijkstra, wavefront):
+        planner(cs, (0.5, 0.5), (3.5, 3.5))
+    world = load_world("corridor")
+    x, y, _ = world.start
+    rrt(world, (x, y), (x + 0.5, y), rng=0)
+
+
 def _warm_avoidance() -> None:
     from .avoidance import (
         VFH,
@@ -162,6 +175,7 @@ WARMUPS: dict[str, Callable[[], None] | list[tuple[str, Callable[[], None]]]] = 
     "mapping": _warm_mapping,
     "avoidance": _warm_avoidance,
     "models": _warm_models,
+    "plan": _warm_plan,
 }
 """What `warm_up` can compile: a name to a function that runs its kernels
 once, or to a list of ``(label, function)`` steps (the progress bar counts

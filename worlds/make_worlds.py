@@ -51,6 +51,11 @@ All coordinates here are whole millimetres, as in the files.
 - ``office``: a 20 m x 15 m office in MobileSim ``2D-Map`` form: a corridor,
   seven rooms, a table and a shelf as DATA points, a ``Sim.BoxObstacle``, a
   ``Dock`` before the ``RobotHome`` (the home wins) and a ``ForbiddenArea``.
+
+Not shipped, made on demand: ``python worlds/make_worlds.py --large FILE``
+writes `large_map`, a 24 m x 52 m floor drawn as about 60,000 DATA points
+(the size and point count of MobileSim's sample ``columbia.map``), which
+``robotlib bench large-map`` times.
 """
 
 from __future__ import annotations
@@ -489,8 +494,61 @@ def office_map() -> str:
     return "\n".join(lines) + "\n"
 
 
-def main() -> None:
-    """Write every world into this folder."""
+def large_map(seed: int = 0, spacing: int = 8) -> str:
+    """Return the text of a large scanned-looking map (24 m x 52 m, ~60k points).
+
+    A building like MobileSim's ``columbia.map``: a 2.4 m corridor down the
+    middle with 4 m rooms on both sides (1 m doors), every wall drawn as DATA
+    points ``spacing`` mm apart with 5 mm of seeded jitter, as a laser
+    scanner leaves them, plus a few pillars and the outline as LINES.
+    """
+    rng = random.Random(seed)
+    w, h, cx0, cx1 = 24000, 52000, 10800, 13200
+    walls: list[Segment] = [(0, 0, w, 0), (w, 0, w, h), (w, h, 0, h), (0, h, 0, 0)]
+    doors_w = [(y + 1500, y + 2500) for y in range(0, h, 4000)]
+    doors_e = [(y + 2500, y + 3500) for y in range(0, h, 4000)]
+    walls += wall_with_doors(0, h, doors_w, cx0, True)
+    walls += wall_with_doors(0, h, doors_e, cx1, True)
+    for y in range(4000, h, 4000):
+        walls += [(0, y, cx0, y), (cx1, y, w, y)]
+    points = []
+    for x1, y1, x2, y2 in walls:
+        n = max(1, round(math.hypot(x2 - x1, y2 - y1) / spacing))
+        for k in range(n + 1):
+            points.append(
+                (
+                    round(x1 + (x2 - x1) * k / n + rng.uniform(-5, 5)),
+                    round(y1 + (y2 - y1) * k / n + rng.uniform(-5, 5)),
+                )
+            )
+    pillars = [(x, y) for x in (cx0 - 600, cx1 + 600) for y in range(2000, h, 8000)]
+    lines = list(walls[:4])
+    for px, py in pillars:
+        lines += box(px - 150, py - 150, 300, 300)
+    out = [
+        "2D-Map-Ex2",
+        "Sources: robotlib large_map",
+        "MinPos: -200 -200",
+        f"MaxPos: {w + 200} {h + 200}",
+        f"NumPoints: {len(points)}",
+        f"NumLines: {len(lines)}",
+        f'Cairn: RobotHome {(cx0 + cx1) // 2} 2000 90.000000 "" ICON "home"',
+        "LINES",
+        *(" ".join(str(v) for v in s) for s in lines),
+        "DATA",
+        *(f"{x} {y}" for x, y in points),
+    ]
+    return "\n".join(out) + "\n"
+
+
+def main(argv: list[str] | None = None) -> None:
+    """Write every world into this folder (or, with ``--large FILE``, `large_map`)."""
+    import sys
+
+    argv = sys.argv[1:] if argv is None else argv
+    if argv[:1] == ["--large"] and len(argv) == 2:
+        Path(argv[1]).write_text(large_map(), encoding="ascii")
+        return
     notes = {
         "corridor": "The paper's aliased corridor: 28 m x 2 m, doors on both sides.",
         "corridor_periodic": (

@@ -33,6 +33,7 @@ from ..p3dx import (
     ROBOT_WIDTH,
 )
 from ..robot import RobotState
+from ..robot.base import check_argument
 from ..sensing import _kernels as _sensing_kernels
 from ..sensing.laser import simulate_laser
 from ..world import _kernels as _world_kernels
@@ -147,8 +148,27 @@ def _ramp(current: float, target: float, accel: float, decel: float) -> float:
 
 
 def _approach(remaining: float, vmax: float, decel: float) -> float:
-    """Speed towards a goal ``remaining`` away that can still stop on it."""
-    speed = min(vmax, math.sqrt(2.0 * decel * abs(remaining)), abs(remaining) / CYCLE)
+    """Speed this cycle towards a goal ``remaining`` away, that stops on it.
+
+    The discrete trapezoidal profile: driving at ``v = n * decel * CYCLE``
+    this cycle and then slowing by ``decel * CYCLE`` a cycle covers
+    ``decel * CYCLE**2 * (m + 1) * (m / 2 + f)`` with ``n = m + f`` (``m``
+    whole, ``0 <= f < 1``); ``n`` solves that for the remaining distance, so
+    the robot decelerates onto the goal without passing it and never
+    reverses. Capped by ``vmax`` and by the speed that lands on the goal in
+    one cycle.
+    """
+    r = abs(remaining)
+    speed = min(vmax, r / CYCLE)
+    unit = decel * CYCLE * CYCLE
+    if unit > 0.0 and speed > 0.0:
+        cycles = r / unit
+        m = math.floor(0.5 * (math.sqrt(1.0 + 8.0 * cycles) - 1.0))
+        f = cycles / (m + 1) - 0.5 * m
+        if f < 0.0 and m > 0:
+            m -= 1
+            f = cycles / (m + 1) - 0.5 * m
+        speed = min(speed, (m + min(max(f, 0.0), 1.0)) * decel * CYCLE)
     return math.copysign(speed, remaining)
 
 
@@ -183,6 +203,12 @@ class SimBody:
     def _reset(self) -> None:
         self.true_pose = self._initial.copy()
         self._odo = self._initial.copy()
+        self._defaults()
+        self.stalled = False
+        self._sonar = np.full(len(self._sim.sonar.sensors), self._sim.sonar.max_range)
+
+    def _defaults(self) -> None:
+        """Stop; set a freshly opened Pioneer's limits; motors and sonar on."""
         self._v = 0.0
         self._w = 0.0
         self._vmax = DEFAULT_MAX_VELOCITY
@@ -194,8 +220,6 @@ class SimBody:
         self._rot_goal: tuple[str, float] = ("vel", 0.0)
         self._motors = True
         self._sonar_on = True
-        self.stalled = False
-        self._sonar = np.full(len(self._sim.sonar.sensors), self._sim.sonar.max_range)
 
     # -- commands ---------------------------------------------------------
     def command(self, name: str, value=None) -> None:
@@ -215,7 +239,8 @@ class SimBody:
         Raises
         ------
         ValueError
-            For an unknown command or a missing argument.
+            For an unknown command, a missing argument or one that is not a
+            finite number; the body's state is then left as it was.
         """
         name = name.upper()
         if name == "STOP":
@@ -225,11 +250,13 @@ class SimBody:
         if value is None:
             raise ValueError(f"command {name} needs a value")
         if name == "VEL2":
-            left, right = (float(v) for v in value)
+            left, right = (
+                check_argument(f"{name}: wheel speed (m/s)", v) for v in value
+            )
             self._trans_goal = ("vel", (left + right) / 2)
             self._rot_goal = ("vel", (right - left) / AXLE_TRACK)
             return
-        value = float(value)
+        value = check_argument(f"{name}: argument", value)
         if name == "MOVE":
             self._trans_goal = ("move", value)
             self._move_from = self._odo[:2].copy()
@@ -267,6 +294,17 @@ class SimBody:
         """Set the odometry pose to (0, 0, 0) here (a Pioneer's SETO)."""
         self._odo[:] = 0.0
         self._move_from = self._odo[:2].copy()
+
+    def begin_session(self) -> None:
+        """Start a new client's session, as a Pioneer does when a client opens it.
+
+        The robot stops where it is; speed limits, accelerations, motors and
+        sonar go back to their start-up defaults, whatever the previous
+        client set; the odometry restarts at (0, 0, 0) here. The true pose is
+        kept (`set_true_pose` moves it).
+        """
+        self._defaults()
+        self.reset_odometry()
 
     def enable_motors(self, on: bool) -> None:
         """Switch the motors on or off; off stops the robot at once."""
