@@ -1,15 +1,15 @@
 """Every lab graded in the sandbox: solution full, released zero, cheats zero.
 
-For each ``solutions/*.ipynb`` one grading run holds the solution, the
-released lab, a partial solution (for the labs listed in `PARTIAL`), a
-do-nothing answer (for the labs in `DO_NOTHING`: it must fail the outcome
-checks) and two cheating submissions built from the exercises' ``writes``
-metadata: each
-exercise with ``writes`` has, in one of them, the solution's cell plus a
-route to its first listed function, alternately an aliased import (caught by
-the static scan) and a run-time lookup by a string built at run time
-(caught by the tripwire when called). A cheated exercise scores zero with a
-note naming the function; every other check of that submission full marks.
+For each ``solutions/*.ipynb`` one grading run (two submissions at a time,
+the reference run once) holds the solution, the released lab, a partial
+solution (for the labs listed in `PARTIAL`), wrong answers that the lab's
+strict checks must reject (`WRONG`) and two cheating submissions built from
+the exercises' ``writes`` metadata: each exercise with ``writes`` has, in
+one of them, the solution's cell plus a route to its first listed function,
+alternately an aliased import (caught by the static scan) and a run-time
+lookup by a string built at run time (caught by the tripwire when called).
+A cheated exercise scores zero with a note naming the function; every other
+check of that submission full marks.
 New labs are picked up automatically.
 """
 
@@ -32,9 +32,77 @@ from robotlib.course.notebooks import (
 ROOT = Path(__file__).resolve().parents[1]
 LABS = sorted(p.stem for p in (ROOT / "solutions").glob("*.ipynb"))
 
+# lab -> wrong answers, each graded in the same run: the cells it replaces (cell
+# id -> source), the copy it starts from ("solution" or "released"), and for
+# each check the points expected and, where zero, a piece of the reason
+LAB3_DEAD_RECKONING = """
+def paper_step(world, particles, odo_prev, odo_now, z, lam, floor, rng):
+    particles = paper.predict(particles, odo_prev, odo_now, rng=rng)
+    n = len(particles)
+    return particles, paper.estimate(particles, np.full(n, 1 / n))
+"""
+LAB3_IDENTITY = """
+def low_variance_resample(weights, rng):
+    return np.arange(len(weights))
+"""
+LAB3_UNSORTED = """
+def low_variance_resample(weights, rng):
+    w = np.asarray(weights, dtype=float)
+    cum = np.cumsum(w / w.sum())
+    cum[-1] = 1.0
+    pointers = (rng.random() + np.arange(len(w))) / len(w)
+    idx = np.searchsorted(cum, pointers, side="right")
+    return rng.permutation(idx)
+"""
+LAB5_CONSTANTS = (
+    "L_OCC, L_FREE, THICKNESS, HALF_CONE, MAX_RANGE = "
+    "0.9, -0.35, 0.1, math.radians(15), 5.0\n\n\n"
+)
+WRONG = {
+    "lab3_mcl": {
+        # ignores the sonar (dead reckoning) and never resamples (identity)
+        "wrong_dr_identity": (
+            "solution",
+            {"l3-19": LAB3_DEAD_RECKONING, "l3-37": LAB3_IDENTITY},
+            {
+                "tracking": "the sonar must help",
+                "low_variance": "indexes in order",
+                "global": "the resampler loses the robot",
+            },
+        ),
+        # low-variance counts right but in shuffled order: only its check fails
+        "wrong_unsorted": (
+            "released",
+            {"l3-37": LAB3_UNSORTED},
+            {"low_variance": "indexes in order", "global": None},
+        ),
+    },
+    "lab5_slam": {
+        # every function returns zeros or its inputs: the outcome checks fail
+        "do_nothing": (
+            "released",
+            {
+                "l5-03": LAB5_CONSTANTS + "def inverse_sonar(cells, sensor_pose, z):\n"
+                "    return np.zeros(np.asarray(cells).shape[:-1])\n",
+                "l5-06": "def sonar_map(world, poses, scans, resolution=0.1):\n"
+                "    return np.zeros(world.occupancy_grid(resolution).shape)\n",
+                "l5-12": "def weigh_and_resample(maps, particles, logw, loglik, "
+                "temperature, rng):\n    return maps, particles, logw\n",
+                "l5-20": "def ekf_update(mu, P, z, j, R):\n    return mu, P\n",
+            },
+            {
+                "sonar_map": "wrong result",
+                "fastslam_outcome": "wrong result",
+                "ekf_outcome": "wrong result",
+            },
+        ),
+    },
+}
+
 # lab -> the solution cells a "partial" student copied (and the checks they pass)
 PARTIAL = {
     "lab0_getting_started": ({"l0-14"}, {"sonar": 2}),
+    "lab2_avoidance": ({"l2-05"}, {"braitenberg": 2, "explorer": 2}),
     "lab3_mcl": (
         {"l3-05", "l3-10", "l3-13", "l3-37"},
         {"weights": 2, "select": 1, "resize": 2, "low_variance": 2, "global": 2},
@@ -42,19 +110,6 @@ PARTIAL = {
     "lab5_slam": (
         {"l5-03", "l5-20"},
         {"inverse_sonar": 2, "ekf_update": 3, "ekf_outcome": 2},
-    ),
-}
-
-# lab -> (a do-nothing body for each exercise cell, the outcome checks it must fail)
-DO_NOTHING = {
-    "lab5_slam": (
-        {
-            "l5-03": "return np.zeros(np.asarray(cells).shape[:-1])",
-            "l5-06": "return np.zeros(world.occupancy_grid(resolution).shape)",
-            "l5-12": "return maps, particles, logw",
-            "l5-20": "return mu, P",
-        },
-        {"sonar_map", "fastslam_outcome", "ekf_outcome"},
     ),
 }
 
@@ -125,14 +180,11 @@ def lab_graded(request, tmp_path_factory):
             if cell.id in PARTIAL[lab][0]:
                 cell.source = sources[cell.id]
         subs["partial"] = partial
-    if lab in DO_NOTHING:
-        nothing = copy.deepcopy(released)
-        for cell in nothing.cells:
-            body = DO_NOTHING[lab][0].get(cell.id)
-            if body is not None:
-                assert "raise NotImplementedError()" in cell.source, cell.id
-                cell.source = cell.source.replace("raise NotImplementedError()", body)
-        subs["nothing"] = nothing
+    for name, (base, cells, _) in WRONG.get(lab, {}).items():
+        nb = copy.deepcopy(sol if base == "solution" else released)
+        for cell in nb.cells:
+            cell.source = cells.get(cell.id, cell.source)
+        subs[name] = nb
     plan = cheats(sol)
     for i, (nb, _) in enumerate(plan):
         subs[f"cheat{i}"] = nb
@@ -154,9 +206,6 @@ def test_solution_full_released_zero(lab_graded):
     if lab in PARTIAL:
         got = {k: v for k, v in rows["partial"].points.items() if v}
         assert got == PARTIAL[lab][1], rows["partial"].reasons
-    if lab in DO_NOTHING:  # answers that return their inputs or zeros
-        r = rows["nothing"]
-        assert all(r.points[g] == 0 for g in DO_NOTHING[lab][1]), r.reasons
 
 
 def test_cheats_score_zero_for_their_exercise_only(lab_graded):
@@ -175,3 +224,26 @@ def test_cheats_score_zero_for_their_exercise_only(lab_graded):
             if route == "string":  # only the run-time tripwire can see this one
                 assert "called" in r.reasons[c.grade_id], r.reasons[c.grade_id]
         assert "answer reaches the library's own version" in r.flags
+
+
+def test_wrong_answers_fail_their_strict_checks(lab_graded):
+    """Lab 3: dead reckoning fails tracking; identity and unsorted fail low-variance.
+
+    A wrong answer built on the solution keeps every other check; one built
+    on the released lab passes only the checks named with no reason.
+    """
+    lab, rows, items, _ = lab_graded
+    if lab not in WRONG:
+        pytest.skip(f"{lab} has no wrong answers listed")
+    auto = [c for c in items if not c.manual]
+    for name, (base, _, expect) in WRONG[lab].items():
+        r = rows[name]
+        for c in auto:
+            if c.grade_id in expect and expect[c.grade_id] is not None:
+                assert r.points[c.grade_id] == 0, (name, c.grade_id)
+                assert expect[c.grade_id] in r.reasons[c.grade_id], r.reasons
+            elif base == "solution" or c.grade_id in expect:
+                assert r.points[c.grade_id] == c.points, (name, c.grade_id, r.reasons)
+            else:
+                assert r.points[c.grade_id] == 0, (name, c.grade_id)
+        assert not r.flags, (name, r.flags)

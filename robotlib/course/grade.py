@@ -38,11 +38,11 @@ import signal
 import sys
 import threading
 import time
-from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
 from pathlib import Path
 
 import nbformat
 
+from . import cache as numba_cache
 from . import sandbox as sb
 from .gradebook import (
     Records,
@@ -53,6 +53,7 @@ from .gradebook import (
     write_gradebook,
 )
 from .notebooks import META_KEY, NotebookError, notebook_text, read_notebook
+from .parallel import Bar, dask_map, raise_interrupt, thread_map
 from .plan import LabPlan, lab_plan, scan_submission, student_cells
 from .release import project_dir
 from .session import JOB_ENV, Options, run_submission
@@ -275,58 +276,6 @@ def grade_task(student, data, solution_text, lab, reference, opts, slot=0):
         return res.to_json()
 
 
-class _Bar:
-    def __init__(self, total: int, label: str, enabled: bool):
-        self.bar = None
-        if enabled:
-            try:
-                from tqdm import tqdm
-
-                self.bar = tqdm(total=total, desc=label, unit="sub", file=sys.stderr)
-            except ImportError:
-                self.bar = None
-        self.enabled, self.total, self.done, self.label = enabled, total, 0, label
-
-    def advance(self, note: str = "") -> None:
-        self.done += 1
-        if self.bar is not None:
-            self.bar.set_postfix_str(note[:40])
-            self.bar.update(1)
-        elif self.enabled:
-            sys.stderr.write(f"{self.label} {self.done}/{self.total} {note}\n")
-
-    def close(self) -> None:
-        if self.bar is not None:
-            self.bar.close()
-
-
-def _dask_map(tasks, scheduler: str, jobs: int, stop, on_result):
-    from dask.distributed import Client, LocalCluster, as_completed
-
-    cluster = None
-    if scheduler == "local":
-        cluster = LocalCluster(
-            n_workers=jobs, threads_per_worker=1, processes=True, dashboard_address=None
-        )
-        client = Client(cluster)
-    else:
-        client = Client(scheduler)
-    try:
-        futures = [
-            client.submit(grade_task, *t, slot=i % 64, pure=False)
-            for i, t in enumerate(tasks)
-        ]
-        for fut in as_completed(futures):
-            if stop.is_set():
-                client.cancel(futures)
-                break
-            on_result(fut.result())
-    finally:
-        client.close()
-        if cluster is not None:
-            cluster.close()
-
-
 def grade(
     submissions: str | Path,
     lab: str,
@@ -399,9 +348,10 @@ def grade(
             results[student] = old[0]
             continue
         todo.append((student, path, status, fp))
-    bar = _Bar(len(todo) + 1, f"grading {lab}", progress)
+    items = plan.checks + plan.manual
+    bar = Bar(len(todo) + 1, f"grading {lab}", progress)
     own = threading.current_thread() is threading.main_thread()
-    old_term = signal.signal(signal.SIGTERM, _raise_interrupt) if own else None
+    old_term = signal.signal(signal.SIGTERM, raise_interrupt) if own else None
     try:
         import tempfile
 
@@ -409,6 +359,10 @@ def grade(
             os.chmod(c, 0o755)
             opts.numba_cache = Path(c) / "numba"
             opts.numba_cache.mkdir()
+            opts.mpl_cache = Path(c) / "matplotlib"
+            opts.mpl_cache.mkdir()
+            numba_cache.prewarm(plan.setup, opts.mpl_cache)
+            numba_cache.seed(opts.numba_cache)
             reference = reference_run(plan, read_notebook(solution), opts)
             bar.advance("(reference run)")
             fps = {t[0]: t[3] for t in todo}
@@ -424,7 +378,7 @@ def grade(
             for student, path, status, _ in todo:
                 if status:
                     r = Result(student, {}, {}, plan.max_points, status=status)
-                    r.reasons = {c.grade_id: status for c in plan.checks + plan.manual}
+                    r.reasons = {c.grade_id: status for c in items}
                     done(r.to_json())
                     continue
                 data = path.read_bytes() if path is not None else None
@@ -432,9 +386,16 @@ def grade(
             if scheduler:
                 plain = Options(**{**vars(opts), "stop": None})
                 tasks = [(*t[:5], plain) for t in tasks]
-                _dask_map(tasks, scheduler, jobs, stop, done)
+
+                def failed(student, exc):
+                    r = Result(student, {}, {}, plan.max_points)
+                    r.status = f"grader error: {type(exc).__name__}: {exc}"[:200]
+                    r.reasons = {c.grade_id: "not graded (grader error)" for c in items}
+                    done(r.to_json())
+
+                dask_map(grade_task, tasks, scheduler, jobs, stop, done, failed)
             else:
-                _thread_map(tasks, jobs, stop, done)
+                thread_map(grade_task, tasks, jobs, stop, done)
     except KeyboardInterrupt:
         stop.set()
         raise
@@ -443,39 +404,7 @@ def grade(
         bar.close()
         if old_term is not None:
             signal.signal(signal.SIGTERM, old_term)
-    items = plan.checks + plan.manual
     return [results[k] for k in sorted(results)], items
-
-
-def _raise_interrupt(signum, frame):
-    raise KeyboardInterrupt(f"signal {signum}")
-
-
-def _thread_map(tasks, jobs, stop, on_result) -> None:
-    slots = list(range(jobs))
-    lock = threading.Lock()
-
-    def one(task):
-        with lock:
-            slot = slots.pop()
-        try:
-            return grade_task(*task, slot=slot)
-        finally:
-            with lock:
-                slots.append(slot)
-
-    pool = ThreadPoolExecutor(max_workers=jobs)
-    try:
-        pending = {pool.submit(one, t) for t in tasks}
-        while pending:
-            finished, pending = wait(pending, timeout=0.5, return_when=FIRST_COMPLETED)
-            for fut in finished:
-                data = fut.result()
-                if not str(data.get("status", "")).startswith("interrupted"):
-                    on_result(data)
-    finally:
-        stop.set()  # running submissions end their processes and return
-        pool.shutdown(wait=True, cancel_futures=True)
 
 
 def fold_manual(results: list[Result], items, scores: dict) -> None:

@@ -412,6 +412,8 @@ def release_notebook(nb: NotebookNode, name: str = "notebook") -> NotebookNode:
         elif meta is not None:
             keep = {k: meta[k] for k in ("grade_id", "points")}
             new.metadata = {META_KEY: keep, "deletable": False, "editable": False}
+        if meta is not None and not meta["manual"]:
+            new.metadata["tags"] = ["graded"]  # JupyterLab shows it: a graded check
         cells.append(new)
     out = nbformat.v4.new_notebook(cells=cells)
     out.metadata = {"kernelspec": dict(KERNELSPEC), "language_info": {"name": "python"}}

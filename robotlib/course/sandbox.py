@@ -78,9 +78,7 @@ class Limits:
 
 def readonly_paths() -> list[Path]:
     """Folders a grading process needs, read-only: Python, the venv, the library."""
-    import robotlib
-
-    pkg = Path(robotlib.__file__).resolve().parent
+    pkg = Path(__file__).resolve().parents[1]  # the installed robotlib package
     paths = {
         Path(sys.base_prefix).resolve(),
         Path(sys.prefix).resolve(),

@@ -56,6 +56,7 @@ class Options:
     sandbox: bool = True
     limits: sb.Limits = field(default_factory=sb.Limits)
     numba_cache: Path | None = None  # warmed cache, copied into each scratch
+    mpl_cache: Path | None = None  # matplotlib's font list, copied likewise
     warm: bool = False  # this run may write the shared cache (the reference)
     stop: object = None  # a threading.Event: set to end every running submission
 
@@ -137,6 +138,9 @@ class _Proc:
         scratch.mkdir(parents=True, exist_ok=True)
         for sub in ("home/.ipython", "home/.matplotlib", "tmp"):
             (scratch / sub).mkdir(parents=True, exist_ok=True)
+        if opts.mpl_cache is not None and opts.mpl_cache.is_dir():
+            for f in opts.mpl_cache.glob("fontlist*.json"):
+                shutil.copy(f, scratch / "home" / ".matplotlib" / f.name)
         cache = scratch / "numba"
         if opts.numba_cache is not None and not opts.numba_cache.is_dir():
             opts = Options(**{**vars(opts), "numba_cache": None})  # another machine
@@ -145,6 +149,9 @@ class _Proc:
                 cache.symlink_to(opts.numba_cache)  # the trusted reference run
             else:
                 shutil.copytree(opts.numba_cache, cache, symlinks=False)
+        # the class's cache was warmed before the reference run: skip the
+        # set-up cell's warm-ups (numba loads each kernel from it when used)
+        spec = {**spec, "skip_warm_up": cache.exists()}
         cache.mkdir(exist_ok=True)
         if uid is not None:
             for root, dirs, files in os.walk(scratch):
@@ -242,6 +249,8 @@ def run_submission(
     events: queue.Queue = queue.Queue()
     uid = sb.sandbox_uid(2 * slot) if opts.sandbox else None
     cuid = sb.sandbox_uid(2 * slot + 1) if opts.sandbox else None
+    if opts.warm:  # the solution's two processes both write the shared cache
+        cuid = uid
     logf = open(root / "log.txt", "wb")  # noqa: SIM115
     skip: set[str] = set()
     gen = {"student": 0, "check": 0}

@@ -137,6 +137,12 @@ def _trim(exc: BaseException, sources: dict[str, str]) -> str:
     return "\n".join(lines[-12:])
 
 
+def _no_warm_up(spec: dict) -> None:
+    """Make the set-up cell's warm-ups a no-op when the cache holds the kernels."""
+    if spec.get("skip_warm_up"):
+        os.environ["ROBOTLIB_SKIP_WARM_UP"] = "1"  # read by robotlib.notebook.setup
+
+
 def _student(fin: int, fout: int) -> None:
     from IPython.core.interactiveshell import InteractiveShell
 
@@ -161,6 +167,7 @@ def _student(fin: int, fout: int) -> None:
 
     sources = {c["id"]: c["source"] for c in spec["cells"]}
     sources["setup"] = spec["setup"]
+    _no_warm_up(spec)
     run("setup", spec["setup"])
     answers.arm(spec["writes"], report, [ns])
     for cell in spec["cells"]:
@@ -284,6 +291,7 @@ def _check(fin: int, fout: int) -> None:
     def run(name, source):
         exec(compile(shell.transform_cell(source), name, "exec"), ns)  # noqa: S102
 
+    _no_warm_up(spec)
     run("<setup>", spec["setup"])
     proxies = {}
     for name, info in spec["names"].items():
