@@ -447,6 +447,13 @@ def _bilinear_evidence(L, x0, y0, res, px, py):
     i = int(math.floor(gy))
     fx = gx - j
     fy = gy - i
+    if 0 <= i and i + 1 < L.shape[0] and 0 <= j and j + 1 < L.shape[1]:
+        # inside the grid: the same sum without the per-cell bounds tests
+        e00 = max(np.float64(L[i, j]), 0.0)
+        e01 = max(np.float64(L[i, j + 1]), 0.0)
+        e10 = max(np.float64(L[i + 1, j]), 0.0)
+        e11 = max(np.float64(L[i + 1, j + 1]), 0.0)
+        return (1 - fy) * ((1 - fx) * e00 + fx * e01) + fy * ((1 - fx) * e10 + fx * e11)
     return (1 - fy) * ((1 - fx) * _evidence(L, i, j) + fx * _evidence(L, i, j + 1)) + (
         fy * ((1 - fx) * _evidence(L, i + 1, j) + fx * _evidence(L, i + 1, j + 1))
     )
