@@ -10,7 +10,7 @@ import numba as nb
 import numpy as np
 
 from ..._config import JIT, JIT_PARALLEL, serial_and_parallel
-from ...sensing._kernels import sonar_cone
+from ...sensing._kernels import cone_echo
 from ...world._kernels import point_segment_distance
 from .common import _TWO_PI
 
@@ -36,10 +36,10 @@ def _cone_cell(
     half = (n_rays - 1) // 2 if n_rays > 1 else 0
     if ray_step > 0:
         for b in range(n_bins):
-            echo, _ = sonar_cone(
+            # the echo alone: `sonar_cone` would also trace each miss's bounce
+            rays[b] = cone_echo(
                 cx, cy, b * _TWO_PI / n_bins, segments, 1, 0.0, max_range, cos_specular
             )
-            rays[b] = echo
     for b in range(n_bins):
         if ray_step > 0:
             echo = np.inf
@@ -48,7 +48,7 @@ def _cone_cell(
                 if r < echo:
                     echo = r
         else:
-            echo, _ = sonar_cone(
+            echo = cone_echo(
                 cx,
                 cy,
                 b * _TWO_PI / n_bins,
