@@ -15,6 +15,7 @@ __all__ = ["BENCHES", "add_arguments", "run"]
 
 BENCHES = {
     "mcl": "robotlib.experiments.bench_mcl",
+    "buildings": "robotlib.experiments.bench_buildings",
 }
 """Topic name to the module that measures it."""
 
