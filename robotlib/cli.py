@@ -20,8 +20,13 @@ COMMANDS = {
         "run the paper's MCL experiment over many seeds",
     ),
     "bench": ("robotlib.experiments.benchmarks", "measure a topic against its peers"),
+    "faulty-link": (
+        "robotlib.pioneer.faults",
+        "a proxy to sim-server that delays and drops packets",
+    ),
     "release": ("robotlib.course.release", "write labs/ from solutions/"),
-    "grade": ("robotlib.course.grade", "grade a folder of submissions with nbval"),
+    "grade": ("robotlib.course.grade", "grade a folder of submissions in a sandbox"),
+    "warmup": ("robotlib.notebook", "compile the numba kernels the labs use, once"),
 }
 """Subcommand name to (module, one-line help)."""
 

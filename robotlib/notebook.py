@@ -1,35 +1,46 @@
 """The one call every lab notebook starts with: ``robotlib.notebook.setup()``.
 
-It sets a plotting style, seeds what can be seeded, and compiles (or loads
-from numba's cache) the kernels the lab will use, so that later cells show
-only teaching code and graded cells do not pay for compilation::
+It applies the course's figure style (`robotlib.plotting.style`), seeds what
+can be seeded, says unsolved exercises plainly (`explain_unsolved`), and
+compiles (or loads from numba's cache) the kernels the lab will use, with a
+progress bar naming what compiles, so that later cells show only teaching
+code and graded cells do not pay for compilation::
 
     import robotlib.notebook
-    rng = robotlib.notebook.setup(seed=0)
+    rng = robotlib.notebook.setup(seed=0, warm=("sim",))
+
+`robotlib warmup` (this module's command) compiles every part of `WARMUPS`
+once, into numba's cache: the README's set-up command and CI run it, so a
+student's first cell only loads. Kernels compile lazily (on first call), so
+a lab compiles only the parts it names. `progress` is the bar for long cells.
+
+Sits on top (layer 7): imports any layer, inside functions, so that
+importing it stays cheap; nothing imports it.
 """
 
 from __future__ import annotations
 
+import json
 import os
 import random
+import sys
+import threading
 import time
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
+from pathlib import Path
 
 import numpy as np
 
-__all__ = ["setup", "warm_up", "WARMUPS"]
-
-STYLE = {
-    "figure.figsize": (7.0, 3.5),
-    "figure.dpi": 80,
-    "axes.grid": True,
-    "grid.alpha": 0.3,
-    "axes.spines.top": False,
-    "axes.spines.right": False,
-    "legend.frameon": False,
-    "image.cmap": "viridis",
-}
-"""Matplotlib settings of the labs (small, light figures)."""
+__all__ = [
+    "setup",
+    "warm_up",
+    "WARMUPS",
+    "progress",
+    "explain_unsolved",
+    "warmed_parts",
+    "add_arguments",
+    "run",
+]
 
 
 def _warm_sim() -> None:
@@ -43,66 +54,324 @@ def _warm_sim() -> None:
         sim.step()
 
 
-def _warm_mcl() -> None:
-    from .localization import MCL, BeamSensorModel, KLDResampling, paper
+def _mcl_inputs():
     from .world import load_world
 
     world = load_world("corridor")
+    odo = np.asarray(world.start, dtype=float)
+    return world, odo, odo + [0.1, 0.0, 0.0], np.full(8, 2.0)
+
+
+def _warm_mcl_pieces() -> None:
+    from .localization import paper
+
+    world, *_ = _mcl_inputs()
     rng = np.random.default_rng(0)
     p, w = paper.uniform_particles(world, 20, rng)
-    z = np.full(8, 2.0)
     zhat = paper.expected(world, p)
-    w = paper.innovation_weights(z, zhat)
+    w = paper.innovation_weights(np.full(8, 2.0), zhat)
     idx = paper.resample_indexes(w, rng)
     paper.check_particles(world, p[idx], w, rng)
     paper.estimate(p, w)
     paper.dispersion_index(p, world.size)
-    odo = np.asarray(world.start, dtype=float)
-    # The exact and fast (fused) paths, small N and the many-particle paths
-    # (threads, chunked noise) of the filters the labs and widgets build.
-    filters = (
-        MCL.paper(world, n=20, rng=0),
-        MCL.paper(world, n=20, fast=True, rng=0),
-        MCL(
-            world, BeamSensorModel(world), resampling=KLDResampling(20, 40), n=20, rng=0
-        ),
-        MCL.best(world, rng=0, n=10_000),
+    many, _ = paper.uniform_particles(world, 64, rng)  # the threaded scan (N >= 64)
+    paper.admissible(world, paper.predict(many, odo0 := np.zeros(3), odo0, rng=rng))
+    paper.expected(world, many)
+
+
+def _warm_filter(make: Callable) -> Callable[[], None]:
+    def warm() -> None:
+        world, odo0, odo1, z = _mcl_inputs()
+        make(world).step(odo0, odo1, z)
+
+    return warm
+
+
+def _warm_plan() -> None:
+    from .planning import CSpace, astar, dijkstra, inflate, rrt, wavefront
+    from .world import load_world
+
+    cs = CSpace.from_array(np.zeros((4, 4), dtype=bool))
+    inflate(cs.blocked, 1.0)
+    for planner in (astar, dijkstra, wavefront):
+        planner(cs, (0.5, 0.5), (3.5, 3.5))
+    world = load_world("corridor")
+    x, y, _ = world.start
+    rrt(world, (x, y), (x + 0.5, y), rng=0)
+
+
+def _warm_avoidance() -> None:
+    from .avoidance import (
+        VFH,
+        Bug2,
+        PotentialField,
+        WallFollower,
+        polar_histogram,
+        run_episode,
+        smooth_histogram,
     )
-    for mcl in filters:
-        mcl.step(odo, odo + [0.1, 0.0, 0.0], z)
+    from .world import World
+
+    box = World(segments=[[0, 0, 4, 0], [4, 0, 4, 3], [4, 3, 0, 3], [0, 3, 0, 0]])
+    for c in (VFH(), PotentialField(), Bug2(), WallFollower()):
+        run_episode(box, c, goal=(3.0, 1.5), start=(1.0, 1.5, 0.0), seed=0, max_time=1)
+    smooth_histogram(polar_histogram([[1.0, 0.0]], [1.0], [0.0, 0.0, 0.0]))
 
 
-WARMUPS = {"sim": _warm_sim, "mcl": _warm_mcl}
-"""What `warm_up` can compile: a name to a function that runs the kernels once."""
+def _warm_mapping() -> None:
+    from .mapping import record_drive, run_fastslam
+
+    log = record_drive("loop", [(3.0, 1.5)], seed=0, every=2)
+    run_fastslam(log, 4, "laser", rng=0)
+    run_fastslam(log, 4, "sonar", rng=0)
 
 
-def warm_up(parts: Iterable[str] = ("sim",)) -> dict[str, float]:
+def _warm_models() -> None:
+    from .localization import BeamParameters, BeamSensorModel
+    from .sensing import SonarModel, simulate_ranges
+    from .world import load_world
+
+    world = load_world("corridor")
+    poses = np.tile(np.asarray(world.start, dtype=float), (3, 1))
+    simulate_ranges(world, poses, SonarModel(), rng=0)
+    simulate_ranges(world, poses, SonarModel(sensors=np.zeros((1, 3))), rng=0)
+    z = np.full(8, 2.0)
+    BeamSensorModel(world).log_likelihood(poses, z)
+    fast = BeamSensorModel(world, fast=True, params=BeamParameters(exponent=0.2))
+    fast.log_likelihood(np.tile(poses, (100, 1)), z)
+
+
+def _paper(world):
+    from .localization import MCL
+
+    return MCL.paper(world, n=20, rng=0)
+
+
+def _paper_fast(world):
+    from .localization import MCL
+
+    return MCL.paper(world, n=20, fast=True, rng=0)
+
+
+def _beam_kld(world):
+    from .localization import MCL, BeamSensorModel, KLDResampling
+
+    model = BeamSensorModel(world)
+    return MCL(world, model, resampling=KLDResampling(20, 40), n=20, rng=0)
+
+
+def _best(world):
+    from .localization import MCL
+
+    return MCL.best(world, rng=0, n=10_000)  # threads, chunked noise
+
+
+WARMUPS: dict[str, Callable[[], None] | list[tuple[str, Callable[[], None]]]] = {
+    "sim": _warm_sim,
+    "mcl": [
+        ("the paper's pieces", _warm_mcl_pieces),
+        ("MCL.paper", _warm_filter(_paper)),
+        ("MCL.paper (fast)", _warm_filter(_paper_fast)),
+        ("beam + KLD", _warm_filter(_beam_kld)),
+        ("MCL.best (threads)", _warm_filter(_best)),
+    ],
+    "mapping": _warm_mapping,
+    "avoidance": _warm_avoidance,
+    "models": _warm_models,
+    "plan": _warm_plan,
+}
+"""What `warm_up` can compile: a name to a function that runs its kernels
+once, or to a list of ``(label, function)`` steps (the progress bar counts
+steps). Each lab adds its entry and names it in ``setup(warm=...)``."""
+
+
+def _steps(parts: Iterable[str]) -> list[tuple[str, str, Callable[[], None]]]:
+    out = []
+    for part in parts:
+        if part not in WARMUPS:
+            raise ValueError(f"unknown warm-up {part!r}; choose from {sorted(WARMUPS)}")
+        entry = WARMUPS[part]
+        steps = [(part, entry)] if callable(entry) else list(entry)
+        out.extend((part, label, fn) for label, fn in steps)
+    return out
+
+
+class _CompileWatch:
+    """Counts numba compilations (cache misses) and names the one running."""
+
+    def __init__(self, on_start: Callable[[str], None] | None = None):
+        self.compiled: list[str] = []
+        self.on_start = on_start
+
+    def __enter__(self):
+        from numba.core import event
+
+        watch = self
+
+        class Listener(event.Listener):
+            def on_start(self, ev):
+                disp = ev.data.get("dispatcher")
+                func = getattr(disp, "py_func", None)
+                module = getattr(func, "__module__", "") or ""
+                if not module.startswith("robotlib"):
+                    return  # numba's own helpers, compiled along with a kernel
+                name = f"{module.rpartition('.')[2]}.{func.__name__}"
+                watch.compiled.append(name)
+                if watch.on_start is not None:
+                    watch.on_start(name)
+
+            def on_end(self, ev):
+                pass
+
+        self._listener = Listener()
+        event.register("numba:compile", self._listener)
+        return self
+
+    def __exit__(self, *exc):
+        from numba.core import event
+
+        event.unregister("numba:compile", self._listener)
+        return False
+
+
+def progress(iterable=None, desc: str = "", total: int | None = None, **kw):
+    """Return a progress bar for a long cell: tqdm's notebook bar, text headless.
+
+    Parameters
+    ----------
+    iterable : iterable, optional
+        What to iterate over (as ``tqdm``).
+    desc : str
+        What the bar counts.
+    total : int, optional
+        Number of items, if ``len(iterable)`` does not tell.
+    **kw
+        Passed to ``tqdm``.
+
+    Returns
+    -------
+    tqdm.tqdm
+    """
+    if _in_kernel():
+        from tqdm.notebook import tqdm
+    else:
+        from tqdm import tqdm
+    kw.setdefault("leave", True)
+    return tqdm(iterable, desc=desc, total=total, **kw)
+
+
+_BAR = "{desc}: {n}/{total} steps |{bar}| {elapsed}{postfix}"
+
+
+def _stamp_file() -> Path:
+    """Where `warm_up` notes which parts are in numba's cache for this source."""
+    import hashlib
+
+    import numba
+
+    root = Path(__file__).resolve().parent
+    key = hashlib.sha1(f"{numba.__version__} {sys.version}".encode())
+    for path in sorted(root.rglob("*.py")):
+        key.update(f"{path.relative_to(root)} {path.stat().st_mtime_ns}".encode())
+    base = Path(numba.config.CACHE_DIR) if numba.config.CACHE_DIR else root
+    return base / "__pycache__" / f"robotlib-warm-{key.hexdigest()[:16]}.json"
+
+
+def warmed_parts() -> set[str]:
+    """Return the parts of `WARMUPS` already compiled into numba's cache.
+
+    A part counts once `warm_up` has run it against the installed source
+    (any change to robotlib's files, numba or Python starts afresh).
+    """
+    try:
+        return set(json.loads(_stamp_file().read_text()))
+    except (OSError, ValueError):
+        return set()
+
+
+def _note_warmed(parts) -> None:
+    try:
+        path = _stamp_file()
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(json.dumps(sorted(warmed_parts() | set(parts))))
+    except OSError:  # a read-only install: warm again next time
+        pass
+
+
+def warm_up(parts: Iterable[str] = ("sim",), show: bool = True) -> dict[str, float]:
     """Run the numba kernels of ``parts`` once (compiling or loading them).
+
+    When something has to compile (numba's cache is cold or stale), a
+    progress bar shows which part and kernel compiles and how many steps are
+    done; when everything loads from the cache, nothing is shown.
 
     Parameters
     ----------
     parts : iterable of str
         Keys of `WARMUPS`.
+    show : bool
+        Show the progress bar when compiling.
 
     Returns
     -------
     dict
         Seconds spent on each part.
     """
-    spent = {}
-    for part in parts:
-        if part not in WARMUPS:
-            raise ValueError(f"unknown warm-up {part!r}; choose from {sorted(WARMUPS)}")
-        t0 = time.perf_counter()
-        WARMUPS[part]()
-        spent[part] = time.perf_counter() - t0
+    steps = _steps(parts)
+    spent: dict[str, float] = {}
+    bar = None
+    t_all = time.perf_counter()
+
+    def started(kernel: str) -> None:
+        nonlocal bar
+        if not show:
+            return
+        if bar is None:
+            bar = progress(
+                total=len(steps), desc="compiling kernels (once)", bar_format=_BAR
+            )
+            bar.update(done)
+        bar.set_postfix_str(f"{current}: {kernel}", refresh=True)
+
+    with _CompileWatch(started) as watch:
+        for index, (part, label, fn) in enumerate(steps):
+            done = index
+            current = label if label == part else f"{part}, {label}"
+            if bar is not None:
+                bar.set_postfix_str(current, refresh=True)
+            t0 = time.perf_counter()
+            fn()
+            spent[part] = spent.get(part, 0.0) + time.perf_counter() - t0
+            if bar is not None:
+                bar.update(1)
+    if bar is not None:
+        n = len(watch.compiled)
+        bar.set_postfix_str(
+            f"{n} kernels compiled in {time.perf_counter() - t_all:.0f} s; "
+            "next time they load from the cache",
+            refresh=True,
+        )
+        bar.close()
+    _note_warmed(spent)
     return spent
+
+
+def _in_kernel() -> bool:
+    shell = _shell()
+    return shell is not None and getattr(shell, "kernel", None) is not None
+
+
+def _shell():
+    try:
+        return get_ipython()  # type: ignore[name-defined]  # noqa: F821
+    except NameError:
+        return None
 
 
 def setup(
     seed: int = 0, warm: Iterable[str] = ("sim",), style: bool = True
 ) -> np.random.Generator:
-    """Prepare a lab notebook: style, seeds, warmed-up kernels.
+    """Prepare a lab notebook: style, seeds, plain unsolved errors, warm kernels.
 
     Parameters
     ----------
@@ -111,10 +380,11 @@ def setup(
         student code that uses them) and the returned generator.
     warm : iterable of str
         Kernels to compile or load now (keys of `WARMUPS`: ``"sim"``,
-        ``"mcl"``); empty for none.
+        ``"mcl"``, ``"mapping"``, ``"models"``, ...); empty for none.
     style : bool
-        Apply the labs' matplotlib style (`STYLE`). The backend is left to
-        Jupyter (inline) or to ``MPLBACKEND`` (``Agg`` in CI and grading).
+        Apply the course's figure style (`robotlib.plotting.style`). The
+        backend is left to Jupyter (inline) or to ``MPLBACKEND`` (``Agg``
+        in CI and grading).
 
     Returns
     -------
@@ -124,14 +394,125 @@ def setup(
     if style:
         import matplotlib as mpl
 
+        from .plotting import style as course_style
+
         if not os.environ.get("DISPLAY") and "MPLBACKEND" not in os.environ:
-            try:
-                get_ipython()  # type: ignore[name-defined]  # noqa: F821
-            except NameError:
+            if _shell() is None:
                 mpl.use("Agg")
-        mpl.rcParams.update(STYLE)
+        course_style.use()
     random.seed(seed)
     np.random.seed(seed)  # noqa: NPY002 - only for students' legacy calls
     np.set_printoptions(precision=4, suppress=True)
-    warm_up(tuple(warm))
+    explain_unsolved()
+    cold = [part for part in warm if part not in warmed_parts()]
+    if cold and not os.environ.get("ROBOTLIB_SKIP_WARM_UP"):  # set by robotlib
+        warm_up(cold)  # a cold cache: compile now, with a progress bar (grade's
+    # sandboxes set it when their copy of the numba cache holds the kernels)
+    _notice_compiling()  # any later cell that compiles says so
     return np.random.default_rng(seed)
+
+
+_NOTICE: dict = {}
+
+
+def _notice_compiling() -> None:
+    """Show a progress line in any cell that compiles robotlib kernels.
+
+    With a warm cache (`robotlib warmup`) kernels load when first used and
+    nothing shows; a kernel that must compile names itself in a bar below
+    the running cell, with how many compiled so far and for how long.
+    """
+    shell = _shell()
+    if shell is None or _NOTICE:
+        return
+    from numba.core import event
+
+    state = {"bar": None, "n": 0, "t0": 0.0}
+
+    class Listener(event.Listener):
+        def on_start(self, ev):
+            func = getattr(ev.data.get("dispatcher"), "py_func", None)
+            module = getattr(func, "__module__", "") or ""
+            if not module.startswith("robotlib"):
+                return
+            if threading.current_thread() is not threading.main_thread():
+                return  # a panel's worker: its own status line says it is busy
+            if state["bar"] is None:
+                state["t0"], state["n"] = time.perf_counter(), 0
+                state["bar"] = progress(
+                    desc="compiling kernels (once, then cached)",
+                    bar_format="{desc}: {n} done{postfix}",
+                )
+            state["n"] += 1
+            state["bar"].set_postfix_str(
+                f"now {module.rpartition('.')[2]}.{func.__name__}, "
+                f"{time.perf_counter() - state['t0']:.0f} s",
+                refresh=False,
+            )
+            state["bar"].update(1)
+
+        def on_end(self, ev):
+            pass
+
+    def close(*_args) -> None:
+        if state["bar"] is not None:
+            state["bar"].close()
+            state["bar"] = None
+
+    _NOTICE["listener"] = Listener()
+    event.register("numba:compile", _NOTICE["listener"])
+    shell.events.register("post_run_cell", close)
+
+
+def explain_unsolved(shell=None) -> bool:
+    """Make a ``NotImplementedError`` from an unsolved exercise a short message.
+
+    Installs an IPython handler: when the error comes from a function defined
+    in a notebook cell (a released lab's ``raise NotImplementedError()``),
+    the cell shows ``Exercise N is not done yet: write `name` in the cell
+    above`` instead of the traceback; any other ``NotImplementedError`` gets
+    its usual traceback. The cell still fails (as an error), so grading and
+    Run All see it as before.
+
+    Parameters
+    ----------
+    shell : IPython.core.interactiveshell.InteractiveShell, optional
+        Default: the running one.
+
+    Returns
+    -------
+    bool
+        Whether a handler was installed (False outside IPython).
+    """
+    from ._unsolved import install
+
+    shell = _shell() if shell is None else shell
+    return shell is not None and install(shell)
+
+
+def add_arguments(parser) -> None:
+    """Arguments of ``robotlib warmup``."""
+    parser.description = (
+        "Compile robotlib's numba kernels into numba's cache, so that the labs' "
+        "first cells only load them."
+    )
+    parser.add_argument(
+        "parts", nargs="*", help=f"parts to warm (default: all of {sorted(WARMUPS)})"
+    )
+    parser.add_argument("--list", action="store_true", help="list the parts and exit")
+
+
+def run(args) -> int:
+    """Run ``robotlib warmup``: warm every part (or those named), print times."""
+    if args.list:
+        for part, entry in WARMUPS.items():
+            steps = "" if callable(entry) else ": " + ", ".join(s for s, _ in entry)
+            sys.stdout.write(f"{part}{steps}\n")
+        return 0
+    parts = args.parts or list(WARMUPS)
+    t0 = time.perf_counter()
+    spent = warm_up(parts)
+    for part, seconds in spent.items():
+        sys.stdout.write(f"{part:12s} {seconds:6.1f} s\n")
+    sys.stdout.write(f"{'all':12s} {time.perf_counter() - t0:6.1f} s\n")
+    return 0

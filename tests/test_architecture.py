@@ -33,6 +33,7 @@ LAYERS = {
     "robotlib.plotting": 6,
     "robotlib.widgets": 7,
     "robotlib.notebook": 7,
+    "robotlib._unsolved": 0,  # a leaf: the notebook set-up's IPython handler
     "robotlib.course": 7,
     "robotlib.cli": 8,
     "robotlib": 8,
@@ -45,11 +46,12 @@ ALLOWED_SIDEWAYS = {
     # Navigation localizes, plans, follows and avoids.
     ("robotlib.planning", "robotlib.localization"),
     ("robotlib.planning", "robotlib.avoidance"),
+    # Grid FastSLAM resamples its map-carrying particles with MCL's resamplers.
+    ("robotlib.mapping", "robotlib.localization"),
 }
 """Imports between packages of one layer that the design allows."""
 
 MAX_LINES = 600
-LONG_UNTIL_SPLIT = {"robotlib.course.grade"}  # being split on the grading branch
 
 
 def _modules() -> dict[str, Path]:
@@ -162,8 +164,7 @@ def test_no_import_circles():
 @pytest.mark.parametrize("module", sorted(MODULES))
 def test_modules_are_short_and_documented(module):
     text = MODULES[module].read_text(encoding="utf-8")
-    if module not in LONG_UNTIL_SPLIT:
-        assert text.count("\n") <= MAX_LINES, f"{module}: {text.count(chr(10))} lines"
+    assert text.count("\n") <= MAX_LINES, f"{module}: {text.count(chr(10))} lines"
     assert ast.get_docstring(ast.parse(text)), f"{module} has no docstring"
 
 

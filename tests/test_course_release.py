@@ -51,8 +51,12 @@ def test_release_replaces_solutions_and_hides_tests():
     assert "YOUR ANSWER HERE" in lab.cells[8].source
     assert all(c.outputs == [] and c.execution_count is None for c in code)
     assert [c.id for c in lab.cells] == [c.id for c in sol.cells]
-    assert [c.grade_id for c in check_cells(lab)] == ["add", "mean", "scale"]
-    checks = [c for c in lab.cells if "robotlib" in c.metadata]
+    assert [c.grade_id for c in check_cells(lab)] == ["add", "mean", "why", "scale"]
+    assert "rubric" not in text and "writes" not in text  # answers' keys stay home
+    assert lab.cells[8].metadata["robotlib"]["manual"] is True
+    checks = [
+        c for c in lab.cells if "robotlib" in c.metadata and c.cell_type == "code"
+    ]
     assert all(c.metadata["editable"] is False for c in checks)
     nbformat.validate(lab)
 

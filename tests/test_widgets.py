@@ -77,7 +77,7 @@ def test_mcl_panel_callbacks(route):
     panel.sensor.value = "beam"
     panel.resampler.value = "low variance"
     assert panel.settings()["sensor"] == "beam"
-    assert len(panel.figure.axes) == 3
+    assert len(panel.figure.axes) == 4  # map (+ its colour bar: the step), error, count
     assert "localized" in panel.status.value
 
 

@@ -2,9 +2,10 @@
 
 Run ``python worlds/make_worlds.py`` from the repository root to rewrite
 ``corridor.wld``, ``corridor_periodic.wld``, ``corridor2.wld``, ``maze.wld``,
-``arena.wld`` and ``office.map``. The files themselves are committed; this
-script documents how they were made and regenerates them identically (the maze
-uses a fixed seed).
+``arena.wld``, the avoidance worlds (``clutter``, ``doorway``, ``utrap``,
+``alcoves``, each with a ``.pairs.json``), ``loop.wld`` and ``office.map``. The files
+themselves are committed; this script documents how they were made and
+regenerates them identically (the maze and the clutter use fixed seeds).
 
 All coordinates here are whole millimetres, as in the files.
 
@@ -30,13 +31,36 @@ All coordinates here are whole millimetres, as in the files.
 - ``maze``: an 8 x 6 maze of 1.5 m cells (a seeded depth-first maze with a
   few extra openings, so there are loops).
 - ``arena``: an open 10 m x 10 m arena with six box obstacles.
+- ``clutter``: the obstacle-avoidance arena, 10 m x 8 m with 10 seeded boxes
+  (0.3 to 0.8 m sides) in its middle, at least 0.9 m apart; start/goal pairs
+  from the west strip to the east strip.
+- ``doorway``: two 5.5 m x 6 m rooms joined by one 0.8 m door off the middle
+  of the wall between them; pairs from the west room to the east room.
+- ``utrap``: a 12 m x 8 m hall with a U-shaped trap (3 m wide, 2 m deep, open
+  to the west) between the start strip and the goal strip, the goal straight
+  behind the trap's bottom: the trap that catches potential fields.
+- ``alcoves``: a 16 m x 2 m corridor with 1 m alcoves on both sides; pairs
+  from the west end to the east end.
+- The avoidance worlds each have a sidecar ``NAME.pairs.json``: the regions
+  that seeded start/goal pairs are drawn from
+  (`robotlib.avoidance.start_goal_pairs`).
+- ``loop``: a 20 m x 15 m building whose 2 m corridors run in a loop around
+  eight rooms (open doors onto the corridor, different north and south),
+  with pilasters on the outer walls; one lap is about 62 m, enough for
+  odometry alone to miss closing the loop by a metre or more (mapping, SLAM).
 - ``office``: a 20 m x 15 m office in MobileSim ``2D-Map`` form: a corridor,
   seven rooms, a table and a shelf as DATA points, a ``Sim.BoxObstacle``, a
   ``Dock`` before the ``RobotHome`` (the home wins) and a ``ForbiddenArea``.
+
+Not shipped, made on demand: ``python worlds/make_worlds.py --large FILE``
+writes `large_map`, a 24 m x 52 m floor drawn as about 60,000 DATA points
+(the size and point count of MobileSim's sample ``columbia.map``), which
+``robotlib bench large-map`` times.
 """
 
 from __future__ import annotations
 
+import json
 import math
 import random
 from pathlib import Path
@@ -234,6 +258,32 @@ def corridor2() -> World:
     return to_world(south + north + west + rest, (20500, 14500), (1500, 3400, 0.0))
 
 
+def loop() -> World:
+    """Build the loop building: a 2 m corridor ring around eight rooms (20 x 15 m)."""
+    segs = box(500, 500, 20000, 15000)
+    partitions = [2500, 6500, 10500, 14500, 18500]
+    segs += rooms(
+        2500,
+        partitions,
+        [(4000, 5000), (8500, 9500), (12000, 13000), (16000, 17000)],
+        5500,
+    )
+    north = rooms(
+        13500,
+        partitions,
+        [(3500, 4500), (7500, 8500), (12500, 13500), (15500, 16500)],
+        -5500,
+    )
+    segs += [s for s in north if s not in segs]
+    # pilasters (0.3 m deep, 0.4 m long) on the outer walls
+    segs += box(500, 4500, 300, 400) + box(500, 9500, 300, 400)
+    segs += box(20200, 6000, 300, 400) + box(20200, 11000, 300, 400)
+    segs += box(7000, 500, 400, 300) + box(13500, 500, 400, 300)
+    segs += box(5500, 15200, 400, 300) + box(11000, 15200, 400, 300)
+    segs += box(16500, 15200, 400, 300)
+    return to_world(segs, (21000, 16000), (1500, 1500, 0.0))
+
+
 def maze(cols: int = 8, rows: int = 6, cell: int = 1500, seed: int = 7) -> World:
     """Build a seeded depth-first maze of ``cols`` x ``rows`` cells of ``cell`` mm."""
     rnd = random.Random(seed)
@@ -310,6 +360,90 @@ def arena() -> World:
     return to_world(segs, (11000, 11000), (1500, 1500, 45.0))
 
 
+def clutter(seed: int = 11, n_boxes: int = 10) -> World:
+    """Build the cluttered arena: 10 m x 8 m, seeded boxes in its middle.
+
+    Boxes are dropped at random, each at least 0.9 m (edge to edge, along
+    either axis) from the others; a layout that gets stuck starts over.
+    """
+    rnd = random.Random(seed)
+    segs = box(500, 500, 10000, 8000)
+    placed: list[tuple[int, int, int, int]] = []
+    tries = 0
+    while len(placed) < n_boxes:
+        tries += 1
+        if tries > 2000:  # stuck: start the layout over
+            placed, tries = [], 0
+        w, h = rnd.randrange(300, 801, 50), rnd.randrange(300, 801, 50)
+        x, y = rnd.randrange(2800, 8200 - w, 50), rnd.randrange(1300, 7700 - h, 50)
+        if all(
+            x > bx + bw + 900
+            or bx > x + w + 900
+            or y > by + bh + 900
+            or by > y + h + 900
+            for bx, by, bw, bh in placed
+        ):
+            placed.append((x, y, w, h))
+    for b in placed:
+        segs += box(*b)
+    return to_world(segs, (11000, 9000), (1500, 4500, 0.0))
+
+
+def doorway() -> World:
+    """Build two rooms joined by one 0.8 m door (centre 3.1 m from the south)."""
+    segs = box(500, 500, 11000, 6000)
+    segs += wall_with_doors(500, 6500, [(3200, 4000)], 6000, vertical=True)
+    return to_world(segs, (12000, 7000), (1500, 3500, 0.0))
+
+
+def utrap() -> World:
+    """Build a hall with a U-shaped trap open towards the start (west)."""
+    segs = box(500, 500, 12000, 8000)
+    segs += [
+        (5000, 3000, 7000, 3000),  # south arm
+        (7000, 3000, 7000, 6000),  # bottom
+        (7000, 6000, 5000, 6000),  # north arm
+    ]
+    return to_world(segs, (13000, 9000), (2000, 4500, 0.0))
+
+
+def alcoves() -> World:
+    """Build a 16 m x 2 m corridor with 1 m x 0.8 m alcoves on both sides."""
+    south = [(3000, 4000), (7500, 8500), (12000, 13000)]
+    north = [(5000, 6000), (9500, 10500), (14000, 15000)]
+    segs = wall_with_doors(500, 16500, south, 1000, vertical=False)
+    segs += wall_with_doors(500, 16500, north, 3000, vertical=False)
+    for lo, hi in south:
+        segs += [(lo, 1000, lo, 200), (lo, 200, hi, 200), (hi, 200, hi, 1000)]
+    for lo, hi in north:
+        segs += [(lo, 3000, lo, 3800), (lo, 3800, hi, 3800), (hi, 3800, hi, 3000)]
+    segs += [(500, 1000, 500, 3000), (16500, 1000, 16500, 3000)]
+    return to_world(segs, (17000, 4000), (1200, 2000, 0.0))
+
+
+PAIRS = {
+    "clutter": {"start": [1.2, 1.2, 2.2, 7.8], "goal": [8.8, 1.2, 9.8, 7.8]},
+    "doorway": {"start": [1.2, 1.2, 5.0, 5.8], "goal": [7.0, 1.2, 10.8, 5.8]},
+    "utrap": {"start": [1.5, 3.5, 3.0, 5.5], "goal": [8.5, 3.5, 10.0, 5.5]},
+    "alcoves": {"start": [0.9, 1.6, 1.8, 2.4], "goal": [15.2, 1.6, 16.1, 2.4]},
+}
+"""Per avoidance world: regions ``[xmin, ymin, xmax, ymax]`` (m) of starts, goals."""
+
+
+def write_pairs(name: str) -> None:
+    """Write ``NAME.pairs.json``: where seeded start/goal pairs are drawn."""
+    doc = {
+        "world": name,
+        "start_region": PAIRS[name]["start"],
+        "goal_region": PAIRS[name]["goal"],
+        "clearance": 0.7,
+        "heading": "towards the goal, +-45 deg",
+        "units": "m",
+    }
+    text = json.dumps(doc, indent=1) + "\n"
+    (HERE / f"{name}.pairs.json").write_text(text, encoding="ascii")
+
+
 def office_map() -> str:
     """Return the text of ``office.map`` (20 m x 15 m)."""
     segs = box(0, 0, 20000, 15000)
@@ -360,8 +494,61 @@ def office_map() -> str:
     return "\n".join(lines) + "\n"
 
 
-def main() -> None:
-    """Write every world into this folder."""
+def large_map(seed: int = 0, spacing: int = 8) -> str:
+    """Return the text of a large scanned-looking map (24 m x 52 m, ~60k points).
+
+    A building like MobileSim's ``columbia.map``: a 2.4 m corridor down the
+    middle with 4 m rooms on both sides (1 m doors), every wall drawn as DATA
+    points ``spacing`` mm apart with 5 mm of seeded jitter, as a laser
+    scanner leaves them, plus a few pillars and the outline as LINES.
+    """
+    rng = random.Random(seed)
+    w, h, cx0, cx1 = 24000, 52000, 10800, 13200
+    walls: list[Segment] = [(0, 0, w, 0), (w, 0, w, h), (w, h, 0, h), (0, h, 0, 0)]
+    doors_w = [(y + 1500, y + 2500) for y in range(0, h, 4000)]
+    doors_e = [(y + 2500, y + 3500) for y in range(0, h, 4000)]
+    walls += wall_with_doors(0, h, doors_w, cx0, True)
+    walls += wall_with_doors(0, h, doors_e, cx1, True)
+    for y in range(4000, h, 4000):
+        walls += [(0, y, cx0, y), (cx1, y, w, y)]
+    points = []
+    for x1, y1, x2, y2 in walls:
+        n = max(1, round(math.hypot(x2 - x1, y2 - y1) / spacing))
+        for k in range(n + 1):
+            points.append(
+                (
+                    round(x1 + (x2 - x1) * k / n + rng.uniform(-5, 5)),
+                    round(y1 + (y2 - y1) * k / n + rng.uniform(-5, 5)),
+                )
+            )
+    pillars = [(x, y) for x in (cx0 - 600, cx1 + 600) for y in range(2000, h, 8000)]
+    lines = list(walls[:4])
+    for px, py in pillars:
+        lines += box(px - 150, py - 150, 300, 300)
+    out = [
+        "2D-Map-Ex2",
+        "Sources: robotlib large_map",
+        "MinPos: -200 -200",
+        f"MaxPos: {w + 200} {h + 200}",
+        f"NumPoints: {len(points)}",
+        f"NumLines: {len(lines)}",
+        f'Cairn: RobotHome {(cx0 + cx1) // 2} 2000 90.000000 "" ICON "home"',
+        "LINES",
+        *(" ".join(str(v) for v in s) for s in lines),
+        "DATA",
+        *(f"{x} {y}" for x, y in points),
+    ]
+    return "\n".join(out) + "\n"
+
+
+def main(argv: list[str] | None = None) -> None:
+    """Write every world into this folder (or, with ``--large FILE``, `large_map`)."""
+    import sys
+
+    argv = sys.argv[1:] if argv is None else argv
+    if argv[:1] == ["--large"] and len(argv) == 2:
+        Path(argv[1]).write_text(large_map(), encoding="ascii")
+        return
     notes = {
         "corridor": "The paper's aliased corridor: 28 m x 2 m, doors on both sides.",
         "corridor_periodic": (
@@ -370,6 +557,11 @@ def main() -> None:
         "corridor2": "A second aliased corridor with an L bend.",
         "maze": "An 8 x 6 maze of 1.5 m cells.",
         "arena": "An open 10 m x 10 m arena with six boxes.",
+        "clutter": "Obstacle avoidance: a 10 m x 8 m arena with 10 seeded boxes.",
+        "doorway": "Obstacle avoidance: two rooms joined by a 0.8 m door.",
+        "utrap": "Obstacle avoidance: a hall with a U-shaped trap open to the west.",
+        "alcoves": "Obstacle avoidance: a 16 m x 2 m corridor with alcoves.",
+        "loop": "A 20 m x 15 m building: a loop of 2 m corridors around 8 rooms.",
     }
     makers = {
         "corridor": corridor,
@@ -377,10 +569,17 @@ def main() -> None:
         "corridor2": corridor2,
         "maze": maze,
         "arena": arena,
+        "clutter": clutter,
+        "doorway": doorway,
+        "utrap": utrap,
+        "alcoves": alcoves,
+        "loop": loop,
     }
     for name, make in makers.items():
         comment = f"{notes[name]}\nGenerated by worlds/make_worlds.py; units mm, deg."
         write_wld(make(), HERE / f"{name}.wld", comment=comment)
+    for name in PAIRS:
+        write_pairs(name)
     (HERE / "office.map").write_text(office_map(), encoding="ascii")
 
 

@@ -39,6 +39,9 @@ __all__ = [
     "strip_region",
     "release_notebook",
     "NBVAL_TAGS",
+    "Exercise",
+    "exercises",
+    "setup_cell",
 ]
 
 META_KEY = "robotlib"
@@ -94,6 +97,36 @@ class CheckCell:
     points: float
     cell_id: str
     index: int
+    exercises: tuple[str, ...] = ()
+    manual: bool = False
+    rubric: str = ""
+
+
+@dataclass(frozen=True)
+class Exercise:
+    """A cell where the student writes code.
+
+    Attributes
+    ----------
+    exercise_id : str
+        The exercise's name (``{"robotlib": {"exercise": ...}}``).
+    cell_id : str
+        The cell's id.
+    index : int
+        Position of the cell in the notebook (all cells counted).
+    writes : tuple of str
+        Dotted names of the library functions whose work the exercise asks
+        for (an answer reaching them scores zero).
+    names : tuple of str
+        The top-level names the student writes (definitions that hold a
+        solution region); the checks call these.
+    """
+
+    exercise_id: str
+    cell_id: str
+    index: int
+    writes: tuple[str, ...] = ()
+    names: tuple[str, ...] = ()
 
 
 def read_notebook(path: str | Path) -> NotebookNode:
@@ -129,7 +162,10 @@ def write_notebook(nb: NotebookNode, path: str | Path) -> bool:
 
 
 def check_meta(cell: dict, where: str = "cell") -> dict | None:
-    """Return ``{"grade_id", "points"}`` of a check cell, or None.
+    """Return the grading metadata of a check or written-answer cell, or None.
+
+    The dict has ``grade_id``, ``points``, ``exercises`` (the exercises the
+    check grades, default ``[grade_id]``), ``manual`` and ``rubric``.
 
     Parameters
     ----------
@@ -152,9 +188,22 @@ def check_meta(cell: dict, where: str = "cell") -> dict | None:
     points = meta.get("points", 1)
     if isinstance(points, bool) or not isinstance(points, int | float) or points <= 0:
         raise NotebookError(f"{where}: points of {gid!r} must be > 0, got {points!r}")
-    if cell.get("cell_type") != "code":
+    manual = meta.get("manual", False) is True
+    if manual and cell.get("cell_type") != "markdown":
+        raise NotebookError(f"{where}: written answer {gid!r} must be a markdown cell")
+    if not manual and cell.get("cell_type") != "code":
         raise NotebookError(f"{where}: check {gid!r} must be a code cell")
-    return {"grade_id": gid, "points": points}
+    exs = meta.get("exercises", [gid])
+    if not isinstance(exs, list) or not all(isinstance(e, str) for e in exs):
+        raise NotebookError(f"{where}: exercises of {gid!r} must be a list of str")
+    rubric = meta.get("rubric", "")
+    return {
+        "grade_id": gid,
+        "points": points,
+        "exercises": list(exs),
+        "manual": manual,
+        "rubric": str(rubric),
+    }
 
 
 def cell_id(cell: dict, name: str, index: int) -> str:
@@ -185,8 +234,95 @@ def check_cells(nb: NotebookNode, name: str = "notebook") -> list[CheckCell]:
             )
         seen.add(meta["grade_id"])
         out.append(
-            CheckCell(meta["grade_id"], meta["points"], cell_id(cell, name, i), i)
+            CheckCell(
+                meta["grade_id"],
+                meta["points"],
+                cell_id(cell, name, i),
+                i,
+                tuple(meta["exercises"]),
+                meta["manual"],
+                meta["rubric"],
+            )
         )
+    return out
+
+
+def setup_cell(nb: NotebookNode) -> int | None:
+    """Index of the lab's set-up cell (its first code cell), or None."""
+    return next((i for i, c in enumerate(nb.cells) if c.cell_type == "code"), None)
+
+
+def _written_names(source: str) -> list[str]:
+    """Top-level names bound by statements that hold a solution region."""
+    import ast
+
+    try:
+        tree = ast.parse(source)
+    except SyntaxError:
+        return []
+    lines = source.splitlines()
+    names = []
+    for node in tree.body:
+        span = lines[node.lineno - 1 : node.end_lineno]
+        if not any(ln.strip() == SOLUTION[0] for ln in span):
+            continue
+        if isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef | ast.ClassDef):
+            names.append(node.name)
+        elif isinstance(node, ast.Assign | ast.AnnAssign | ast.AugAssign):
+            targets = node.targets if isinstance(node, ast.Assign) else [node.target]
+            for t in targets:
+                names += [n.id for n in ast.walk(t) if isinstance(n, ast.Name)]
+    if not names and any(ln.strip() == SOLUTION[0] for ln in lines):
+        for node in tree.body:  # a cell that is all solution: every name it binds
+            if isinstance(node, ast.FunctionDef | ast.ClassDef):
+                names.append(node.name)
+            elif isinstance(node, ast.Assign):
+                for t in node.targets:
+                    names += [n.id for n in ast.walk(t) if isinstance(n, ast.Name)]
+    return list(dict.fromkeys(names))
+
+
+def exercises(nb: NotebookNode, name: str = "notebook") -> list[Exercise]:
+    """List the exercise cells of a lab source notebook, in order.
+
+    An exercise cell carries ``{"robotlib": {"exercise": id, "writes": [...]}}``.
+    A code cell with a solution region and no such metadata is an exercise
+    too, named after the first check cell that follows it (labs written
+    before the convention).
+
+    Raises
+    ------
+    NotebookError
+        On malformed metadata or an exercise id used twice.
+    """
+    out: list[Exercise] = []
+    seen: set[str] = set()
+    checks = check_cells(nb, name)
+    for i, cell in enumerate(nb.cells):
+        if cell.cell_type != "code" or check_meta(cell) is not None:
+            continue
+        meta = cell.get("metadata", {}).get(META_KEY) or {}
+        where = f"{name}: cell {i}"
+        eid = meta.get("exercise")
+        if eid is None:
+            if not _has_marker(cell.source, SOLUTION):
+                continue
+            eid = next((c.grade_id for c in checks if c.index > i), None)
+            if eid is None:
+                continue
+        if not isinstance(eid, str) or not _GRADE_ID.match(eid):
+            raise NotebookError(f"{where}: bad exercise id {eid!r}")
+        if eid in seen:
+            raise NotebookError(f"{where}: exercise {eid!r} used twice")
+        seen.add(eid)
+        writes = meta.get("writes", [])
+        if not isinstance(writes, list) or not all(
+            isinstance(w, str) and re.fullmatch(r"[A-Za-z_][\w.]*\.\w+", w)
+            for w in writes
+        ):
+            raise NotebookError(f"{where}: writes must be a list of dotted names")
+        names = tuple(_written_names(cell.source))
+        out.append(Exercise(eid, cell_id(cell, name, i), i, tuple(writes), names))
     return out
 
 
@@ -249,7 +385,9 @@ def release_notebook(nb: NotebookNode, name: str = "notebook") -> NotebookNode:
         where = f"{name}: cell {i}"
         meta = check_meta(cell, where)
         source = cell.source
-        if meta is not None:
+        if meta is not None and meta["manual"]:
+            source = strip_region(source, SOLUTION, ANSWER_STUB, where)
+        elif meta is not None:
             if _has_marker(source, SOLUTION):
                 raise NotebookError(f"{where}: a check cell cannot hold a solution")
             source = strip_region(source, HIDDEN, (), where).rstrip()
@@ -268,8 +406,14 @@ def release_notebook(nb: NotebookNode, name: str = "notebook") -> NotebookNode:
         else:
             new = nbformat.v4.new_raw_cell(source)
         new.id = cid
-        if meta is not None:
-            new.metadata = {META_KEY: meta, "deletable": False, "editable": False}
+        if meta is not None and meta["manual"]:  # the rubric stays with you
+            keep = {k: meta[k] for k in ("grade_id", "points", "manual")}
+            new.metadata = {META_KEY: keep}
+        elif meta is not None:
+            keep = {k: meta[k] for k in ("grade_id", "points")}
+            new.metadata = {META_KEY: keep, "deletable": False, "editable": False}
+        if meta is not None and not meta["manual"]:
+            new.metadata["tags"] = ["graded"]  # JupyterLab shows it: a graded check
         cells.append(new)
     out = nbformat.v4.new_notebook(cells=cells)
     out.metadata = {"kernelspec": dict(KERNELSPEC), "language_info": {"name": "python"}}

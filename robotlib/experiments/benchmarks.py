@@ -15,6 +15,14 @@ __all__ = ["BENCHES", "add_arguments", "run"]
 
 BENCHES = {
     "mcl": "robotlib.experiments.bench_mcl",
+    "avoid": "robotlib.experiments.bench_avoid",
+    "map": "robotlib.experiments.bench_map",
+    "slam": "robotlib.experiments.bench_map",
+    "logs": "robotlib.experiments.bench_logs",
+    "histogram": "robotlib.experiments.bench_histogram",
+    "plan": "robotlib.experiments.bench_plan",
+    "nav": "robotlib.experiments.bench_nav",
+    "large-map": "robotlib.experiments.bench_large_map",
     "buildings": "robotlib.experiments.bench_buildings",
 }
 """Topic name to the module that measures it."""

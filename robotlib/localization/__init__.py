@@ -1,15 +1,18 @@
 """Monte Carlo localization: the paper's filter and the standard alternatives.
 
 Procedural pieces (what a lab asks students to write) are in
-`robotlib.localization.paper`; `MCL` composes a motion model
+`robotlib.localization.paper`; the grid filters before particles
+(`HistogramFilter1D`, `GridFilter`) in `robotlib.localization.histogram`.
+`MCL` composes a motion model
 (`OdometryMotionModel`), a sensor model (`PaperSensorModel`,
 `BeamSensorModel`, `LikelihoodFieldSensorModel`) and a resampling policy
 (`PaperResampling`, `ThresholdResampling`, `KLDResampling`), optionally with
 augmented MCL's `AugmentedInjection`. `History` records a run from outside.
 """
 
-from . import paper
+from . import histogram, paper
 from .cones import ConeTable, cone_table, expected_readings
+from .histogram import GridFilter, HistogramFilter1D
 from .history import History, localized_step
 from .kld import kld_bound, kld_resample
 from .mcl import BEST, MCL, StepInfo
@@ -44,6 +47,8 @@ __all__ = [
     "BeamParameters",
     "BeamSensorModel",
     "ConeTable",
+    "GridFilter",
+    "HistogramFilter1D",
     "History",
     "KLDResampling",
     "LikelihoodFieldSensorModel",
@@ -54,6 +59,7 @@ __all__ = [
     "ThresholdResampling",
     "cone_table",
     "effective_sample_size",
+    "histogram",
     "expected_readings",
     "innovation_loglik",
     "kld_bound",

@@ -22,6 +22,7 @@ import numpy as np
 
 from ..sensing import SonarModel
 from ..world import World
+from ..world.index import INDEX_MIN_SEGMENTS
 from . import _kernels
 from .motion import PARALLEL_MIN, _particles
 
@@ -94,10 +95,7 @@ class ConeTable:
         _check_size(world, ny, nx, self.resolution, self.n_bins, max_bytes)
         self.table = np.empty((ny, nx, n_bins), dtype=np.uint16)
         t0 = time.perf_counter()
-        _kernels.build_cone_table(
-            np.ascontiguousarray(world.obstacles),
-            self.origin[0],
-            self.origin[1],
+        model = (
             self.resolution,
             self.n_bins,
             ray_step,
@@ -106,9 +104,21 @@ class ConeTable:
             float(sonar.max_range),
             float(sonar.min_range),
             sonar.cos_specular,
-            16,
-            self.table,
         )
+        if len(world.obstacles) >= INDEX_MIN_SEGMENTS:
+            # a large map: rays through the walls' bucket index, jumping over
+            # clear space by the distance field (the same table, much sooner)
+            index = world.segment_index()
+            field = world.distance_field(self.resolution)
+            _kernels.build_cone_table_indexed(
+                index.segments, *self.origin, *model, *index.args, field.data,
+                self.table,
+            )  # fmt: skip
+        else:
+            _kernels.build_cone_table(
+                np.ascontiguousarray(world.obstacles), *self.origin, *model, 16,
+                self.table,
+            )  # fmt: skip
         self.build_seconds = time.perf_counter() - t0
         self.table.setflags(write=False)
 

@@ -4,11 +4,20 @@ Each simulated robot listens on its own TCP port (8101, 8102, ... on
 127.0.0.1 by default) or on a pseudo-terminal (the serial path). A client
 runs the SYNC handshake, sends OPEN and then gets a SIP every 100 ms of
 simulated time; the simulator runs in real time, or ``speed`` times faster.
-`Session` is the protocol of one link, bytes in and bytes out, with no I/O;
-`SimServer` moves bytes between sessions and sockets in one thread with a
-selector. Garbage, bad checksums, truncated or malformed packets are skipped;
-a client that vanishes or misbehaves is dropped, its robot stopped, and the
-next client is accepted on the same port.
+`robotlib.pioneer.session.Session` is the protocol of one link, bytes in
+and bytes out, with no I/O (re-exported here); `SimServer` moves bytes
+between sessions and sockets in one thread with a selector. Garbage, bad
+checksums, truncated or malformed packets are skipped; a client that
+vanishes or misbehaves is dropped, its robot stopped, and the next client
+is accepted on the same port.
+
+Every connection is accepted at once (the backlog fits a class connecting
+together) and runs its own handshake; the first to OPEN drives the robot,
+a second one is refused (closed) while the first is alive, and one that
+does not open within ``handshake_timeout`` is closed, so a silent socket
+cannot hold a port. Each session starts from a freshly opened Pioneer's
+state: defaults for speeds and accelerations, odometry (0, 0, 0); the true
+pose is the simulator's (``SIM_SET_POSE``, ``SIM_RESET``).
 """
 
 from __future__ import annotations
@@ -26,190 +35,61 @@ import tty
 import numpy as np
 
 from ..p3dx import CYCLE
-from .commands import SYNC0, SYNC1, SYNC2, decode_si
-from .packets import PacketDecoder, PacketError, frame
-from .sip import (
-    ConvFactors,
-    default_config,
-    encode_config,
-    encode_sip,
-    encode_sync2_reply,
-    factors_for,
-    sip_from_si,
-)
+from .session import Session
 from .transport import DEFAULT_PORT
 
 __all__ = ["Session", "SimServer", "add_arguments", "run"]
 
 log = logging.getLogger(__name__)
 
-_MOTION = {"MOVE", "HEAD", "DHEAD", "VEL", "RVEL", "VEL2", "SETV", "SETRV", "STOP"}
 _MAX_OUTBOX = 64 * 1024
 
 
-class Session:
-    """The Pioneer protocol of one link to one simulated robot (no I/O).
+class _Conn:
+    """One accepted TCP connection: its socket, session and unsent bytes."""
 
-    Parameters
-    ----------
-    sim : robotlib.sim.Simulator
-        The simulator (for SIM_RESET).
-    body : robotlib.sim.SimBody
-        The robot this link drives.
-    name, robot_class, subclass : str
-        What the SYNC2 reply reports.
-    config : dict, optional
-        The config packet's fields (default: `default_config`).
-    watchdog : float
-        Stop the robot after this long without a packet from the client, s.
-    clock : callable
-        Wall-clock time, s (for the watchdog).
-    """
-
-    def __init__(
-        self,
-        sim,
-        body,
-        *,
-        name: str = "robotlib",
-        robot_class: str = "Pioneer",
-        subclass: str = "p3dx",
-        config: dict | None = None,
-        watchdog: float = 2.0,
-        clock=time.monotonic,
-    ):
-        self.sim = sim
-        self.body = body
-        self.ident = (name, robot_class, subclass)
-        self.factors: ConvFactors = factors_for(subclass)
-        wd = int(watchdog * 1000)
-        self.config = default_config(
-            **{"name": name, "subtype": subclass, "watchdog": wd, **(config or {})}
-        )
-        self.watchdog = watchdog
-        self.clock = clock
-        self.decoder = PacketDecoder()
-        self.expect = SYNC0  # next sync id; 3 = synced, waiting for OPEN
-        self.open = False
-        self.ignored = 0
-        self.last_packet = clock()
-        self._watchdog_fired = False
-
-    def receive(self, data: bytes) -> bytes:
-        """Take bytes from the client; return the bytes to send back."""
-        out = []
-        for pkt in self.decoder.feed(data):
-            self.last_packet = self.clock()
-            self._watchdog_fired = False
-            try:
-                out.append(self.handle(pkt.id, pkt.data))
-            except (PacketError, ValueError, TypeError) as exc:
-                self.ignored += 1
-                log.debug("ignored packet 0x%02x: %s", pkt.id, exc)
-        return b"".join(out)
-
-    def handle(self, packet_id: int, data: bytes) -> bytes:
-        """Act on one packet; return the reply bytes (often none)."""
-        if not self.open:
-            return self._handle_sync(packet_id, data)
-        from .packets import Packet
-
-        cmd = decode_si(Packet(packet_id, data), self.factors.vel2_divisor)
-        name, value = cmd.name, cmd.value
-        if name in _MOTION:
-            self.body.command(name, value)
-        elif name == "ROTATE":
-            self.body.command("RVEL", value)
-        elif name in ("SETA", "SETRA"):
-            if value != 0:  # an acceleration of 0 would freeze the robot
-                self.body.command(name, value)
-        elif name == "ESTOP":
-            self.body.command("STOP")
-        elif name == "ENABLE":
-            self.body.enable_motors(bool(value))
-        elif name == "SONAR":
-            self.body.enable_sonar(bool(value))
-        elif name == "SETO":
-            self.body.reset_odometry()
-        elif name == "CONFIG":
-            return encode_config(self.config)
-        elif name == "SIM_SET_POSE":
-            self.body.set_true_pose(value)
-        elif name == "SIM_RESET":
-            self.sim.reset()
-        elif name == "CLOSE":
-            self.close()
-        # PULSE, OPEN again, HOSTBAUD and unknown commands: nothing to do
-        return b""
-
-    def _handle_sync(self, packet_id: int, data: bytes) -> bytes:
-        if packet_id == SYNC0 and not data:
-            self.expect = SYNC1
-            return frame(SYNC0)
-        if packet_id == SYNC1 and self.expect == SYNC1 and not data:
-            self.expect = SYNC2
-            return frame(SYNC1)
-        if packet_id == SYNC2 and self.expect == SYNC2 and not data:
-            self.expect = 3
-            return encode_sync2_reply(*self.ident)
-        if packet_id == 1 and self.expect == 3:  # OPEN
-            self.open = True
-            self.body.command("STOP")
-            return b""
-        if packet_id in (SYNC0, SYNC1, SYNC2):
-            self.expect = SYNC0  # out of order: start again
-        return b""
-
-    def close(self) -> None:
-        """End the connection's open state: stop the robot, wait for a new SYNC."""
-        if self.open:
-            self.body.command("STOP")
-        self.open = False
-        self.expect = SYNC0
-
-    def tick(self) -> bytes:
-        """After a simulator step: the SIP to send (b"" unless open)."""
-        if not self.open:
-            return b""
-        if not self._watchdog_fired and self.clock() - self.last_packet > self.watchdog:
-            self.body.command("STOP")
-            self._watchdog_fired = True
-        st = self.body.state
-        enabled = bool(getattr(self.body, "_sonar_on", True))
-        sonar = list(enumerate(st.sonar[:16])) if enabled else []
-        sip = sip_from_si(
-            st.pose,
-            st.velocity[0],
-            st.velocity[1],
-            sonar,
-            stalled=st.stalled,
-            motors_enabled=st.motors_enabled,
-            sonar_enabled=enabled,
-            moving=bool(self.body.moving),
-            factors=self.factors,
-        )
-        return encode_sip(sip)
+    def __init__(self, sock: socket.socket, session: Session, now: float):
+        self.sock = sock
+        self.session = session
+        self.outbox = bytearray()
+        self.accepted = now
 
 
 class _Endpoint:
-    """One robot's link: a TCP listener or a pseudo-terminal, and its session."""
+    """One robot's link: a TCP listener or a pseudo-terminal, and its sessions.
+
+    A TCP robot accepts every connection; each runs its own handshake, and
+    the first to send OPEN drives the robot (`owner`) until it leaves, goes
+    silent or closes. Connections that do not open within the handshake
+    timeout are dropped, so none can hold the port.
+    """
 
     def __init__(self, server: SimServer, body, kind: str):
         self.server = server
         self.body = body
         self.kind = kind
         self.listener: socket.socket | None = None
-        self.conn: socket.socket | None = None
+        self.conns: list[_Conn] = []
+        self.owner: _Conn | None = None
         self.fd: int | None = None  # pty master
         self.slave_fd: int | None = None
         self.path: str | None = None
         self.port: int | None = None
-        self.session: Session | None = None
-        self.outbox = bytearray()
+        self.session: Session | None = None  # the pty's
         self.clients = 0
 
-    def new_session(self) -> Session:
-        return Session(self.server.sim, self.body, **self.server.session_options)
+    def new_session(self, claim=None) -> Session:
+        return Session(
+            self.server.sim, self.body, claim=claim, **self.server.session_options
+        )
+
+    @property
+    def active(self) -> Session | None:
+        """The open session driving this robot, if any."""
+        if self.kind == "pty":
+            return self.session if self.session and self.session.open else None
+        owner = self.owner
+        return owner.session if owner is not None and owner.session.open else None
 
 
 class SimServer:
@@ -233,6 +113,16 @@ class SimServer:
         The simulator's randomness.
     sim : robotlib.sim.Simulator, optional
         Serve robots of this simulator (new bodies are added to it).
+    drop_after : float
+        Close an open session whose client sent nothing for this long, s.
+    handshake_timeout : float
+        Close a connection that has not opened (SYNC0-2, OPEN) this long
+        after it was accepted, s.
+    max_pending : int
+        Connections per robot at most at once; one more is accepted and
+        closed at once (a clean refusal rather than a hang).
+    backlog : int
+        The listening sockets' backlog (a class connecting at once).
     session_options
         Passed to each `Session` (``name``, ``subclass``, ``watchdog``...).
     """
@@ -249,6 +139,9 @@ class SimServer:
         seed=None,
         sim=None,
         drop_after: float = 10.0,
+        handshake_timeout: float = 3.0,
+        max_pending: int = 64,
+        backlog: int = 128,
         **session_options,
     ):
         if not speed > 0 or not math.isfinite(speed):
@@ -269,6 +162,9 @@ class SimServer:
         self.host = host
         self.period = CYCLE / float(speed)
         self.drop_after = drop_after
+        self.handshake_timeout = float(handshake_timeout)
+        self.max_pending = int(max_pending)
+        self.backlog = int(backlog)
         self.session_options = session_options
         self.error: BaseException | None = None
         self._stop = threading.Event()
@@ -297,10 +193,10 @@ class SimServer:
         ep.listener = s
         s.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
         s.bind((self.host, port))
-        s.listen(4)
+        s.listen(self.backlog)
         s.setblocking(False)
         ep.port = s.getsockname()[1]
-        self._sel.register(s, selectors.EVENT_READ, ("accept", ep))
+        self._sel.register(s, selectors.EVENT_READ, ("accept", ep, None))
 
     def _open_pty(self, ep: _Endpoint) -> None:
         master, slave = os.openpty()
@@ -308,7 +204,7 @@ class SimServer:
         os.set_blocking(master, False)
         ep.fd, ep.slave_fd, ep.path = master, slave, os.ttyname(slave)
         ep.session = ep.new_session()
-        self._sel.register(master, selectors.EVENT_READ, ("pty", ep))
+        self._sel.register(master, selectors.EVENT_READ, ("pty", ep, None))
 
     @property
     def ports(self) -> list[int]:
@@ -362,76 +258,126 @@ class SimServer:
             while not self._stop.is_set():
                 wait = max(0.0, min(0.1, next_tick - time.monotonic()))
                 for key, _ in self._sel.select(wait):
-                    kind, ep = key.data
+                    kind, ep, conn = key.data
                     try:
                         if kind == "accept":
                             self._accept(ep)
                         elif kind == "conn":
-                            self._read_conn(ep)
+                            self._read_conn(ep, conn)
                         else:
                             self._read_pty(ep)
                     except Exception as exc:  # a misbehaving client, not the server
                         log.warning("robot %s: dropping client: %s", ep.port, exc)
-                        self._drop(ep)
+                        if conn is not None:
+                            self._drop(ep, conn)
+                        elif ep.session is not None:
+                            ep.session.close()
                 now = time.monotonic()
+                self._expire(now)
                 if now >= next_tick:
                     self._tick()
                     next_tick += self.period
                     if now - next_tick > 5 * self.period:  # fell behind: do not burst
                         next_tick = now + self.period
+        except KeyboardInterrupt:
+            log.info("interrupted: stopping")
         except BaseException as exc:
             self.error = exc
             log.exception("sim-server stopped on an error")
         finally:
             self._close_all()
 
+    def _expire(self, now: float) -> None:
+        """Drop connections that did not open in time, or that closed."""
+        for ep in self.endpoints:
+            for c in list(ep.conns):
+                s = c.session
+                if s.open:
+                    continue
+                if s.refused or s.was_open:  # refused, or sent CLOSE
+                    self._drop(ep, c)
+                elif now - c.accepted > self.handshake_timeout:
+                    log.info("robot %s: no handshake in time, closing", ep.port)
+                    self._drop(ep, c)
+
     def _tick(self) -> None:
-        active = [ep for ep in self.endpoints if ep.session and ep.session.open]
+        active = [ep for ep in self.endpoints if ep.active is not None]
         if not active:
             return
         self.sim.step()
         now = time.monotonic()
         for ep in active:
-            s = ep.session
+            s = ep.active
             if now - s.last_packet > self.drop_after:
                 log.info("robot %s: client silent, closing its session", ep.port)
                 if ep.kind == "tcp":
-                    self._drop(ep)
+                    self._drop(ep, ep.owner)
                 else:
                     s.close()
                 continue
-            self._send(ep, s.tick())
+            if ep.kind == "tcp":
+                self._send(ep, s.tick(), ep.owner)
+            else:
+                self._send(ep, s.tick())
 
     # -- TCP ------------------------------------------------------------------
-    def _accept(self, ep: _Endpoint) -> None:
-        if ep.conn is not None:
-            return
-        try:
-            conn, _ = ep.listener.accept()
-        except BlockingIOError:
-            return
-        conn.setblocking(False)
-        conn.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
-        ep.conn = conn
+    def _claim(self, ep: _Endpoint, conn_ref: list) -> bool:
+        """May the connection in ``conn_ref`` take the robot? (on its OPEN)."""
+        conn = conn_ref[0]
+        owner = ep.owner
+        if owner is not None and owner is not conn:
+            # a CLOSE or a hang-up the previous client already sent comes first
+            self._read_conn(ep, owner)
+            owner = ep.owner
+        if owner is not None and owner is not conn:
+            s = owner.session
+            if s.open and s.silent_for <= s.watchdog:
+                log.info("robot %s: busy, refusing a second client", ep.port)
+                return False
+            log.info("robot %s: previous client gone or silent, replacing it", ep.port)
+            self._drop(ep, owner)
+        ep.owner = conn
         ep.clients += 1
-        ep.session = ep.new_session()
-        ep.outbox.clear()
-        self._sel.unregister(ep.listener)  # one client at a time; others wait
-        self._sel.register(conn, selectors.EVENT_READ, ("conn", ep))
+        return True
 
-    def _read_conn(self, ep: _Endpoint) -> None:
+    def _accept(self, ep: _Endpoint) -> None:
+        for _ in range(self.backlog):
+            try:
+                sock, _ = ep.listener.accept()
+            except (BlockingIOError, InterruptedError):
+                return
+            except OSError as exc:  # e.g. out of file descriptors: try later
+                log.warning("robot %s: accept failed: %s", ep.port, exc)
+                return
+            if len(ep.conns) >= self.max_pending:
+                log.info("robot %s: too many connections, refusing one", ep.port)
+                sock.close()
+                continue
+            sock.setblocking(False)
+            sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+            ref: list = []
+            conn = _Conn(
+                sock,
+                ep.new_session(lambda _s, r=ref: self._claim(ep, r)),
+                time.monotonic(),
+            )
+            ref.append(conn)
+            ep.conns.append(conn)
+            self._sel.register(sock, selectors.EVENT_READ, ("conn", ep, conn))
+
+    def _read_conn(self, ep: _Endpoint, conn: _Conn) -> None:
         try:
-            data = ep.conn.recv(4096)
+            data = conn.sock.recv(4096)
         except BlockingIOError:
             return
         except OSError:
             data = b""
         if not data:
-            self._drop(ep)
+            self._drop(ep, conn)
             return
-        self._send(ep, ep.session.receive(data))
+        self._send(ep, conn.session.receive(data), conn)
 
-    def _send(self, ep: _Endpoint, data: bytes) -> None:
+    def _send(self, ep: _Endpoint, data: bytes, conn: _Conn | None = None) -> None:
         if not data:
             return
         if ep.kind == "pty":
@@ -440,37 +386,34 @@ class SimServer:
             except BlockingIOError:
                 pass  # nobody reads the line: the bytes are lost, as on a cable
             return
-        if ep.conn is None:
+        if conn is None or conn not in ep.conns:
             return
-        ep.outbox += data
+        conn.outbox += data
         try:
-            sent = ep.conn.send(ep.outbox)
-            del ep.outbox[:sent]
+            sent = conn.sock.send(conn.outbox)
+            del conn.outbox[:sent]
         except BlockingIOError:
             pass
         except OSError:
-            self._drop(ep)
+            self._drop(ep, conn)
             return
-        if len(ep.outbox) > _MAX_OUTBOX:
+        if len(conn.outbox) > _MAX_OUTBOX:
             log.info("robot %s: client does not read, dropping it", ep.port)
-            self._drop(ep)
+            self._drop(ep, conn)
 
-    def _drop(self, ep: _Endpoint) -> None:
-        """Forget the client: stop its robot, close its socket, accept the next."""
-        if ep.session is not None:
-            ep.session.close()
-        if ep.kind == "pty":
+    def _drop(self, ep: _Endpoint, conn: _Conn | None) -> None:
+        """Forget one client: stop its robot if it drove it, close its socket."""
+        if conn is None or conn not in ep.conns:
             return
-        ep.session = None
-        if ep.conn is not None:
-            try:
-                self._sel.unregister(ep.conn)
-            except (KeyError, ValueError):
-                pass
-            ep.conn.close()
-            ep.conn = None
-            if ep.listener is not None and not self._stop.is_set():
-                self._sel.register(ep.listener, selectors.EVENT_READ, ("accept", ep))
+        conn.session.close()
+        ep.conns.remove(conn)
+        if ep.owner is conn:
+            ep.owner = None
+        try:
+            self._sel.unregister(conn.sock)
+        except (KeyError, ValueError):
+            pass
+        conn.sock.close()
 
     # -- pty --------------------------------------------------------------------
     def _read_pty(self, ep: _Endpoint) -> None:
@@ -484,14 +427,17 @@ class SimServer:
 
     def _close_all(self) -> None:
         for ep in self.endpoints:
-            for sock in (ep.conn, ep.listener):
+            socks = [c.sock for c in ep.conns] + [ep.listener]
+            ep.conns.clear()
+            ep.owner = None
+            for sock in socks:
                 if sock is not None:
                     try:
                         self._sel.unregister(sock)
                     except (KeyError, ValueError):
                         pass
                     sock.close()
-            ep.conn = ep.listener = None
+            ep.listener = None
             for fd in (ep.fd, ep.slave_fd):
                 if fd is not None:
                     try:
@@ -565,8 +511,8 @@ def run(args: argparse.Namespace) -> int:
         log.info("serving %s", addr)
     try:
         server.serve(args.duration)
-    except KeyboardInterrupt:
-        pass
+    except KeyboardInterrupt:  # Ctrl-C between two select calls: a clean stop
+        log.info("interrupted: stopping")
     finally:
         server.stop()
     return 0 if server.error is None else 1

@@ -313,7 +313,7 @@ def open_transport(
     Parameters
     ----------
     address : str
-        ``tcp://HOST:PORT`` (port 8101 if left out), ``serial:///dev/ttyS0``
+        ``tcp://HOST:PORT`` (port 8101 if left out; port 0 is an error), ``serial:///dev/ttyS0``
         (a device path), or ``serial:URL`` with any pyserial URL
         (``serial:loop://``, ``serial:socket://127.0.0.1:9000``).
     timeouts : Timeouts
@@ -325,7 +325,18 @@ def open_transport(
         parts = urlsplit(address)
         if not parts.hostname:
             raise ValueError(f"robot address {address!r} has no host")
-        return TcpTransport(parts.hostname, parts.port or DEFAULT_PORT, timeouts)
+        try:
+            port = parts.port
+        except ValueError:
+            raise ValueError(f"robot address {address!r}: bad port") from None
+        if port == 0:
+            raise ValueError(
+                f"robot address {address!r}: port 0 is not a robot's port "
+                f"(leave it out for {DEFAULT_PORT})"
+            )
+        return TcpTransport(
+            parts.hostname, DEFAULT_PORT if port is None else port, timeouts
+        )
     if scheme == "serial":
         url = rest[2:] if rest.startswith("//") else rest
         if not url:

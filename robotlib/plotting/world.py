@@ -26,6 +26,7 @@ from ..p3dx import (
     SONAR_POSES,
 )
 from ..world import Grid, World
+from .style import COLORS, map_axes
 
 __all__ = [
     "plot_world",
@@ -38,13 +39,12 @@ __all__ = [
 ]
 
 
-def _label_axes(ax) -> None:
-    ax.set_aspect("equal")
-    ax.set_xlabel("x [m]")
-    ax.set_ylabel("y [m]")
+_label_axes = map_axes
 
 
-def plot_world(ax, world: World, color: str = "k", linewidth: float = 1.5, **kw):
+def plot_world(
+    ax, world: World, color: str = COLORS["walls"], linewidth: float = 1.5, **kw
+):
     """Draw a world's walls (and point obstacles), set equal axes in metres.
 
     Parameters
@@ -94,7 +94,7 @@ def robot_outline(pose) -> np.ndarray:
     return body @ np.array([[c, s], [-s, c]]) + [x, y]
 
 
-def plot_robot(ax, pose, color: str = "tab:blue", alpha: float = 0.6, label=None):
+def plot_robot(ax, pose, color: str = COLORS["robot"], alpha: float = 0.6, label=None):
     """Draw the robot's footprint at ``pose`` with a line showing its heading.
 
     Parameters
@@ -130,7 +130,7 @@ def plot_sonar(
     sensors=SONAR_POSES,
     cone: float = SONAR_CONE,
     max_range: float = SONAR_MAX_RANGE,
-    color: str = "tab:orange",
+    color: str = COLORS["sonar"],
 ):
     """Draw each sonar's cone out to its reading.
 
@@ -182,7 +182,9 @@ def plot_trajectory(ax, poses, label=None, **kw):
     return line
 
 
-def plot_particles(ax, particles, weights=None, color="tab:red", arrows=None, **kw):
+def plot_particles(
+    ax, particles, weights=None, color=COLORS["particles"], arrows=None, **kw
+):
     """Draw a particle cloud.
 
     Parameters

@@ -40,6 +40,7 @@ BACKENDS = {
     "sim": "robotlib.sim:SimRobot",
     "tcp": "robotlib.pioneer.client:PioneerRobot",
     "serial": "robotlib.pioneer.client:PioneerRobot",
+    "log": "robotlib.logs:LogRobot",
 }
 """Address scheme to backend class (``module:Class``), imported on first use."""
 
@@ -53,7 +54,8 @@ def robot(address: str = "sim:corridor", **options) -> Robot:
         ``"sim:NAME_OR_PATH"`` for the in-process simulator in a shipped world
         or a world file; ``"tcp://HOST:PORT"`` for MobileSim or
         ``robotlib sim-server``; ``"serial:///dev/ttyUSB0"`` for a real
-        Pioneer over RS-232.
+        Pioneer over RS-232; ``"log:run.mcap"`` to replay a recorded run
+        (`robotlib.logs`).
     **options
         Passed to the backend's ``from_address`` (e.g. ``seed=1`` for the
         simulator, ``timeout=5.0`` for a Pioneer).

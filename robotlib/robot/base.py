@@ -19,7 +19,48 @@ import numpy as np
 from ..p3dx import HEADING_DONE_TOLERANCE, MOVE_DONE_TOLERANCE
 from ..world.geometry import wrap_angle
 
-__all__ = ["Robot", "RobotState", "RobotTimeout"]
+__all__ = ["Robot", "RobotState", "RobotTimeout", "check_argument"]
+
+_WIRE = 32.767
+"""Largest magnitude of a MOVE (m) or VEL (m/s): the protocol's signed 16-bit mm."""
+_WIRE_ROT = math.radians(32767.0)
+"""Largest magnitude of an RVEL (rad/s): the protocol's signed 16-bit deg/s."""
+
+
+def check_argument(
+    what: str, value, limit: float = math.inf, *, nonnegative: bool = False
+) -> float:
+    """Return ``value`` as a float, or raise one clear `ValueError`.
+
+    Every backend checks its arguments here before it stores or sends
+    anything, so a refused command leaves the robot as it was.
+
+    Parameters
+    ----------
+    what : str
+        The call and argument, for the message (``"move: distance (m)"``).
+    value : float
+        The argument.
+    limit : float
+        Largest magnitude accepted.
+    nonnegative : bool
+        Refuse negative values too.
+
+    Raises
+    ------
+    ValueError
+        If ``value`` is not a number, not finite, or out of range.
+    """
+    try:
+        x = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{what} must be a number, got {value!r}") from None
+    if not math.isfinite(x):
+        raise ValueError(f"{what} must be finite, got {value!r}")
+    if abs(x) > limit or (nonnegative and x < 0):
+        lo = 0 if nonnegative else -limit
+        raise ValueError(f"{what} must be within [{lo:g}, {limit:g}], got {value!r}")
+    return x
 
 
 class RobotTimeout(TimeoutError):
@@ -109,29 +150,66 @@ class Robot(ABC):
 
     # -- the paper's Table 1 --------------------------------------------
     def move(self, distance: float) -> None:
-        """Drive ``distance`` metres straight ahead (negative: backwards)."""
-        self._move_start = self._latest().pose.copy()
-        self._move_distance = float(distance)
-        self._send("MOVE", float(distance))
+        """Drive ``distance`` metres straight ahead (negative: backwards).
+
+        Raises
+        ------
+        ValueError
+            If ``distance`` is not finite or beyond +-32.767 m (the protocol's
+            range); the robot's motion is then left as it was.
+        """
+        d = check_argument("move: distance (m)", distance, _WIRE)
+        start = self._latest().pose.copy()
+        self._send("MOVE", d)
+        self._move_start = start
+        self._move_distance = d
 
     def setheading(self, theta: float) -> None:
-        """Turn to the absolute heading ``theta`` (rad, odometry frame)."""
-        self._heading_target = wrap_angle(float(theta))
-        self._send("HEAD", self._heading_target)
+        """Turn to the absolute heading ``theta`` (rad, odometry frame).
+
+        Raises
+        ------
+        ValueError
+            If ``theta`` is not finite (nothing is stored or sent then).
+        """
+        target = wrap_angle(check_argument("setheading: theta (rad)", theta))
+        self._send("HEAD", target)
+        self._heading_target = target
 
     def setdeltaheading(self, dtheta: float) -> None:
-        """Turn by ``dtheta`` radians from the current heading (positive: left)."""
-        self.setheading(self._latest().pose[2] + float(dtheta))
+        """Turn by ``dtheta`` radians from the current heading (positive: left).
+
+        Raises
+        ------
+        ValueError
+            If ``dtheta`` is not finite.
+        """
+        d = check_argument("setdeltaheading: dtheta (rad)", dtheta)
+        self.setheading(self._latest().pose[2] + d)
 
     def setvel(self, v: float) -> None:
-        """Drive at ``v`` m/s until told otherwise (cancels a move)."""
+        """Drive at ``v`` m/s until told otherwise (cancels a move).
+
+        Raises
+        ------
+        ValueError
+            If ``v`` is not finite or beyond +-32.767 m/s.
+        """
+        v = check_argument("setvel: v (m/s)", v, _WIRE)
+        self._send("VEL", v)
         self._move_start = None
-        self._send("VEL", float(v))
 
     def setrotvel(self, w: float) -> None:
-        """Turn at ``w`` rad/s until told otherwise (cancels a heading)."""
+        """Turn at ``w`` rad/s until told otherwise (cancels a heading).
+
+        Raises
+        ------
+        ValueError
+            If ``w`` is not finite or beyond the protocol's 32767 deg/s.
+        """
+        w = check_argument("setrotvel: w (rad/s)", w, _WIRE_ROT)
+        self._send("RVEL", w)
         self._heading_target = None
-        self._send("RVEL", float(w))
 
     def stop(self) -> None:
         """Stop translation and rotation (cancels any move or heading)."""
@@ -140,12 +218,16 @@ class Robot(ABC):
         self._send("STOP")
 
     def set_max_velocity(self, v: float) -> None:
-        """Limit the translational speed of later motions, m/s."""
-        self._send("SETV", float(v))
+        """Limit the translational speed of later motions, m/s (>= 0)."""
+        v = check_argument("set_max_velocity: v (m/s)", v, _WIRE, nonnegative=True)
+        self._send("SETV", v)
 
     def set_max_rot_velocity(self, w: float) -> None:
-        """Limit the rotational speed of later motions, rad/s."""
-        self._send("SETRV", float(w))
+        """Limit the rotational speed of later motions, rad/s (>= 0)."""
+        w = check_argument(
+            "set_max_rot_velocity: w (rad/s)", w, _WIRE_ROT, nonnegative=True
+        )
+        self._send("SETRV", w)
 
     def ismovedone(self) -> bool:
         """Poll once; True when the last `move` is within 40 mm of its distance.
@@ -173,6 +255,27 @@ class Robot(ABC):
     def readsonar(self) -> np.ndarray:
         """Poll once; the eight front sonar ranges, shape (8,), m (5 m: no echo)."""
         return self._poll().sonar.copy()
+
+    def readlaser(self) -> np.ndarray:
+        """Poll once; the laser scan, shape (n_beams,), m, right to left.
+
+        Raises
+        ------
+        NotImplementedError
+            If this backend has no laser (before polling).
+        """
+        if not self._has_laser():
+            raise NotImplementedError(f"{type(self).__name__} has no laser")
+        self._poll()
+        return self._read_laser()
+
+    def _has_laser(self) -> bool:
+        """Whether `readlaser` works on this backend (default: no laser)."""
+        return False
+
+    def _read_laser(self) -> np.ndarray:
+        """Return the laser scan of the last cycle (backends with a laser)."""
+        raise NotImplementedError(f"{type(self).__name__} has no laser")
 
     def pose(self) -> np.ndarray:
         """Poll once; the odometry pose ``(x, y, theta)``, m and rad."""

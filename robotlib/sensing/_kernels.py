@@ -432,3 +432,143 @@ def cone_echo(sx, sy, sth, segments, n_rays, cone, max_range, cos_specular):
     """`sonar_cone`'s first echo alone (no multipath bounce): the same number."""
     echo, _ = _cone(sx, sy, sth, segments, n_rays, cone, max_range, cos_specular, False)
     return echo
+
+
+# -- ray casting through a bucket index of segments (large maps) ------------------
+@nb.njit(**JIT)
+def _bucket_hits(ox, oy, dx, dy, segments, items, lo, hi, best, best_m):
+    """`ray_segments`' test over the segments ``items[lo:hi]``; the better hit."""
+    for q in range(lo, hi):
+        m = items[q]
+        px = segments[m, 0]
+        py = segments[m, 1]
+        ex = segments[m, 2] - px
+        ey = segments[m, 3] - py
+        denom = dx * ey - dy * ex
+        if abs(denom) < _EPS:
+            continue
+        wx = px - ox
+        wy = py - oy
+        t = (wx * ey - wy * ex) / denom
+        if t < 0.0 or t > best or (t == best and m >= best_m):
+            continue
+        s = (wx * dy - wy * dx) / denom
+        if 0.0 <= s <= 1.0:
+            best = t
+            best_m = m
+    return best, best_m
+
+
+@nb.njit(**JIT)
+def indexed_ray(
+    ox, oy, dx, dy, segments, x0, y0, size, nbx, nby, start, items, reach,
+    field, fx0, fy0, fres,
+):  # fmt: skip
+    """`ray_segments` through a bucket index, up to ``reach``.
+
+    Walks the buckets the ray crosses in order (Amanatides and Woo) and
+    stops at the first bucket that holds a hit before the ray leaves it.
+    Where ``field`` (ny, nx), the exact distance to the nearest segment at
+    the centres of a grid of cells of side ``fres`` from ``(fx0, fy0)``,
+    shows a clearance of more than two buckets, the ray jumps over that
+    clearance (no segment lies there) instead; pass a (0, 0) array to walk
+    every bucket. The result is the same ``(t, m)`` as `ray_segments` (the
+    nearest hit, the lowest index among equals) whenever that hit is nearer
+    than ``reach``; otherwise possibly ``(inf, -1)``. A ray from outside the
+    indexed area is cast against every segment.
+    """
+    if not (0 <= int(math.floor((ox - x0) / size)) < nbx) or not (
+        0 <= int(math.floor((oy - y0) / size)) < nby
+    ):
+        return ray_segments(ox, oy, dx, dy, segments)
+    fny, fnx = field.shape
+    slack = 0.7072 * fres + 1e-9  # > half a cell's diagonal
+    jump = 2.0 * size
+    best = np.inf
+    best_m = -1
+    t = 0.0
+    while t <= reach:
+        px = ox + t * dx
+        py = oy + t * dy
+        # -- jump over clear space -------------------------------------
+        fj = int(math.floor((px - fx0) / fres))
+        fi = int(math.floor((py - fy0) / fres))
+        if 0 <= fi < fny and 0 <= fj < fnx:
+            clear = field[fi, fj] - slack
+            if clear > jump:
+                t += clear
+                continue
+        # -- walk the buckets from here for a while ----------------------
+        gx = (px - x0) / size
+        gy = (py - y0) / size
+        j = int(math.floor(gx))
+        i = int(math.floor(gy))
+        if not (0 <= i < nby and 0 <= j < nbx):
+            return best, best_m
+        step_j = 1 if dx > 0 else -1
+        step_i = 1 if dy > 0 else -1
+        if dx != 0.0:
+            t_x = t + ((j + 1 - gx) if dx > 0 else (gx - j)) * size / abs(dx)
+            d_x = size / abs(dx)
+        else:
+            t_x = np.inf
+            d_x = np.inf
+        if dy != 0.0:
+            t_y = t + ((i + 1 - gy) if dy > 0 else (gy - i)) * size / abs(dy)
+            d_y = size / abs(dy)
+        else:
+            t_y = np.inf
+            d_y = np.inf
+        walked = 0
+        while True:
+            q = i * nbx + j
+            best, best_m = _bucket_hits(
+                ox, oy, dx, dy, segments, items, start[q], start[q + 1], best, best_m
+            )
+            t_exit = min(t_x, t_y)
+            if best < t_exit - 1e-9 or t_exit > reach:
+                return best, best_m
+            if t_x < t_y:
+                j += step_j
+                t_x += d_x
+            else:
+                i += step_i
+                t_y += d_y
+            if not (0 <= i < nby and 0 <= j < nbx):
+                return best, best_m
+            walked += 1
+            if walked >= 4 and fny > 0:  # look for clear space again
+                t = t_exit
+                break
+    return best, best_m
+
+
+@nb.njit(**JIT)
+def indexed_cone_echo(
+    sx, sy, sth, segments, n_rays, cone, max_range, cos_specular,
+    x0, y0, size, nbx, nby, start, items, field, fx0, fy0, fres,
+):  # fmt: skip
+    """`cone_echo` through a bucket index: the same echo, each ray cast sooner."""
+    echo = np.inf
+    for r in range(n_rays):
+        if n_rays == 1:
+            a = sth
+        else:
+            a = sth - 0.5 * cone + cone * r / (n_rays - 1)
+        dx = math.cos(a)
+        dy = math.sin(a)
+        t, m = indexed_ray(
+            sx, sy, dx, dy, segments, x0, y0, size, nbx, nby, start, items, max_range,
+            field, fx0, fy0, fres,
+        )  # fmt: skip
+        if m < 0 or t >= max_range or t >= echo:
+            continue
+        ex = segments[m, 2] - segments[m, 0]
+        ey = segments[m, 3] - segments[m, 1]
+        length = math.sqrt(ex * ex + ey * ey)
+        nxn = -ey / length
+        nyn = ex / length
+        cos_inc = abs(dx * nxn + dy * nyn)
+        if cos_inc >= cos_specular:
+            echo = t
+    return echo

@@ -79,6 +79,39 @@ class SonarModel:
         if self.noise_std < 0:
             raise ValueError("noise_std must be non-negative")
 
+    @classmethod
+    def single_ray(cls, **changes) -> SonarModel:
+        """Return MobileSim's sonar model: one ray on each sonar's axis.
+
+        MobileSim (Stage) casts a single ray per sonar and reports the first
+        wall it meets, at any angle: no cone, no specular misses, no
+        multipath. robotlib's default cone is the better model of a real
+        Pioneer (it sees walls off the axis, and misses ones met at a
+        grazing angle); this option lets a run be compared with MobileSim's.
+        ``changes`` override any other field (``noise_std``,
+        ``dropout_prob``, ...).
+
+        Examples
+        --------
+        >>> from robotlib.sim import Simulator
+        >>> from robotlib.world import load_world
+        >>> sim = Simulator(load_world("corridor"), seed=0,
+        ...                 sonar=SonarModel.single_ray())
+        """
+        settings = {
+            "n_rays": 1,
+            "cone": 0.0,
+            "specular_angle": None,
+            "multipath_prob": 0.0,
+            **changes,
+        }
+        return cls(**settings)
+
+    @property
+    def is_single_ray(self) -> bool:
+        """Whether each sonar is one ray on its axis (MobileSim's model)."""
+        return self.n_rays == 1
+
     def ideal(self) -> SonarModel:
         """Return the same ring with no noise, specular misses or dropouts."""
         return replace(

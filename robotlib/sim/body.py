@@ -4,8 +4,10 @@
 integrates what the wheels did, the truth adds slip drawn from an
 `OdometryNoise` model. Walls (and other robots) stop a body and set its stall
 flag. Sonar readings come from `robotlib.sensing`'s cone model at the true
-pose. Imports the world, sensing and the robot's state record; never a
-backend or anything above the simulator.
+pose; a laser scan (`robotlib.sensing.laser`), only when asked for, from its
+own random stream, so reading the laser changes no sonar or odometry number.
+Imports the world, sensing and the robot's state record; never a backend or
+anything above the simulator.
 """
 
 from __future__ import annotations
@@ -31,7 +33,9 @@ from ..p3dx import (
     ROBOT_WIDTH,
 )
 from ..robot import RobotState
+from ..robot.base import check_argument
 from ..sensing import _kernels as _sensing_kernels
+from ..sensing.laser import simulate_laser
 from ..world import _kernels as _world_kernels
 from ..world.geometry import wrap_angle
 
@@ -58,6 +62,10 @@ class OdometryNoise:
     - rotation: ``var = rot_per_rad**2 * |dtheta| + rot_per_m**2 * |ds|``
       (rad^2)
 
+    On top of that random walk, ``ed`` and ``eb`` set Borenstein's
+    systematic errors (unequal wheels, a wrong track; see `true_increment`),
+    off (1.0) by default.
+
     Attributes
     ----------
     trans_per_m : float
@@ -66,16 +74,62 @@ class OdometryNoise:
         Heading error after turning 1 rad, standard deviation, rad.
     rot_per_m : float
         Heading error after 1 m of travel, standard deviation, rad.
+    ed : float
+        Right wheel diameter over left wheel diameter, ``D_R / D_L``
+        (1: equal wheels).
+    eb : float
+        Real wheel track over the nominal one the odometry assumes
+        (1: exact).
     """
 
     trans_per_m: float = 0.03
     rot_per_rad: float = 0.03
     rot_per_m: float = 0.02
+    ed: float = 1.0
+    eb: float = 1.0
+
+    def __post_init__(self):
+        if not (self.ed > 0 and self.eb > 0):
+            raise ValueError(f"ed and eb must be positive, got {self.ed}, {self.eb}")
 
     @classmethod
     def none(cls) -> OdometryNoise:
         """Return a model with perfect odometry."""
         return cls(0.0, 0.0, 0.0)
+
+    @property
+    def systematic(self) -> bool:
+        """Whether the wheels differ from the odometry's nominal geometry."""
+        return self.ed != 1.0 or self.eb != 1.0
+
+    def true_increment(self, ds: float, dth: float) -> tuple[float, float]:
+        """Return the motion the wheels really make for a measured increment.
+
+        The odometry counts encoder ticks and assumes two equal wheels of
+        the nominal diameter and the nominal track `robotlib.p3dx.AXLE_TRACK`.
+        With Borenstein's systematic errors (UMBmark, 1996) the right wheel's
+        diameter is ``ed`` times the left's (their mean is nominal) and the
+        real track is ``eb`` times the nominal one, so the same ticks move the
+        robot differently.
+
+        Parameters
+        ----------
+        ds : float
+            Measured translation, m.
+        dth : float
+            Measured rotation, rad.
+
+        Returns
+        -------
+        tuple of float
+            The true translation (m) and rotation (rad), before random slip;
+            ``(ds, dth)`` unchanged when there is no systematic error.
+        """
+        if not self.systematic:
+            return ds, dth
+        left = (ds - 0.5 * AXLE_TRACK * dth) * 2.0 / (self.ed + 1.0)
+        right = (ds + 0.5 * AXLE_TRACK * dth) * 2.0 * self.ed / (self.ed + 1.0)
+        return 0.5 * (left + right), (right - left) / (self.eb * AXLE_TRACK)
 
 
 def _arc(pose: np.ndarray, ds: float, dth: float) -> None:
@@ -94,8 +148,27 @@ def _ramp(current: float, target: float, accel: float, decel: float) -> float:
 
 
 def _approach(remaining: float, vmax: float, decel: float) -> float:
-    """Speed towards a goal ``remaining`` away that can still stop on it."""
-    speed = min(vmax, math.sqrt(2.0 * decel * abs(remaining)), abs(remaining) / CYCLE)
+    """Speed this cycle towards a goal ``remaining`` away, that stops on it.
+
+    The discrete trapezoidal profile: driving at ``v = n * decel * CYCLE``
+    this cycle and then slowing by ``decel * CYCLE`` a cycle covers
+    ``decel * CYCLE**2 * (m + 1) * (m / 2 + f)`` with ``n = m + f`` (``m``
+    whole, ``0 <= f < 1``); ``n`` solves that for the remaining distance, so
+    the robot decelerates onto the goal without passing it and never
+    reverses. Capped by ``vmax`` and by the speed that lands on the goal in
+    one cycle.
+    """
+    r = abs(remaining)
+    speed = min(vmax, r / CYCLE)
+    unit = decel * CYCLE * CYCLE
+    if unit > 0.0 and speed > 0.0:
+        cycles = r / unit
+        m = math.floor(0.5 * (math.sqrt(1.0 + 8.0 * cycles) - 1.0))
+        f = cycles / (m + 1) - 0.5 * m
+        if f < 0.0 and m > 0:
+            m -= 1
+            f = cycles / (m + 1) - 0.5 * m
+        speed = min(speed, (m + min(max(f, 0.0), 1.0)) * decel * CYCLE)
     return math.copysign(speed, remaining)
 
 
@@ -124,11 +197,18 @@ class SimBody:
         self._sim = sim
         self._rng = rng
         self._initial = np.array(pose, dtype=float)
+        self._laser_rng: np.random.Generator | None = None
         self._reset()
 
     def _reset(self) -> None:
         self.true_pose = self._initial.copy()
         self._odo = self._initial.copy()
+        self._defaults()
+        self.stalled = False
+        self._sonar = np.full(len(self._sim.sonar.sensors), self._sim.sonar.max_range)
+
+    def _defaults(self) -> None:
+        """Stop; set a freshly opened Pioneer's limits; motors and sonar on."""
         self._v = 0.0
         self._w = 0.0
         self._vmax = DEFAULT_MAX_VELOCITY
@@ -140,8 +220,6 @@ class SimBody:
         self._rot_goal: tuple[str, float] = ("vel", 0.0)
         self._motors = True
         self._sonar_on = True
-        self.stalled = False
-        self._sonar = np.full(len(self._sim.sonar.sensors), self._sim.sonar.max_range)
 
     # -- commands ---------------------------------------------------------
     def command(self, name: str, value=None) -> None:
@@ -161,7 +239,8 @@ class SimBody:
         Raises
         ------
         ValueError
-            For an unknown command or a missing argument.
+            For an unknown command, a missing argument or one that is not a
+            finite number; the body's state is then left as it was.
         """
         name = name.upper()
         if name == "STOP":
@@ -171,11 +250,13 @@ class SimBody:
         if value is None:
             raise ValueError(f"command {name} needs a value")
         if name == "VEL2":
-            left, right = (float(v) for v in value)
+            left, right = (
+                check_argument(f"{name}: wheel speed (m/s)", v) for v in value
+            )
             self._trans_goal = ("vel", (left + right) / 2)
             self._rot_goal = ("vel", (right - left) / AXLE_TRACK)
             return
-        value = float(value)
+        value = check_argument(f"{name}: argument", value)
         if name == "MOVE":
             self._trans_goal = ("move", value)
             self._move_from = self._odo[:2].copy()
@@ -214,6 +295,17 @@ class SimBody:
         self._odo[:] = 0.0
         self._move_from = self._odo[:2].copy()
 
+    def begin_session(self) -> None:
+        """Start a new client's session, as a Pioneer does when a client opens it.
+
+        The robot stops where it is; speed limits, accelerations, motors and
+        sonar go back to their start-up defaults, whatever the previous
+        client set; the odometry restarts at (0, 0, 0) here. The true pose is
+        kept (`set_true_pose` moves it).
+        """
+        self._defaults()
+        self.reset_odometry()
+
     def enable_motors(self, on: bool) -> None:
         """Switch the motors on or off; off stops the robot at once."""
         self._motors = bool(on)
@@ -225,6 +317,20 @@ class SimBody:
         self._sonar_on = bool(on)
         if not on:
             self._sonar[:] = self._sim.sonar.max_range
+
+    def scan_laser(self) -> np.ndarray:
+        """Return a laser scan at the true pose now, shape (n_beams,), m.
+
+        The noise comes from a stream of its own (spawned from this body's
+        on first use), so scanning leaves the sonar and odometry noise as
+        they would be without a laser.
+        """
+        if self._laser_rng is None:
+            self._laser_rng = self._rng.spawn(1)[0]
+        obstacles = self._sim._obstacles_for(self)
+        return simulate_laser(
+            obstacles, self.true_pose, self._sim.laser, self._laser_rng
+        )[0]
 
     # -- reports ----------------------------------------------------------
     @property
@@ -276,8 +382,9 @@ class SimBody:
         v, w = self._control()
         ds, dth = v * CYCLE, w * CYCLE
         model = self._sim.odometry
-        true_ds = ds + noise[0] * model.trans_per_m * math.sqrt(abs(ds))
-        true_dth = dth + noise[1] * math.sqrt(
+        wheel_ds, wheel_dth = model.true_increment(ds, dth)
+        true_ds = wheel_ds + noise[0] * model.trans_per_m * math.sqrt(abs(ds))
+        true_dth = wheel_dth + noise[1] * math.sqrt(
             model.rot_per_rad**2 * abs(dth) + model.rot_per_m**2 * abs(ds)
         )
         fraction = self._free_fraction(true_ds, true_dth, obstacles, others)

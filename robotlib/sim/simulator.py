@@ -15,7 +15,7 @@ import numpy as np
 from .._random import as_rng
 from ..p3dx import CYCLE
 from ..robot import Robot, RobotState
-from ..sensing import SonarModel
+from ..sensing import LaserModel, SonarModel
 from ..world import World, load_world
 from ..world.geometry import wrap_angle
 from .body import OdometryNoise, SimBody, footprint_segments
@@ -37,6 +37,9 @@ class Simulator:
         The robots' sonar ring and its noise (default: a Pioneer 3-DX's).
     odometry : OdometryNoise, optional
         The odometry error model.
+    laser : LaserModel, optional
+        The laser each robot carries (default: a SICK LMS-200), read with
+        `SimBody.scan_laser` or `SimRobot.readlaser`.
     """
 
     def __init__(
@@ -45,9 +48,11 @@ class Simulator:
         seed: np.random.Generator | int | None = None,
         sonar: SonarModel | None = None,
         odometry: OdometryNoise | None = None,
+        laser: LaserModel | None = None,
     ):
         self.world = world
         self.sonar = SonarModel() if sonar is None else sonar
+        self.laser = LaserModel() if laser is None else laser
         self.odometry = OdometryNoise() if odometry is None else odometry
         self._rng = as_rng(seed)
         self.bodies: list[SimBody] = []
@@ -126,6 +131,12 @@ class SimRobot(Robot):
 
     def _send(self, command: str, value=None) -> None:
         self.body.command(command, value)
+
+    def _has_laser(self) -> bool:
+        return True
+
+    def _read_laser(self) -> np.ndarray:
+        return self.body.scan_laser()
 
     def _update(self) -> RobotState:
         self.simulator.step()

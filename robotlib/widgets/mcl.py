@@ -16,23 +16,22 @@ values programmatically and read the results.
 
 from __future__ import annotations
 
-import matplotlib.pyplot as plt
+import io
+import time
 
-from ..localization import (
-    BEST,
-    MCL,
-    AugmentedInjection,
-    BeamParameters,
-    BeamSensorModel,
-    History,
-    KLDResampling,
-    LikelihoodFieldSensorModel,
-    PaperResampling,
-    PaperSensorModel,
-    ThresholdResampling,
+import numpy as np
+
+from ..localization import History
+from ..plotting.mcl import plot_mcl_run, plot_particle_snapshots
+from ._live import LiveRunner
+from ._mcl_choices import (
+    _DEFAULTS,
+    PRESETS,
+    RESAMPLERS,
+    SENSORS,
+    mcl_filter,
+    run_mcl,
 )
-from ..localization.paper import RESIZE_FLOOR
-from ..plotting import plot_trajectory, plot_world
 
 __all__ = [
     "SENSORS",
@@ -41,225 +40,31 @@ __all__ = [
     "mcl_filter",
     "run_mcl",
     "plot_mcl_run",
+    "plot_particle_snapshots",
+    "PARTICLE_COUNTS",
     "MCLPanel",
 ]
 
-SENSORS = ("paper", "beam", "beam (tempered)", "likelihood field")
-"""Sensor models the MCL panel offers.
+PARTICLE_COUNTS = (
+    50, 75, 100, 150, 200, 300, 500, 750, 1000, 1500, 2000, 3000, 5000, 7500,
+    10_000, 15_000, 20_000, 30_000, 50_000,
+)  # fmt: skip
+"""The particle slider's stops: a log scale (1, 1.5, 2, 3, 5, 7.5 per decade)
+holding the paper's 300, 1,000 and `MCL.best`'s 50,000; the typed box next to
+it takes any other count."""
 
-``"beam (tempered)"`` is the beam model with the parameters of `MCL.best`
-(``BEST["beam"]``: its log-likelihood scaled down, so that one scan does not
-leave a handful of particles carrying all the weight).
-"""
-RESAMPLERS = (
-    "paper (select + resize)",
-    "low variance",
-    "KLD",
-    "KLD when ESS < N/2",
-    "low variance + augmented",
-)
-"""Resampling schemes the MCL panel offers.
-
-``"KLD when ESS < N/2"`` is the KLD-sampling of `MCL.best` (``BEST["kld"]``),
-from the initial particle count down to no fewer than ``BEST["kld"]["n_min"]``.
-"""
-PRESETS = {
-    "paper": {
-        "sensor": "paper",
-        "resampler": "paper (select + resize)",
-        "n": 300,
-        "lam": 0.5,
-    },
-    "best (beam + KLD)": {
-        "sensor": "beam (tempered)",
-        "resampler": "KLD when ESS < N/2",
-        "n": int(BEST["n"]),
-    },
-}
-"""Named sets of choices: the paper's filter (`MCL.paper`'s defaults) and the
-configuration of `MCL.best` (tempered beam model, KLD-sampling from
-``BEST["n"]`` particles)."""
-
-_DEFAULTS = {"n": 300, "lam": 0.5, "sensor": "paper", "resampler": RESAMPLERS[0]}
-
-
-def mcl_filter(
-    world,
-    n: int | None = None,
-    lam: float | None = None,
-    sensor: str | None = None,
-    resampler: str | None = None,
-    floor: int = RESIZE_FLOOR,
-    rng=None,
-    init=None,
-    preset: str | None = None,
-) -> MCL:
-    """Build an `MCL` from the MCL panel's choices.
-
-    Parameters
-    ----------
-    world : World
-        The map.
-    n : int, optional
-        Initial particle count (default: the preset's, else 300).
-    lam : float, optional
-        The paper's resize lambda (used by ``"paper (select + resize)"``
-        only; default: the preset's, else 0.5).
-    sensor : str, optional
-        One of `SENSORS` (default: the preset's, else ``"paper"``).
-    resampler : str, optional
-        One of `RESAMPLERS` (default: the preset's, else the paper's): the
-        paper's multinomial selection and resize; low-variance (systematic)
-        resampling when the effective sample size falls below N/2;
-        KLD-sampling every step (at most ``max(n, 2000)`` particles); the
-        KLD-sampling of `MCL.best` (when ESS < N/2, from ``n`` particles
-        down to ``BEST["kld"]["n_min"]``); or low variance with augmented
-        MCL's random injection.
-    floor : int
-        Smallest population of the paper's resize.
-    rng : numpy.random.Generator, int or None
-        The filter's randomness.
-    init : array_like, shape (3,), optional
-        Start around this pose (tracking) instead of uniformly (global).
-    preset : str, optional
-        A key of `PRESETS`, giving the choices not passed explicitly.
-        ``preset="best (beam + KLD)"`` builds the filter `MCL.best` builds.
-
-    Returns
-    -------
-    MCL
-    """
-    if preset is not None and preset not in PRESETS:
-        raise ValueError(f"unknown preset {preset!r}; choose from {tuple(PRESETS)}")
-    given = {"n": n, "lam": lam, "sensor": sensor, "resampler": resampler}
-    chosen = {**_DEFAULTS, **PRESETS.get(preset, {})}
-    chosen.update({k: v for k, v in given.items() if v is not None})
-    n, lam = int(chosen["n"]), float(chosen["lam"])
-    sensor, resampler = chosen["sensor"], chosen["resampler"]
-    if sensor not in SENSORS:
-        raise ValueError(f"unknown sensor {sensor!r}; choose from {SENSORS}")
-    if resampler not in RESAMPLERS:
-        raise ValueError(f"unknown resampler {resampler!r}; choose from {RESAMPLERS}")
-    if n < 1:
-        raise ValueError(f"n must be at least 1, got {n}")
-    if sensor == "paper":
-        model = PaperSensorModel(world)
-    elif sensor == "beam":
-        model = BeamSensorModel(world, fast=True)
-    elif sensor == "beam (tempered)":
-        model = BeamSensorModel(world, fast=True, params=BeamParameters(**BEST["beam"]))
-    else:
-        model = LikelihoodFieldSensorModel(world, fast=True)
-    injection = None
-    if resampler == RESAMPLERS[0]:
-        policy = PaperResampling(lam, int(min(floor, n)))
-    elif resampler == "KLD":
-        policy = KLDResampling(n_min=min(n, 300), n_max=max(n, 2000))
-    elif resampler == "KLD when ESS < N/2":
-        kld = dict(BEST["kld"])
-        kld["n_min"] = min(n, int(kld["n_min"]))
-        kld["n_max"] = n
-        policy = KLDResampling(**kld)
-        if BEST.get("augmented") is not None:
-            injection = AugmentedInjection(**BEST["augmented"])
-    else:
-        policy = ThresholdResampling("systematic", 0.5)
-        if resampler.endswith("augmented"):
-            injection = AugmentedInjection()
-    return MCL(
-        world,
-        model,
-        resampling=policy,
-        n=n,
-        injection=injection,
-        rng=rng,
-        init=init,
-    )
-
-
-def run_mcl(
-    route, n_steps: int | None = None, tracking: bool = False, seed=0, **choices
-):
-    """Run a filter built by `mcl_filter` over a logged route.
-
-    Parameters
-    ----------
-    route : robotlib.experiments.RouteLog
-        Odometry, sonar and truth per step.
-    n_steps : int, optional
-        Use only the first steps.
-    tracking : bool
-        Start at the true start pose instead of uniformly.
-    seed : int or numpy.random.Generator
-        The filter's randomness.
-    **choices
-        ``n``, ``lam``, ``sensor``, ``resampler``, ``floor``, ``preset`` (see
-        `mcl_filter`).
-
-    Returns
-    -------
-    History
-    """
-    init = route.truth[0] if tracking else None
-    mcl = mcl_filter(route.world, rng=seed, init=init, **choices)
-    hist = History()
-    steps = len(route) if n_steps is None else min(int(n_steps), len(route))
-    for k in range(steps):
-        mcl.step(route.odometry[max(k - 1, 0)], route.odometry[k], route.sonar[k])
-        hist.record(route.truth[k], mcl)
-    return hist
-
-
-def plot_mcl_run(history: History, world, fig=None, tolerance: float = 0.5):
-    """Draw the paper's Figs. 2-4 for one run: trajectories, error, particles.
-
-    Parameters
-    ----------
-    history : History
-        The run.
-    world : World
-        Its map.
-    fig : matplotlib.figure.Figure, optional
-        Drawn into (cleared first); a new figure by default.
-    tolerance : float
-        The "localized" error bound drawn on the error plot, m.
-
-    Returns
-    -------
-    matplotlib.figure.Figure
-    """
-    if fig is None:
-        fig = plt.figure(figsize=(10, 5.5))
-    fig.clear()
-    grid = fig.add_gridspec(2, 2, height_ratios=(1.1, 1))
-    ax_map = fig.add_subplot(grid[0, :])
-    ax_err = fig.add_subplot(grid[1, 0])
-    ax_n = fig.add_subplot(grid[1, 1])
-    a = history.arrays()
-    plot_world(ax_map, world, color="0.4", linewidth=1)
-    plot_trajectory(ax_map, a["true_pose"], label="true", color="k")
-    plot_trajectory(
-        ax_map, a["estimate"], label="estimated", color="tab:red", marker="."
-    )
-    ax_map.legend(loc="upper right", ncols=2)
-    ax_map.set_title("true and estimated trajectory (Fig. 2)")
-    ax_err.plot(a["step"], a["error"], color="tab:red")
-    ax_err.axhline(tolerance, color="0.5", ls=":", lw=1)
-    ax_err.set_xlabel("step")
-    ax_err.set_ylabel("position error [m]")
-    loc = history.localized_step(tolerance)
-    ax_err.set_title(f"error per step (Fig. 3); localized from {loc or '-'}")
-    ax_n.plot(a["step"], a["n_particles"], color="tab:blue")
-    ax_n.set_xlabel("step")
-    ax_n.set_ylabel("particles")
-    ax_n.set_ylim(0, None)
-    ax_n.set_title("particles per step (Fig. 4)")
-    fig.tight_layout()
-    return fig
+# The last figure greys out while a newer run computes:
+_STALE_CSS = "<style>.robotlib-stale,.robotlib-stale img{opacity:.45}</style>"
 
 
 class MCLPanel:
     """Sliders and choices that re-run MCL on a route and redraw Figs. 2-4.
+
+    A change shows at once that a run has started (the status line, a
+    progress bar, the old figure greyed) and runs in the background; a newer
+    change cancels a run still going, and changes made during a run are
+    coalesced into one run of the newest settings. Lambda is greyed out
+    unless the paper's resampler (the only one that uses it) is chosen.
 
     Parameters
     ----------
@@ -271,6 +76,9 @@ class MCLPanel:
         Steps to run (default: the whole route).
     seed : int
         The filter's seed (fixed, so a change of result comes from a setting).
+    background : bool, optional
+        Run changes on a worker thread (default: inside a Jupyter kernel). The
+        first run, when the panel is made, is always inline.
     **initial
         Initial ``lam``, ``n``, ``sensor``, ``resampler``, ``tracking``, or a
         ``preset`` (a key of `PRESETS`) for the choices not given.
@@ -278,9 +86,12 @@ class MCLPanel:
     Attributes
     ----------
     history : History
-        The last run.
+        The last finished run.
     figure : matplotlib.figure.Figure
-        The last drawing.
+        The last drawing (not pyplot's: shown as the panel's image only).
+    runner : LiveRunner
+        Runs, cancels and coalesces the panel's runs (``runner.wait()``
+        blocks until the newest has been drawn).
     widget : ipywidgets.VBox
         The panel (displaying the object displays it).
     """
@@ -288,9 +99,11 @@ class MCLPanel:
     CUSTOM = "custom"
     """The preset shown when the choices match no preset."""
 
-    def __init__(self, route, n_steps=None, seed=0, **initial):
+    def __init__(self, route, n_steps=None, seed=0, background=None, **initial):
         import ipywidgets as w
+        from matplotlib.figure import Figure
 
+        from ..plotting.style import WIDTH
         from ..world import world_names
 
         unknown = set(initial) - {*_DEFAULTS, "tracking", "preset"}
@@ -309,10 +122,15 @@ class MCLPanel:
         self.lam = w.FloatSlider(
             value=start["lam"], min=0.0, max=5.0, step=0.1,
             description="lambda", continuous_update=False,
+            tooltip="the paper's resize: N <- N exp(-lambda Ip)",
         )  # fmt: skip
-        self.n = w.IntSlider(
-            value=start["n"], min=50, max=max(50_000, int(BEST["n"])), step=50,
+        self.n = w.SelectionSlider(
+            options=self._count_options(int(start["n"])), value=int(start["n"]),
             description="particles", continuous_update=False,
+        )  # fmt: skip
+        self.n_typed = w.BoundedIntText(
+            value=int(start["n"]), min=1, max=200_000, description="or type",
+            layout=w.Layout(width="170px"),
         )  # fmt: skip
         self.sensor = w.Dropdown(
             options=SENSORS, value=start["sensor"], description="sensor"
@@ -334,29 +152,49 @@ class MCLPanel:
             description="world",
         )
         self.status = w.Label()
-        self.output = w.Output()
+        self.progress = w.IntProgress(
+            value=0, min=0, max=1, layout=w.Layout(width="200px")
+        )
+        self.image = w.Image(format="png", layout=w.Layout(max_width="100%"))
+        self.image.add_class("robotlib-mcl-figure")
         for control in (self.lam, self.n, self.sensor, self.resampler, self.tracking):
             control.observe(self._changed, names="value")
+        self.n_typed.observe(self._typed, names="value")
         self.preset.observe(self._preset_changed, names="value")
         self.world.observe(self._changed, names="value")
         self.widget = w.VBox(
             [
+                w.HTML(_STALE_CSS),
                 w.HBox([self.world, self.preset, self.tracking]),
-                w.HBox([self.lam, self.n]),
+                w.HBox([self.lam, self.n, self.n_typed]),
                 w.HBox([self.sensor, self.resampler]),
-                self.status,
-                self.output,
+                w.HBox([self.progress, self.status]),
+                self.image,
             ]
         )
-        self.figure = plt.figure(figsize=(10, 5.5))
-        plt.close(self.figure)  # shown through the output widget only
+        self.widget.add_class("robotlib-panel")
+        self._grey_unused()
+        self.figure = Figure(figsize=(WIDTH, 5.4))
         self.history: History | None = None
-        self.refresh()
+        self.runner = LiveRunner(self._job, self._done, self._failed, background)
+        self.timings: dict[str, float] = {}
+        inline, self.runner.background = self.runner.background, False
+        try:
+            self.refresh()
+        finally:
+            self.runner.background = inline
+
+    @staticmethod
+    def _count_options(n: int):
+        counts = sorted({*PARTICLE_COUNTS, int(n)})
+        return [(f"{c:,}", c) for c in counts]
 
     @property
     def route(self):
         """The route of the chosen world (driven on first use)."""
-        name = self.world.value
+        return self._route_of(self.world.value)
+
+    def _route_of(self, name):
         if name not in self._routes:
             from ..experiments import drive_route
             from ..world import load_world
@@ -384,16 +222,40 @@ class MCLPanel:
                 return name
         return self.CUSTOM
 
+    def _grey_unused(self) -> None:
+        """Disable the controls the chosen settings ignore (lambda)."""
+        self.lam.disabled = self.resampler.value != RESAMPLERS[0]
+
     def _changed(self, change) -> None:
         if self._holding:
             return
-        self._set(preset=self.matching_preset())
+        self._set(preset=self.matching_preset(), n_typed=int(self.n.value))
+        self._grey_unused()
         self.refresh()
+
+    def _typed(self, change) -> None:
+        if self._holding:
+            return
+        n = int(change["new"])
+        if n in [v for _, v in self.n.options]:
+            self.n.value = n  # runs through _changed
+            return
+        self._holding = True
+        try:
+            self.n.options = self._count_options(n)
+            self.n.value = n
+        finally:
+            self._holding = False
+        self._changed(None)
 
     def _preset_changed(self, change) -> None:
         if self._holding or change["new"] not in PRESETS:
             return
-        self._set(**PRESETS[change["new"]])
+        values = dict(PRESETS[change["new"]])
+        if "n" in values:
+            values["n_typed"] = values["n"]
+        self._set(**values)
+        self._grey_unused()
         self.refresh()
 
     def _set(self, **values) -> None:
@@ -401,28 +263,86 @@ class MCLPanel:
         self._holding = True
         try:
             for name, value in values.items():
-                getattr(self, name).value = value
+                if value is not None:
+                    getattr(self, name).value = value
         finally:
             self._holding = False
 
-    def refresh(self) -> History:
-        """Run the filter with the current settings and redraw."""
-        from IPython.display import display
+    def describe(self, settings=None, world=None) -> str:
+        """One line naming a run's settings (the figure's title)."""
+        s = self.settings() if settings is None else settings
+        text = f"{world or self.world.value}: {s['sensor']} sensor, {s['resampler']}"
+        if s["resampler"] == RESAMPLERS[0]:
+            text += f", lambda {s['lam']:g}"
+        start = "at the true start" if s["tracking"] else "uniform"
+        return text + f", {s['n']:,} particles ({start})"
 
-        route = self.route
-        self.history = run_mcl(route, self.n_steps, seed=self.seed, **self.settings())
-        plot_mcl_run(self.history, route.world, self.figure)
-        loc = self.history.localized_step()
-        err = self.history.error
-        self.status.value = f"{self.world.value}, {self.preset.value}: " + (
-            f"localized from step {loc}; mean error then: {err[loc - 1 :].mean():.2f} m"
-            if loc
-            else f"not localized (final error {err[-1]:.2f} m)"
+    def refresh(self) -> History | None:
+        """Run the filter with the current settings and redraw.
+
+        Shows at once that the run started; returns the new history when
+        the run is inline (tests, scripts, the first run), else None (the
+        panel redraws itself when the run ends: ``runner.wait()`` waits).
+        """
+        request = {
+            "settings": self.settings(),
+            "world": self.world.value,
+            "asked": time.perf_counter(),
+        }
+        self.status.value = f"running: {self.describe(request['settings'])} ..."
+        self.progress.value = 0
+        self.progress.bar_style = "info"
+        self.image.add_class("robotlib-stale")
+        self.timings["feedback_s"] = time.perf_counter() - request["asked"]
+        self.runner.submit(request)
+        return None if self.runner.background else self.history
+
+    def _job(self, request):
+        route = self._route_of(request["world"])
+        last = [0.0]
+
+        def on_step(k, steps):
+            self.runner.check()
+            now = time.perf_counter()
+            if now - last[0] > 0.1 or k == steps:
+                last[0] = now
+                self.progress.max, self.progress.value = steps, k
+
+        history = run_mcl(
+            route, self.n_steps, seed=self.seed, on_step=on_step,
+            **request["settings"],
+        )  # fmt: skip
+        self.runner.check()
+        title = self.describe(request["settings"], request["world"])
+        plot_mcl_run(history, route.world, self.figure, title=title)
+        self.runner.check()
+        buf = io.BytesIO()
+        self.figure.savefig(buf, format="png")
+        return history, buf.getvalue(), route
+
+    def _done(self, request, result) -> None:
+        history, png, route = result
+        self.history = history
+        self.image.value = png
+        self.image.remove_class("robotlib-stale")
+        self.progress.bar_style = "success"
+        self.timings["redraw_s"] = time.perf_counter() - request["asked"]
+        loc = history.localized_step()
+        err = history.error
+        step_ms = float(np.nanmean(history.time_ms)) if len(history) else 0.0
+        if loc:
+            result = f"localized from step {loc}; mean error then: "
+            result += f"{err[loc - 1 :].mean():.2f} m"
+        else:
+            result = f"not localized (final error {err[-1]:.2f} m)"
+        self.status.value = (
+            f"{request['world']}, {self.preset.value}: {result}; "
+            f"{step_ms:.0f} ms per step"
         )
-        self.output.clear_output(wait=True)
-        with self.output:
-            display(self.figure)
-        return self.history
+
+    def _failed(self, request, text) -> None:
+        self.progress.bar_style = "danger"
+        self.status.value = "the run failed: " + text.strip().splitlines()[-1]
 
     def _ipython_display_(self):
         from IPython.display import display

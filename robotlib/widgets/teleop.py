@@ -1,7 +1,8 @@
 """Notebook panel for driving a robot by hand (Lab 0).
 
 `teleop` moves a robot one step and reads its sonar; `TeleopPanel` adds
-buttons and a map. The panel runs headless (its callbacks are plain
+buttons and a map, which shows where the next step and turns would go (it
+redraws when a slider moves). The panel runs headless (its callbacks are plain
 methods), so tests press its buttons programmatically. Imports the robot API
 and plotting; never an estimator.
 """
@@ -14,6 +15,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from ..plotting import plot_robot, plot_sonar, plot_world
+from ..plotting.style import COLORS, WIDTH, legend_outside
 
 __all__ = ["teleop", "TeleopPanel"]
 
@@ -87,6 +89,8 @@ class TeleopPanel:
             value=angle_deg, min=5.0, max=180.0, step=5.0, description="turn [deg]",
             continuous_update=False,
         )  # fmt: skip
+        self.distance.observe(lambda _c: self.draw(), names="value")
+        self.angle.observe(lambda _c: self.draw(), names="value")
         self.buttons = {c: w.Button(description=c) for c in self.COMMANDS}
         for c, b in self.buttons.items():
             b.on_click(lambda _b, c=c: self.send(c))
@@ -98,7 +102,7 @@ class TeleopPanel:
                 self.output,
             ]
         )
-        self.figure = plt.figure(figsize=(7, 3))
+        self.figure = plt.figure(figsize=(WIDTH, 4.0))
         plt.close(self.figure)
         self.pose, self.sonar = r.pose(), r.readsonar()
         self.draw()
@@ -124,9 +128,24 @@ class TeleopPanel:
         if sim is not None:
             plot_world(ax, sim.world)
         plot_sonar(ax, shown, self.sonar)
-        plot_robot(ax, shown)
+        plot_robot(ax, shown, label="robot (true pose)")
+        x, y, th = (float(v) for v in shown)
+        d, turn = float(self.distance.value), math.radians(self.angle.value)
+        ax.annotate(
+            "", (x + d * math.cos(th), y + d * math.sin(th)), (x, y),
+            arrowprops={"arrowstyle": "->", "color": COLORS["path"], "ls": "--"},
+        )  # fmt: skip
+        ax.plot([], [], "--", color=COLORS["path"], label=f"forward: {d:.1f} m")
+        for sign in (1, -1):
+            a = th + sign * turn
+            ax.plot(
+                [x, x + 0.6 * math.cos(a)], [y, y + 0.6 * math.sin(a)], ":",
+                color=COLORS["reference"],
+            )  # fmt: skip
+        ax.plot([], [], ":", color=COLORS["reference"], label=f"turns: {turn:.2f} rad")
         ax.set_xlim(shown[0] - 6, shown[0] + 6)
         ax.set_ylim(shown[1] - 3, shown[1] + 3)
+        legend_outside(ax, "right")
         ax.set_title(f"odometry ({self.pose[0]:.2f}, {self.pose[1]:.2f}) m")
         self.output.clear_output(wait=True)
         with self.output:

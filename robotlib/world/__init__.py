@@ -12,7 +12,7 @@ options and `robotlib._random`).
 """
 
 from .catalog import WORLDS_DIR, load_world, read_world, world_names
-from .fileformat import MAP_MAGICS, WorldFileError
+from .fileformat import MAP_MAGICS, MAX_EXTENT, WorldFileError
 from .geometry import compose, relative, wrap_angle
 from .grid import Grid
 from .mapfile import format_map, parse_map, read_map, write_map
@@ -21,6 +21,7 @@ from .wld import format_wld, parse_wld, read_wld, write_wld
 
 __all__ = [
     "MAP_MAGICS",
+    "MAX_EXTENT",
     "POINT_SIZE",
     "WORLDS_DIR",
     "Grid",

@@ -129,3 +129,174 @@ def nearest_distance(px, py, segments):
         if d < best:
             best = d
     return best
+
+
+# -- a uniform bucket index of segments (large maps) -------------------------
+@nb.njit(**JIT)
+def bucket_counts(segments, x0, y0, size, nbx, nby, margin, counts):
+    """Count into ``counts`` (nby * nbx + 1,) the segments of each bucket.
+
+    A segment goes into every bucket its bounding box, grown by ``margin``,
+    overlaps; ``counts[1 + b]`` receives bucket ``b``'s count (CSR layout).
+    """
+    for m in range(segments.shape[0]):
+        j0, j1, i0, i1 = _bucket_span(segments, m, x0, y0, size, nbx, nby, margin)
+        for i in range(i0, i1 + 1):
+            for j in range(j0, j1 + 1):
+                counts[1 + i * nbx + j] += 1
+
+
+@nb.njit(**JIT)
+def _bucket_span(segments, m, x0, y0, size, nbx, nby, margin):
+    lo_x = min(segments[m, 0], segments[m, 2]) - margin
+    hi_x = max(segments[m, 0], segments[m, 2]) + margin
+    lo_y = min(segments[m, 1], segments[m, 3]) - margin
+    hi_y = max(segments[m, 1], segments[m, 3]) + margin
+    j0 = min(max(int(math.floor((lo_x - x0) / size)), 0), nbx - 1)
+    j1 = min(max(int(math.floor((hi_x - x0) / size)), 0), nbx - 1)
+    i0 = min(max(int(math.floor((lo_y - y0) / size)), 0), nby - 1)
+    i1 = min(max(int(math.floor((hi_y - y0) / size)), 0), nby - 1)
+    return j0, j1, i0, i1
+
+
+@nb.njit(**JIT)
+def bucket_fill(segments, x0, y0, size, nbx, nby, margin, start, items):
+    """Fill ``items`` with segment indices per bucket, ascending (CSR ``start``)."""
+    fill = start[:-1].copy()
+    for m in range(segments.shape[0]):
+        j0, j1, i0, i1 = _bucket_span(segments, m, x0, y0, size, nbx, nby, margin)
+        for i in range(i0, i1 + 1):
+            for j in range(j0, j1 + 1):
+                b = i * nbx + j
+                items[fill[b]] = m
+                fill[b] += 1
+
+
+@nb.njit(**JIT)
+def indexed_nearest(px, py, segments, x0, y0, size, nbx, nby, start, items):
+    """`nearest_distance` through a bucket index: the same number, found sooner.
+
+    Searches square rings of buckets outwards from the point's bucket and
+    stops once the best distance is below the ring's clearance (no segment
+    outside the rings searched can be nearer). A point outside the indexed
+    area is measured against every segment.
+    """
+    j = int(math.floor((px - x0) / size))
+    i = int(math.floor((py - y0) / size))
+    if not (0 <= i < nby and 0 <= j < nbx):
+        return nearest_distance(px, py, segments)
+    # clearance of ring k: distance from the point to the outside of the
+    # (2k+1)^2 block of buckets around its own
+    fx = px - (x0 + j * size)
+    fy = py - (y0 + i * size)
+    inner = min(fx, size - fx, fy, size - fy)
+    best = np.inf
+    rings = max(max(i, nby - 1 - i), max(j, nbx - 1 - j))
+    for k in range(rings + 1):
+        for a in range(i - k, i + k + 1):
+            if a < 0 or a >= nby:
+                continue
+            step = 1 if (a == i - k or a == i + k) else 2 * k
+            b = j - k
+            while b <= j + k:
+                if 0 <= b < nbx:
+                    q = a * nbx + b
+                    for t in range(start[q], start[q + 1]):
+                        m = items[t]
+                        d = point_segment_distance(
+                            px,
+                            py,
+                            segments[m, 0],
+                            segments[m, 1],
+                            segments[m, 2],
+                            segments[m, 3],
+                        )
+                        if d < best:
+                            best = d
+                if step == 0:
+                    break
+                b += step
+        if best < inner + k * size - 1e-9:
+            return best
+    return best
+
+
+@nb.njit(**JIT_PARALLEL)
+def indexed_min_distance(points, segments, x0, y0, size, nbx, nby, start, items, out):
+    """`min_distance_to_segments` through a bucket index (the same numbers)."""
+    for k in nb.prange(points.shape[0]):
+        out[k] = indexed_nearest(
+            points[k, 0], points[k, 1], segments, x0, y0, size, nbx, nby, start, items
+        )
+
+
+@nb.njit(**JIT_PARALLEL)
+def indexed_distance_field(
+    x0, y0, resolution, block, segments, bx0, by0, bsize, nbx, nby, start, items, out
+):
+    """Distance from each cell centre of ``out`` (ny, nx) to the nearest segment.
+
+    The same numbers as `min_distance_to_segments` on the centres, computed
+    block by block (``block`` x ``block`` cells, in parallel): the exact
+    distance ``dc`` at a block's centre bounds every cell's nearest segment
+    to within ``dc + 2 r`` of that centre (``r`` the block's half-diagonal),
+    so each cell is measured only against the few segments there, which the
+    bucket index finds.
+    """
+    ny, nx = out.shape
+    nbj = (nx + block - 1) // block
+    nbi = (ny + block - 1) // block
+    r = 0.5 * math.sqrt(2.0) * block * resolution
+    for q in nb.prange(nbi * nbj):
+        bi = q // nbj
+        bj = q % nbj
+        cx = x0 + (bj + 0.5) * block * resolution
+        cy = y0 + (bi + 0.5) * block * resolution
+        dc = indexed_nearest(cx, cy, segments, bx0, by0, bsize, nbx, nby, start, items)
+        i_lo = bi * block
+        i_hi = min((bi + 1) * block, ny)
+        j_lo = bj * block
+        j_hi = min((bj + 1) * block, nx)
+        if not math.isfinite(dc):
+            for i in range(i_lo, i_hi):
+                for j in range(j_lo, j_hi):
+                    out[i, j] = np.inf
+            continue
+        reach = dc + 2.0 * r + 1e-9
+        ja = min(max(int(math.floor((cx - reach - bx0) / bsize)), 0), nbx - 1)
+        jb = min(max(int(math.floor((cx + reach - bx0) / bsize)), 0), nbx - 1)
+        ia = min(max(int(math.floor((cy - reach - by0) / bsize)), 0), nby - 1)
+        ib = min(max(int(math.floor((cy + reach - by0) / bsize)), 0), nby - 1)
+        total = 0
+        for a in range(ia, ib + 1):
+            total += start[a * nbx + jb + 1] - start[a * nbx + ja]
+        near = np.empty(total, dtype=np.int64)
+        count = 0
+        for a in range(ia, ib + 1):
+            for t in range(start[a * nbx + ja], start[a * nbx + jb + 1]):
+                m = items[t]
+                d = point_segment_distance(
+                    cx,
+                    cy,
+                    segments[m, 0],
+                    segments[m, 1],
+                    segments[m, 2],
+                    segments[m, 3],
+                )
+                if d <= reach:
+                    near[count] = m
+                    count += 1
+        for i in range(i_lo, i_hi):
+            py = y0 + (i + 0.5) * resolution
+            for j in range(j_lo, j_hi):
+                px = x0 + (j + 0.5) * resolution
+                best = np.inf
+                for t in range(count):
+                    m = near[t]
+                    d = point_segment_distance(
+                        px, py, segments[m, 0], segments[m, 1], segments[m, 2],
+                        segments[m, 3],
+                    )  # fmt: skip
+                    if d < best:
+                        best = d
+                out[i, j] = best

@@ -12,6 +12,8 @@ radians. This module is the one place where that conversion happens.
 - ``width W`` and ``height H``: the world's size, mm.
 - ``position x y th``: the robot's start pose, mm, mm, deg (``th`` may be
   left out and is then 0).
+- ``floor W H``: both sizes at once, mm (EyeSim's world files, which are
+  otherwise this format with ``#`` comment lines).
 - ``origin x y``: the lower-left corner of the world, mm. This keyword is a
   robotlib extension (other readers ignore unknown lines); it defaults to
   ``0 0``, the Saphira convention that a world spans ``[0, W] x [0, H]``.
@@ -29,6 +31,28 @@ y1 x2 y2`` a rectangle, four walls (the rectangle ``x1..x2, y1..y2`` rotated by
 ``NumPoints``), ``Resolution`` and every other key, cairn type and section are
 ignored.
 
+MobileSim objects: simulated, or only read
+    robotlib builds its world from the walls and obstacles MobileSim puts
+    in the simulation, and reads (but does not simulate) the rest:
+
+    ============================  ==============================================
+    ``LINES``, ``DATA``           simulated: walls, and points (small crosses)
+    ``Cairn: Sim.BoxObstacle``    simulated: a static box of four walls
+                                  (MobileSim's box can be pushed; robotlib's
+                                  cannot)
+    ``Cairn: RobotHome``          used: the start pose (else the first ``Dock``)
+    ``Cairn: Dock``               used as the start only without a RobotHome;
+                                  no docking or charging
+    ``ForbiddenLine``,            read and ignored: navigation hints, not
+    ``ForbiddenArea``,            obstacles (MobileSim does not simulate them
+    ``Goal``, ``GoalWithHeading``  either)
+    other ``Sim.*`` cairns        ignored (e.g. MobileSim's ``Sim.Robot``
+                                  poses and custom simulated object types
+                                  declared by ``MapInfo: ObjectType``)
+    ``MapInfo``, ``Resolution``,  read and ignored (counts are advisory)
+    ``NumPoints``, ``NumLines``
+    ============================  ==============================================
+
 Decisions
 ---------
 Strictness
@@ -44,6 +68,19 @@ Strictness
     every line of a ``LINES`` or ``DATA`` section must be four or two numbers.
     Segment coordinates may be fractional (the writers emit them when a
     coordinate is not a whole millimetre).
+Encoding
+    UTF-8 (a byte-order mark is skipped), else Latin-1. A file that starts
+    with a UTF-8 byte-order mark but is not UTF-8 further on raises
+    `WorldFileError` at the line of the first bad byte, rather than reading
+    its first line as garbage.
+Size
+    No number may exceed `MAX_EXTENT` (10 km) in magnitude, and no world may
+    be wider or higher than that or reach further from the origin: a larger
+    one raises `WorldFileError` (the line of the number, or the file).
+Lookalike numbers
+    A line whose first token starts with any digit (also non-ASCII ones) or
+    a sign, including the Unicode minus and dashes, is read as a record and
+    so refused with its line, rather than skipped as an unknown keyword.
 Bounds
     The declared rectangle (``.wld``: ``origin`` and ``width``/``height``;
     ``.map``: the union of ``MinPos``/``MaxPos`` and
@@ -80,7 +117,12 @@ import numpy as np
 from .geometry import wrap_angle
 from .model import World
 
-__all__ = ["WorldFileError", "MAP_MAGICS"]
+__all__ = ["WorldFileError", "MAP_MAGICS", "MAX_EXTENT"]
+
+MAX_EXTENT = 10_000.0
+"""Largest world size, and largest distance of any coordinate from the origin, m."""
+_MAX_NUMBER = Decimal(10_000_000)  # MAX_EXTENT in mm: the largest number a file holds
+_SIGNS = "+-.\u2212\u2010\u2011\u2012\u2013\u2014\u2015\ufe63\uff0d\uff0b\u207a\u207b"
 
 MAP_MAGICS = ("2D-Map", "2D-Map-Ex", "2D-Map-Ex2")
 """First lines that mark an ARIA map file."""
@@ -136,15 +178,29 @@ def _lines(text: str) -> list[str]:
     return _LINE_BREAK.split(text)
 
 
+def _looks_numeric(token: str) -> bool:
+    """Whether a line's first token is meant as a number (or a lookalike)."""
+    c = token[0]
+    return c in _SIGNS or c.isdigit() or c.isnumeric()
+
+
 def _short(s: str, n: int = 60) -> str:
     s = s.strip()
     return repr(s if len(s) <= n else s[: n - 3] + "...")
 
 
 def _numbers(
-    tokens: list[str], source: str, lineno: int, what: str, line: str
+    tokens: list[str],
+    source: str,
+    lineno: int,
+    what: str,
+    line: str,
+    limited: bool = True,
 ) -> list[Decimal]:
-    """Parse plain finite decimal numbers (exactly), or raise a located error."""
+    """Parse plain finite decimal numbers (exactly), or raise a located error.
+
+    ``limited``: refuse magnitudes beyond `MAX_EXTENT` (in mm) too.
+    """
     out = []
     for tok in tokens:
         if not _NUMBER.fullmatch(tok):
@@ -156,6 +212,13 @@ def _numbers(
         if not (d.is_finite() and math.isfinite(float(d))):
             raise WorldFileError(
                 source, lineno, f"expected {what}, got {tok!r} (out of range)"
+            )
+        if limited and abs(d) > _MAX_NUMBER:
+            raise WorldFileError(
+                source,
+                lineno,
+                f"expected {what}, got {tok!r}: beyond the {MAX_EXTENT / 1000:g} km"
+                " a world may span",
             )
         out.append(d)
     return out
@@ -234,12 +297,31 @@ def _make_world(
         bounds = (float(xmin), float(ymin), float(xmax), float(ymax))
         if not all(math.isfinite(b) for b in bounds):
             raise WorldFileError(source, None, f"bounds out of range: {bounds}")
+    _check_extent(source, seg, pts, bounds)
     try:
         return World(
             segments=seg, bounds=bounds, start=start, points=pts, name=name, source=path
         )
     except ValueError as exc:  # degenerate contents World refuses
         raise WorldFileError(source, None, f"not a valid world: {exc}") from None
+
+
+def _check_extent(source: str, seg: np.ndarray, pts: np.ndarray, bounds) -> None:
+    """Refuse a world larger than `MAX_EXTENT` or reaching further from the origin."""
+    xy = np.concatenate([seg[:, :2], seg[:, 2:], pts])
+    if bounds is not None:
+        xy = np.concatenate([xy, [bounds[:2], bounds[2:]]])
+    if not len(xy):
+        return
+    lo, hi = xy.min(axis=0), xy.max(axis=0)
+    if np.any(hi - lo > MAX_EXTENT) or np.any(np.abs(xy) > MAX_EXTENT):
+        raise WorldFileError(
+            source,
+            None,
+            f"world spans x {lo[0]:g}..{hi[0]:g} m, y {lo[1]:g}..{hi[1]:g} m: larger"
+            f" than the {MAX_EXTENT / 1000:g} km limit (size and distance from the"
+            " origin)",
+        )
 
 
 def _read_text(path_or_file: str | os.PathLike | IO) -> tuple[str, str, Path | None]:
@@ -253,8 +335,22 @@ def _read_text(path_or_file: str | os.PathLike | IO) -> tuple[str, str, Path | N
         name = str(path)
         data = path.read_bytes()
     if isinstance(data, bytes):
-        try:
-            data = data.decode("utf-8")
-        except UnicodeDecodeError:
-            data = data.decode("latin-1")
+        data = _decode(data, name)
     return data, name, path
+
+
+def _decode(data: bytes, source: str) -> str:
+    """Bytes as text: UTF-8 (BOM skipped), else Latin-1; a BOM then bad bytes: error."""
+    bom = data.startswith(b"\xef\xbb\xbf")
+    try:
+        return data.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        if bom:
+            line = data[: exc.start].count(b"\n") + 1
+            raise WorldFileError(
+                source,
+                line,
+                f"the file starts with a UTF-8 byte-order mark but byte "
+                f"{data[exc.start]:#04x} at offset {exc.start} is not UTF-8",
+            ) from None
+        return data.decode("latin-1")

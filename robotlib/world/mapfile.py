@@ -23,6 +23,7 @@ from .fileformat import (
     _fmt_deg,
     _fmt_mm,
     _lines,
+    _looks_numeric,
     _make_world,
     _mm,
     _numbers,
@@ -94,7 +95,8 @@ def parse_map(
                     raise WorldFileError(
                         source, lineno, f"expected {what}, got {_short(line)}"
                     )
-                boxes[key] = tuple(_numbers(vals, source, lineno, what, line))
+                # not limited: ARIA writes an inverted +-2^31 pair for "no data"
+                boxes[key] = tuple(_numbers(vals, source, lineno, what, line, False))
             elif key == "Cairn":
                 cairn = _parse_cairn(args, source, lineno, line)
                 if cairn is None:
@@ -128,7 +130,7 @@ def parse_map(
             points.append(
                 [_mm(v) for v in _numbers(tokens, source, lineno, what, line)]
             )
-        elif section is None and head[0] in "0123456789+-.":
+        elif section is None and _looks_numeric(head):
             raise WorldFileError(
                 source,
                 lineno,

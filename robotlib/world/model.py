@@ -18,6 +18,7 @@ from .._random import as_rng
 from ..p3dx import ROBOT_RADIUS
 from . import _kernels
 from .grid import Grid
+from .index import INDEX_MIN_SEGMENTS, SegmentIndex
 
 __all__ = ["World", "POINT_SIZE"]
 
@@ -26,6 +27,7 @@ POINT_SIZE = 0.02
 """Side of the small cross that stands for one map DATA point, m."""
 
 _MAX_REDRAWS = 20
+_FIELD_BLOCK = 4  # cells a side of the distance field's blocks on large maps
 
 
 @dataclass(frozen=True, eq=False)
@@ -102,6 +104,18 @@ class World:
 
     __hash__ = None
 
+    def __setstate__(self, state: dict) -> None:
+        """Unpickle with the arrays read-only again, as built.
+
+        Pickling drops NumPy's read-only flag; numba types a writable array
+        differently, so an unpickled world would compile every kernel anew.
+        """
+        for value in (*state.values(), *(state.get("_cache") or {}).values()):
+            for a in (value, getattr(value, "data", None)):
+                if isinstance(a, np.ndarray):
+                    a.setflags(write=False)
+        self.__dict__.update(state)
+
     @property
     def size(self) -> tuple[float, float]:
         """Width and height of the bounds, m."""
@@ -143,9 +157,21 @@ class World:
         """
         xy = np.asarray(xy, dtype=float)
         flat = np.ascontiguousarray(xy.reshape(-1, 2))
+        if len(self.obstacles) >= INDEX_MIN_SEGMENTS:
+            return self.segment_index().distances(flat).reshape(xy.shape[:-1])
         out = np.empty(len(flat))
         _kernels.min_distance_to_segments(flat, self.obstacles, out)
         return out.reshape(xy.shape[:-1])
+
+    def segment_index(self) -> SegmentIndex:
+        """Return the obstacles sorted into buckets (`SegmentIndex`), built once.
+
+        Distances and rays through it are the same numbers as against every
+        obstacle, found much sooner on a map of many walls or points.
+        """
+        if "index" not in self._cache:
+            self._cache["index"] = SegmentIndex.build(self.obstacles, self.bounds)
+        return self._cache["index"]
 
     def is_free(self, xy, radius: float = ROBOT_RADIUS) -> np.ndarray:
         """Test whether a disc of ``radius`` at each point touches nothing.
@@ -221,8 +247,16 @@ class World:
         key = ("distance", float(resolution))
         if key not in self._cache:
             shape, origin = self._empty_grid(resolution)
-            grid = Grid(np.zeros(shape), origin, float(resolution))
-            dist = self.distance_to_walls(grid.centres())
+            if len(self.obstacles) >= INDEX_MIN_SEGMENTS:  # block by block
+                dist = np.empty(shape)
+                index = self.segment_index()
+                _kernels.indexed_distance_field(
+                    origin[0], origin[1], float(resolution), _FIELD_BLOCK,
+                    index.segments, *index.args, dist,
+                )  # fmt: skip
+            else:
+                grid = Grid(np.zeros(shape), origin, float(resolution))
+                dist = self.distance_to_walls(grid.centres())
             dist.setflags(write=False)
             self._cache[key] = Grid(dist, origin, float(resolution))
         return self._cache[key]
@@ -251,7 +285,16 @@ class World:
         key = ("free", float(resolution), float(radius))
         if key not in self._cache:
             dist = self.distance_field(resolution)
-            free = self.is_free(dist.centres(), radius) & (dist.data > radius)
+            # is_free at the centres, with the distances already measured
+            xy = dist.centres()
+            xmin, ymin, xmax, ymax = self.bounds
+            free = (
+                (xy[..., 0] - radius >= xmin)
+                & (xy[..., 0] + radius <= xmax)
+                & (xy[..., 1] - radius >= ymin)
+                & (xy[..., 1] + radius <= ymax)
+                & (dist.data > radius)
+            )
             i, j = dist.cell_of(np.array(self.start[:2]))
             ny, nx = free.shape
             if 0 <= i < ny and 0 <= j < nx and free[i, j]:

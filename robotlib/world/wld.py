@@ -21,6 +21,7 @@ from .fileformat import (
     _fmt_deg,
     _fmt_mm,
     _lines,
+    _looks_numeric,
     _make_world,
     _mm,
     _mm_decimal,
@@ -70,7 +71,7 @@ def parse_wld(
         if not tokens:
             continue
         first = tokens[0]
-        if first[0] in "0123456789+-.":
+        if _looks_numeric(first):
             if len(tokens) != 4:
                 raise WorldFileError(
                     source,
@@ -98,6 +99,18 @@ def parse_wld(
                 width = v
             else:
                 height = v
+        elif key == "floor":  # EyeSim: floor W H
+            what = "'floor <width mm> <height mm>' with two positive numbers"
+            if len(args) != 2:
+                raise WorldFileError(
+                    source, lineno, f"expected {what}, got {_short(line)}"
+                )
+            w, h = _numbers(args, source, lineno, what, line)
+            if not (w > 0 and h > 0):
+                raise WorldFileError(
+                    source, lineno, f"expected {what}, got {_short(line)}"
+                )
+            width, height = w, h
         elif key == "position":
             what = "'position x y th' (mm, mm, deg)"
             if len(args) not in (2, 3):
@@ -116,7 +129,7 @@ def parse_wld(
         # any other keyword: ignored
     if not segments and width is None and height is None and start is None:
         raise WorldFileError(
-            source, None, "no walls, width, height or position: not a world file"
+            source, None, "no walls, width, height, floor or position: not a world file"
         )
     declared = None
     if width is not None or height is not None:

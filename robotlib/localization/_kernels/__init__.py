@@ -57,7 +57,12 @@ from .table_models import (
     paper_table_loglik,
     paper_table_loglik_parallel,
 )
-from .tables import build_cone_table, expected_table, expected_table_parallel
+from .tables import (
+    build_cone_table,
+    build_cone_table_indexed,
+    expected_table,
+    expected_table_parallel,
+)
 from .weights import (
     position_spread,
     update_weights,
@@ -76,6 +81,7 @@ __all__ = [
     "beam_table_loglik_parallel",
     "beam_table_step",
     "build_cone_table",
+    "build_cone_table_indexed",
     "cumulative",
     "expected_scan_blocks",
     "expected_scan_blocks_parallel",

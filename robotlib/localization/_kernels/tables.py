@@ -10,7 +10,7 @@ import numba as nb
 import numpy as np
 
 from ..._config import JIT, JIT_PARALLEL, serial_and_parallel
-from ...sensing._kernels import _EPS, cone_echo
+from ...sensing._kernels import _EPS, cone_echo, indexed_cone_echo
 from ...world._kernels import point_segment_distance
 from .common import _TWO_PI
 
@@ -219,6 +219,52 @@ def build_cone_table(
                     i,
                     j,
                 )
+
+
+@nb.njit(**JIT_PARALLEL)
+def build_cone_table_indexed(
+    segments, x0, y0, resolution, n_bins, ray_step, n_rays, cone, max_range,
+    min_range, cos_specular, bx0, by0, bsize, nbx, nby, start, items, field,
+    table,
+):  # fmt: skip
+    """`build_cone_table` with every ray cast through a bucket index of the walls.
+
+    The same table (each ray finds the same nearest wall, see
+    `robotlib.sensing._kernels.indexed_ray`), in time that grows with the
+    walls near each ray rather than with all of them: for maps of many
+    walls or points. ``field`` is the distance field on the table's own
+    cells (rays jump over clear space with it). Rows are filled in parallel.
+    """
+    ny, nx, _ = table.shape
+    half = (n_rays - 1) // 2 if n_rays > 1 else 0
+    for i in nb.prange(ny):
+        rays = np.empty(n_bins)
+        cy = y0 + (i + 0.5) * resolution
+        for j in range(nx):
+            cx = x0 + (j + 0.5) * resolution
+            if ray_step > 0:
+                for b in range(n_bins):
+                    rays[b] = indexed_cone_echo(
+                        cx, cy, b * _TWO_PI / n_bins, segments, 1, 0.0, max_range,
+                        cos_specular, bx0, by0, bsize, nbx, nby, start, items,
+                        field, x0, y0, resolution,
+                    )  # fmt: skip
+            for b in range(n_bins):
+                if ray_step > 0:
+                    echo = np.inf
+                    for k in range(-half, half + 1):
+                        r = rays[(b + k * ray_step) % n_bins]
+                        if r < echo:
+                            echo = r
+                else:
+                    echo = indexed_cone_echo(
+                        cx, cy, b * _TWO_PI / n_bins, segments, n_rays, cone,
+                        max_range, cos_specular, bx0, by0, bsize, nbx, nby, start,
+                        items, field, x0, y0, resolution,
+                    )  # fmt: skip
+                z = max_range if echo >= max_range else echo
+                z = min(max(z, min_range), max_range)
+                table[i, j, b] = np.uint16(round(z * 1000.0))
 
 
 @nb.njit(**JIT, inline="always")

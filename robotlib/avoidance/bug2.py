@@ -1,0 +1,126 @@
+"""Bug2 (Lumelsky and Stepanov 1987) on sonar and odometry, without a map.
+
+The m-line runs from where the robot starts (its first odometry pose) to the
+goal. Bug2 drives along it towards the goal until the front sonars see an
+obstacle (the hit point), then follows the obstacle's boundary (a
+`WallFollower`, the obstacle on the left) until it meets the m-line again
+nearer the goal than the hit point, and leaves the boundary there. If it
+comes back to the hit point without leaving, the goal is unreachable and it
+reports a local minimum.
+
+Imports: `robotlib.avoidance.base` and `reactive`; never plotting.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .base import LOCAL_MINIMUM, Controller
+from .reactive import WallFollower
+
+__all__ = ["Bug2"]
+
+
+class Bug2(Controller):
+    """Bug2 on the front sonars.
+
+    Parameters
+    ----------
+    goal : array_like, optional
+        Goal (odometry frame), m.
+    hit : float
+        The front sonars (+-10, +-30 deg) closer than this make a hit point, m.
+    line_tolerance : float
+        On the m-line within this distance, m.
+    speed : float
+        Speed along the m-line, m/s.
+    follow_distance : float
+        Distance kept from the boundary, m.
+    tolerance, max_speed, max_turn : float
+        See `Controller`.
+
+    Attributes
+    ----------
+    mode : str
+        ``"goal"`` (on the m-line) or ``"follow"`` (on a boundary).
+    hit_point : numpy.ndarray or None
+        Where the current boundary was met.
+    """
+
+    name = "Bug2"
+
+    def __init__(
+        self,
+        goal=None,
+        hit: float = 0.7,
+        line_tolerance: float = 0.15,
+        speed: float = 0.4,
+        follow_distance: float = 0.6,
+        tolerance: float = 0.3,
+        max_speed: float = 0.5,
+        max_turn: float = math.radians(90.0),
+    ):
+        self.hit = float(hit)
+        self.line_tolerance = float(line_tolerance)
+        self.speed = float(speed)
+        self.follower = WallFollower(
+            side="left",
+            distance=follow_distance,
+            speed=speed * 0.75,
+            front=hit,
+            max_speed=max_speed,
+            max_turn=max_turn,
+        )
+        super().__init__(goal, tolerance, max_speed, max_turn)
+
+    def _reset(self) -> None:
+        self.mode = "goal"
+        self.start = None
+        self.hit_point = None
+        self._left_hit = False
+        self.follower.reset()
+
+    def _on_m_line(self, xy: np.ndarray) -> bool:
+        a, b = self.start, self.goal
+        ab = b - a
+        t = float(np.dot(xy - a, ab) / max(np.dot(ab, ab), 1e-12))
+        foot = a + min(max(t, 0.0), 1.0) * ab
+        return bool(np.hypot(*(xy - foot)) < self.line_tolerance)
+
+    def _command(self, sonar, pose):
+        if self.goal is None:
+            return 0.0, 0.0
+        xy = np.array(pose[:2])
+        if self.start is None:
+            self.start = xy.copy()
+        bearing, dist = self.goal_direction(pose)
+        ahead = min(sonar[2], sonar[3], sonar[4], sonar[5])
+        if self.mode == "goal":
+            if ahead < self.hit and abs(bearing) < math.pi / 2:
+                self.mode = "follow"
+                self.hit_point = xy.copy()
+                self._hit_dist = dist
+                self._left_hit = False
+                self.follower.reset()
+            else:
+                w = 1.5 * bearing
+                v = self.speed * max(0.0, math.cos(bearing)) * min(1.0, dist)
+                return v, w
+        # following the boundary
+        away = float(np.hypot(*(xy - self.hit_point)))
+        if away > 0.5:
+            self._left_hit = True
+        elif self._left_hit and away < 0.3:
+            self.status = LOCAL_MINIMUM  # round the obstacle and back: no way
+            return 0.0, 0.0
+        if (
+            self._left_hit
+            and dist < self._hit_dist - 0.3
+            and self._on_m_line(xy)
+            and abs(bearing) < math.pi / 2
+        ):
+            self.mode = "goal"
+            return 0.0, 1.5 * bearing
+        return self.follower.command(sonar, pose)

@@ -1,0 +1,452 @@
+"""Answers not shipped: find student code that reaches the library's own answers.
+
+Each exercise lists (``writes``) the dotted library functions whose work it
+asks for. Two defences, both keyed on those lists:
+
+- `scan_code`, static, in the grader: the student's cells are parsed and
+  every route to a listed function is followed: imports and aliases
+  (``from robotlib.localization.paper import innovation_weights as f``),
+  attribute chains, re-exports (`aliases` finds every module or class
+  attribute naming the same object), ``getattr``/``importlib`` with
+  constant strings, ``exec``/``eval`` of constant strings, names in string
+  constants, reading ``solutions/`` or notebooks; dynamic machinery
+  (``exec``, ``importlib``, ``sys.modules``, subprocesses) in an exercise's
+  own cell counts as reaching, elsewhere it is flagged;
+- `arm`, at run time, in the sandboxed student process: every listed
+  function, under every name a loaded module or class gives it, is replaced
+  by a tripwire that reports (on the grader's channel) and raises, so routes
+  the static pass cannot see (strings built at run time, library calls that
+  do the work indirectly) are caught when they run. Modules imported or
+  reloaded later are re-armed by an import hook.
+
+Imports nothing of robotlib's at module level (`aliases` imports the library
+to resolve names).
+"""
+
+from __future__ import annotations
+
+import ast
+import importlib
+import pkgutil
+import sys
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass
+
+__all__ = ["Finding", "aliases", "resolve", "scan_code", "arm", "Tripwire"]
+
+DYNAMIC = {
+    "exec": "exec",
+    "eval": "eval",
+    "compile": "compile",
+    "__import__": "__import__",
+    "importlib": "importlib",
+    "reload": "importlib.reload",
+    "modules": "sys.modules",
+    "meta_path": "sys.meta_path",
+    "subprocess": "a subprocess",
+    "system": "os.system",
+    "popen": "os.popen",
+    "execv": "os.exec*",
+    "execve": "os.exec*",
+    "execl": "os.exec*",
+    "multiprocessing": "multiprocessing",
+    "ctypes": "ctypes",
+    "getsource": "inspect.getsource",
+    "__code__": "__code__",
+    "__globals__": "__globals__",
+    "__closure__": "__closure__",
+    "__wrapped__": "__wrapped__",
+    "get_objects": "gc.get_objects",
+    "get_referents": "gc.get_referents",
+}
+"""Names of dynamic machinery: reaching with it in an exercise cell scores zero."""
+
+
+@dataclass(frozen=True)
+class Finding:
+    """One route from student code to a listed function (or to the answers)."""
+
+    function: str  # the listed name, or what was used ("exec", "solutions/")
+    how: str  # e.g. "imported as f", "getattr with a string"
+    line: int = 0
+    listed: bool = True  # False: dynamic machinery or reading the solutions
+
+
+def resolve(dotted: str):
+    """Import the object a dotted name names (``pkg.mod.Class.attr``)."""
+    parts = dotted.split(".")
+    for i in range(len(parts), 0, -1):
+        try:
+            obj = importlib.import_module(".".join(parts[:i]))
+        except ImportError:
+            continue
+        for attr in parts[i:]:
+            obj = getattr(obj, attr)
+        return obj
+    raise ImportError(f"cannot import {dotted}")
+
+
+def _import_all(root: str = "robotlib") -> None:
+    pkg = importlib.import_module(root)
+    for info in pkgutil.walk_packages(pkg.__path__, root + "."):
+        if info.name.split(".")[-1] in ("__main__", "cli") or ".course" in info.name:
+            continue
+        try:
+            importlib.import_module(info.name)
+        except Exception:  # noqa: BLE001 - an optional dependency missing
+            continue
+
+
+def _raw(obj):
+    return getattr(obj, "__func__", obj)
+
+
+def _places(targets: dict[int, str], roots=("robotlib",)):
+    """Yield ``(container, attr, listed, dotted)`` for each place a target sits."""
+    for name, mod in list(sys.modules.items()):
+        if mod is None or not name.startswith(roots):
+            continue
+        for attr, val in list(vars(mod).items()):
+            if id(_raw(val)) in targets:
+                yield mod, attr, targets[id(_raw(val))], f"{name}.{attr}"
+            elif isinstance(val, type) and val.__module__.startswith(roots):
+                for k, v in list(vars(val).items()):
+                    if id(_raw(v)) in targets:
+                        yield val, k, targets[id(_raw(v))], f"{name}.{attr}.{k}"
+
+
+def _targets(writes: Iterable[str]) -> dict[int, str]:
+    out = {}
+    for w in writes:
+        try:
+            out[id(_raw(resolve(w)))] = w
+        except (ImportError, AttributeError):
+            continue
+    return out
+
+
+def aliases(writes: Iterable[str]) -> dict[str, str]:
+    """Map every dotted path naming a listed function to the listed name.
+
+    Imports the whole library first so that re-exports are found.
+
+    Raises
+    ------
+    ImportError
+        If a listed name does not exist (a lab's metadata is wrong).
+    """
+    writes = list(writes)
+    for w in writes:
+        resolve(w)
+    _import_all()
+    out = {w: w for w in writes}
+    for _, _, listed, dotted in _places(_targets(writes)):
+        out[dotted] = listed
+    return out
+
+
+# -- static analysis ---------------------------------------------------------------
+
+
+def _python(source: str) -> str:
+    try:
+        from IPython.core.inputtransformer2 import TransformerManager
+
+        return TransformerManager().transform_cell(source)
+    except Exception:  # noqa: BLE001 - IPython missing or a transformer failed
+        return source
+
+
+def _const_str(node) -> str | None:
+    if isinstance(node, ast.Constant) and isinstance(node.value, str):
+        return node.value
+    if isinstance(node, ast.BinOp) and isinstance(node.op, ast.Add):
+        a, b = _const_str(node.left), _const_str(node.right)
+        return a + b if a is not None and b is not None else None
+    if isinstance(node, ast.JoinedStr):
+        parts = [_const_str(v) for v in node.values]
+        return "".join(parts) if all(p is not None for p in parts) else None
+    return None
+
+
+class _Scanner(ast.NodeVisitor):
+    def __init__(self, names: dict[str, str]):
+        self.names = names  # alias path -> listed
+        self.lasts = {p.rsplit(".", 1)[-1]: w for p, w in names.items()}
+        self.env: dict[str, str] = {}  # local name -> dotted path
+        self.found: list[Finding] = []
+        self.docstrings: set[int] = set()
+
+    def hit(self, dotted: str, how: str, node) -> bool:
+        for path, listed in self.names.items():
+            if dotted == path or path.startswith(dotted + ".") and how == "star":
+                self.found.append(Finding(listed, how, getattr(node, "lineno", 0)))
+                return True
+        return False
+
+    def dotted(self, node) -> str | None:
+        if isinstance(node, ast.Name):
+            return self.env.get(node.id)
+        if isinstance(node, ast.Attribute):
+            base = self.dotted(node.value)
+            return f"{base}.{node.attr}" if base else None
+        if isinstance(node, ast.Call):
+            f = self.dotted(node.func) or ""
+            args = node.args
+            if (
+                f.endswith("import_module")
+                or f == "__import__"
+                or (isinstance(node.func, ast.Name) and node.func.id == "__import__")
+            ):
+                s = _const_str(args[0]) if args else None
+                return s
+            if isinstance(node.func, ast.Name) and node.func.id == "getattr":
+                if len(args) >= 2:
+                    base, s = self.dotted(args[0]), _const_str(args[1])
+                    if base and s:
+                        return f"{base}.{s}"
+        return None
+
+    def visit_Module(self, node):
+        self._docstring(node)
+        self.generic_visit(node)
+
+    def _docstring(self, node):
+        body = getattr(node, "body", [])
+        if body and isinstance(body[0], ast.Expr):
+            if isinstance(body[0].value, ast.Constant):
+                self.docstrings.add(id(body[0].value))
+
+    def visit_FunctionDef(self, node):
+        self._docstring(node)
+        self.generic_visit(node)
+
+    visit_AsyncFunctionDef = visit_FunctionDef  # noqa: N815
+    visit_ClassDef = visit_FunctionDef  # noqa: N815
+
+    def visit_Import(self, node):
+        for a in node.names:
+            if a.asname:
+                self.env[a.asname] = a.name
+            else:
+                top = a.name.split(".")[0]
+                self.env[top] = top
+            self.hit(a.name, "imported", node)
+
+    def visit_ImportFrom(self, node):
+        if node.level or not node.module:
+            return
+        for a in node.names:
+            if a.name == "*":
+                self.hit(node.module, "star", node)
+                continue
+            path = f"{node.module}.{a.name}"
+            self.env[a.asname or a.name] = path
+            how = f"imported as {a.asname}" if a.asname else "imported"
+            self.hit(path, how, node)
+
+    def visit_Assign(self, node):
+        self.generic_visit(node)
+        d = self.dotted(node.value)
+        if d:
+            for t in node.targets:
+                if isinstance(t, ast.Name):
+                    self.env[t.id] = d
+
+    def visit_Attribute(self, node):
+        d = self.dotted(node)
+        if not (d and self.hit(d, "attribute", node)):
+            self.generic_visit(node)
+        if node.attr in DYNAMIC:
+            self.found.append(Finding(DYNAMIC[node.attr], "used", node.lineno, False))
+
+    def visit_Name(self, node):
+        if node.id in DYNAMIC:
+            self.found.append(Finding(DYNAMIC[node.id], "used", node.lineno, False))
+
+    def visit_Call(self, node):
+        d = self.dotted(node)
+        if d and d in self.names:
+            self.hit(d, "looked up by a string", node)
+        f = node.func
+        if isinstance(f, ast.Name) and f.id in ("exec", "eval", "compile"):
+            s = _const_str(node.args[0]) if node.args else None
+            if s is not None:
+                for fd in scan_code(s, self.names):
+                    self.found.append(Finding(fd.function, f"in {f.id}()", node.lineno))
+        self.generic_visit(node)
+
+    def visit_Constant(self, node):
+        if not isinstance(node.value, str) or id(node) in self.docstrings:
+            return
+        self._string(node.value, node)
+
+    def visit_BinOp(self, node):
+        s = _const_str(node)
+        if s is not None:
+            self._string(s, node)
+        self.generic_visit(node)
+
+    def _string(self, s: str, node) -> None:
+        if s.strip() in self.lasts:
+            listed = self.lasts[s.strip()]
+            self.found.append(Finding(listed, "named in a string", node.lineno))
+        for path, listed in self.names.items():
+            if path in s:
+                self.found.append(Finding(listed, "named in a string", node.lineno))
+        low = s.lower()
+        if "solutions" in low and ("/" in low or "ipynb" in low) or ".ipynb" in low:
+            self.found.append(
+                Finding("solutions/", "reads notebooks", node.lineno, False)
+            )
+
+
+def scan_code(source: str, names: dict[str, str]) -> list[Finding]:
+    """Find the routes from ``source`` to the functions of ``names``.
+
+    Parameters
+    ----------
+    source : str
+        A cell's code (IPython syntax allowed).
+    names : dict
+        `aliases` of the listed functions.
+
+    Returns
+    -------
+    list of Finding
+        ``listed=True`` findings name a listed function; ``listed=False``
+        ones name dynamic machinery or reading notebooks. A cell that does not
+        parse gives no findings (it fails when run).
+    """
+    try:
+        tree = ast.parse(_python(source))
+    except (SyntaxError, ValueError):
+        return []
+    sc = _Scanner(names)
+    sc.visit(tree)
+    seen, out = set(), []
+    for f in sc.found:
+        if (f.function, f.how) not in seen:
+            seen.add((f.function, f.how))
+            out.append(f)
+    return out
+
+
+# -- run-time tripwires --------------------------------------------------------------
+
+
+class Tripwire(RuntimeError):
+    """Raised when graded code calls a library function an exercise asks for."""
+
+
+def _tripwire(listed: str, report: Callable[[str], None]):
+    def tripwire(*args, **kwargs):
+        report(listed)
+        raise Tripwire(f"{listed} is the exercise's own work: write it yourself")
+
+    tripwire.__name__ = listed.rsplit(".", 1)[-1]
+    tripwire.__qualname__ = tripwire.__name__
+    return tripwire
+
+
+def arm(writes: Iterable[str], report: Callable[[str], None], namespaces=()) -> int:
+    """Replace every listed function, wherever it is named, by a tripwire.
+
+    Parameters
+    ----------
+    writes : iterable of str
+        The listed functions.
+    report : callable
+        Called with the listed name when a tripwire fires (before it raises).
+    namespaces : iterable of dict
+        More namespaces to clean (e.g. the notebook's globals).
+
+    Returns
+    -------
+    int
+        How many places were armed.
+    """
+    writes = list(writes)
+    if not writes:
+        return 0
+    targets = _targets(writes)  # imports the listed functions' modules only
+    wires = {w: _tripwire(w, report) for w in writes}
+    n = 0
+
+    def put(container, attr, listed):
+        nonlocal n
+        old = vars(container)[attr] if isinstance(container, type) else None
+        wire = wires[listed]
+        if isinstance(old, staticmethod):
+            wire = staticmethod(wire)
+        elif isinstance(old, classmethod):
+            wire = classmethod(wire)
+        setattr(container, attr, wire)
+        n += 1
+
+    for container, attr, listed, _ in list(_places(targets)):
+        put(container, attr, listed)
+    for w in writes:  # the listed name itself, wherever it lives
+        parent, _, attr = w.rpartition(".")
+        try:
+            container = resolve(parent)
+        except (ImportError, AttributeError):
+            continue
+        if id(_raw(getattr(container, attr, None))) in targets:
+            put(container, attr, w)
+    for ns in namespaces:
+        for k, v in list(ns.items()):
+            if id(_raw(v)) in targets:
+                ns[k] = wires[targets[id(_raw(v))]]
+                n += 1
+    _hook(wires, targets)
+    return n
+
+
+def _hook(wires: dict, targets: dict) -> None:
+    """Re-arm robotlib modules executed (imported or reloaded) from now on."""
+    import importlib.abc
+
+    def rearm(module):
+        for attr, val in list(vars(module).items()):
+            if id(_raw(val)) in targets:
+                setattr(module, attr, wires[targets[id(_raw(val))]])
+        for w, wire in wires.items():
+            mod, _, attr = w.rpartition(".")
+            if module.__name__ == mod and hasattr(module, attr):
+                setattr(module, attr, wire)
+            owner, _, cls = mod.rpartition(".")
+            if module.__name__ == owner and isinstance(getattr(module, cls, 0), type):
+                setattr(getattr(module, cls), attr, wire)
+
+    class Loader(importlib.abc.Loader):
+        def __init__(self, inner):
+            self.inner = inner
+
+        def create_module(self, spec):
+            return self.inner.create_module(spec)
+
+        def exec_module(self, module):
+            self.inner.exec_module(module)
+            rearm(module)
+
+    class Finder(importlib.abc.MetaPathFinder):
+        def find_spec(self, name, path, target=None):
+            if not name.startswith("robotlib.") or name.startswith("robotlib.course"):
+                return None
+            for f in sys.meta_path:
+                if f is self or not hasattr(f, "find_spec"):
+                    continue
+                spec = f.find_spec(name, path, target)
+                if spec is not None:
+                    if spec.loader is not None:
+                        spec.loader = Loader(spec.loader)
+                    return spec
+            return None
+
+    sys.meta_path.insert(0, Finder())
+    for name in [n for n in sys.modules if n.startswith("robotlib.")]:
+        mod = sys.modules.get(name)
+        spec = getattr(mod, "__spec__", None)
+        if spec is not None and spec.loader is not None:
+            spec.loader = Loader(spec.loader)

@@ -1,0 +1,258 @@
+"""Grades on disk: per-submission records, the gradebook CSV, feedback, manual points.
+
+- `Result`: one submission's grade.
+- `Records`: one JSON file per submission in ``<out>-records/``, written
+  atomically (temporary file, fsync, rename) as soon as it is graded, so an
+  interrupted class resumes where it stopped (`Records.done`).
+- `write_gradebook`: the CSV, one row per student, rewritten atomically.
+- `feedback_text` / `write_feedback`: a Markdown file per student, named by a
+  slug plus a hash of the student's name (names differing by case, spaces or
+  accents never collide).
+- `export_manual` / `read_manual`: the written answers of every student in
+  one file for the instructor (``<out>-manual.csv``: student, grade id,
+  points, rubric, answer, a ``score`` column to fill in); `read_manual`
+  reads it back to fold the points into the results.
+
+Imports `notebooks` only.
+"""
+
+from __future__ import annotations
+
+import csv
+import hashlib
+import io
+import json
+import os
+import re
+import unicodedata
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+
+from .notebooks import CheckCell
+
+__all__ = [
+    "Result",
+    "Records",
+    "write_gradebook",
+    "gradebook_rows",
+    "feedback_text",
+    "write_feedback",
+    "export_manual",
+    "read_manual",
+    "slug",
+]
+
+
+@dataclass
+class Result:
+    """The grade of one submission."""
+
+    student: str
+    points: dict[str, float]
+    reasons: dict[str, str]
+    max_points: float
+    status: str = "ok"
+    seconds: float = 0.0
+    passes: int = 0
+    flags: list[str] = field(default_factory=list)
+    check_lines: dict[str, dict] = field(default_factory=dict)
+    details: dict[str, str] = field(default_factory=dict)  # gid -> feedback text
+    answers: dict[str, str] = field(default_factory=dict)  # manual gid -> answer
+    source: str = ""
+
+    @property
+    def total(self) -> float:
+        """Sum of the points earned."""
+        return float(sum(self.points.values()))
+
+    def to_json(self) -> dict:
+        """Return the record written to disk."""
+        return asdict(self)
+
+    @classmethod
+    def from_json(cls, data: dict) -> Result:
+        """Read a record back."""
+        names = set(cls.__dataclass_fields__)
+        return cls(**{k: v for k, v in data.items() if k in names})
+
+
+def slug(name: str) -> str:
+    """Return a file name for ``name``: readable, unique (hashes the exact name)."""
+    ascii_ = unicodedata.normalize("NFKD", name).encode("ascii", "ignore").decode()
+    base = re.sub(r"[^A-Za-z0-9_.@-]+", "_", ascii_).strip("._")[:60] or "student"
+    digest = hashlib.sha1(name.encode("utf-8", "surrogateescape")).hexdigest()[:8]
+    return f"{base}-{digest}"
+
+
+def _atomic(path: Path, text: str) -> None:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    with open(tmp, "w", encoding="utf-8") as f:
+        f.write(text)
+        f.flush()
+        os.fsync(f.fileno())
+    tmp.replace(path)
+
+
+class Records:
+    """One durable JSON record per graded submission, in a folder."""
+
+    def __init__(self, folder: str | Path, lab: str):
+        self.folder = Path(folder)
+        self.lab = lab
+        self.folder.mkdir(parents=True, exist_ok=True)
+
+    def path(self, student: str) -> Path:
+        """Return the record file of ``student``."""
+        return self.folder / f"{slug(student)}.json"
+
+    def save(self, result: Result, fingerprint: str) -> None:
+        """Write ``result`` (atomically, synced to disk)."""
+        data = {"lab": self.lab, "fingerprint": fingerprint, **result.to_json()}
+        _atomic(self.path(result.student), json.dumps(data, indent=1))
+
+    def load(self, student: str) -> tuple[Result, str] | None:
+        """Return the stored result of ``student`` and its fingerprint, or None."""
+        try:
+            data = json.loads(self.path(student).read_text(encoding="utf-8"))
+        except (OSError, ValueError):
+            return None
+        if data.get("lab") != self.lab or data.get("student") != student:
+            return None
+        return Result.from_json(data), str(data.get("fingerprint", ""))
+
+    def all(self) -> list[Result]:
+        """Every stored result."""
+        out = []
+        for p in sorted(self.folder.glob("*.json")):
+            try:
+                data = json.loads(p.read_text(encoding="utf-8"))
+            except (OSError, ValueError):
+                continue
+            if data.get("lab") == self.lab:
+                out.append(Result.from_json(data))
+        return out
+
+
+def gradebook_rows(results: list[Result], checks: list[CheckCell]) -> list[dict]:
+    """Return the gradebook as a list of rows (dicts of strings)."""
+    rows = []
+    for r in results:
+        row = {"student": r.student}
+        row.update({c.grade_id: f"{r.points.get(c.grade_id, 0.0):g}" for c in checks})
+        row["total"] = f"{r.total:g}"
+        row["max"] = f"{r.max_points:g}"
+        row["status"] = r.status
+        row["seconds"] = f"{r.seconds:.1f}"
+        row["flags"] = "; ".join(r.flags)
+        row["notes"] = "; ".join(f"{k}: {v}" for k, v in r.reasons.items())
+        rows.append(row)
+    return rows
+
+
+def write_gradebook(
+    path: str | Path, results: list[Result], checks: list[CheckCell]
+) -> None:
+    """Write the gradebook CSV atomically (a temporary file, then a rename)."""
+    fields = ["student", *[c.grade_id for c in checks], "total", "max"]
+    fields += ["status", "seconds", "flags", "notes"]
+    buf = io.StringIO()
+    writer = csv.DictWriter(buf, fieldnames=fields, lineterminator="\n")
+    writer.writeheader()
+    writer.writerows(gradebook_rows(results, checks))
+    _atomic(Path(path), buf.getvalue())
+
+
+def _cell(text: str) -> str:
+    return text.replace("|", "\\|").replace("\n", " ")
+
+
+def feedback_text(result: Result, checks: list[CheckCell], lab: str) -> str:
+    """Return a student's feedback, in Markdown."""
+    lines = [
+        f"# {lab}: feedback for {result.student}",
+        "",
+        f"Score: **{result.total:g} / {result.max_points:g}**",
+        "",
+        "| check | points | result |",
+        "|---|---|---|",
+    ]
+    for c in checks:
+        got = result.points.get(c.grade_id, 0.0)
+        why = result.reasons.get(c.grade_id, "passed")
+        if c.manual and c.grade_id not in result.reasons and not got:
+            why = "graded by hand"
+        lines.append(f"| {c.grade_id} | {got:g} / {c.points:g} | {_cell(why)} |")
+    if result.status != "ok":
+        lines += ["", f"Status: {result.status}."]
+    for gid, text in result.details.items():
+        lines += ["", f"## {gid}", "", "```", text.rstrip(), "```"]
+    lines += [
+        "",
+        "Each check was run by the instructor's own code in a separate process,"
+        " calling your functions, with hidden tests added.",
+        "",
+    ]
+    return "\n".join(lines)
+
+
+def write_feedback(folder: str | Path, results: list[Result], checks, lab: str) -> None:
+    """Write ``<slug>.md`` feedback files into ``folder``."""
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    for r in results:
+        _atomic(folder / f"{slug(r.student)}.md", feedback_text(r, checks, lab))
+
+
+MANUAL_FIELDS = ["student", "grade_id", "points", "rubric", "answer", "score"]
+
+
+def export_manual(path: str | Path, results: list[Result], manual: list[CheckCell]):
+    """Write every student's written answers to one CSV, a ``score`` to fill in.
+
+    Scores already folded in (``--manual``) are kept in the ``score`` column.
+    """
+    buf = io.StringIO()
+    writer = csv.DictWriter(buf, fieldnames=MANUAL_FIELDS, lineterminator="\n")
+    writer.writeheader()
+    for r in results:
+        for c in manual:
+            score = r.points.get(c.grade_id)
+            writer.writerow(
+                {
+                    "student": r.student,
+                    "grade_id": c.grade_id,
+                    "points": f"{c.points:g}",
+                    "rubric": c.rubric,
+                    "answer": r.answers.get(c.grade_id, ""),
+                    "score": "" if score is None else f"{score:g}",
+                }
+            )
+    _atomic(Path(path), buf.getvalue())
+
+
+def read_manual(path: str | Path, manual: list[CheckCell]) -> dict:
+    """Read the instructor's scores: ``{student: {grade_id: points}}``.
+
+    Raises
+    ------
+    ValueError
+        On an unknown grade id or a score outside ``[0, points]``.
+    """
+    limits = {c.grade_id: float(c.points) for c in manual}
+    out: dict[str, dict[str, float]] = {}
+    with open(path, newline="", encoding="utf-8") as f:
+        for n, row in enumerate(csv.DictReader(f), 2):
+            gid, score = row.get("grade_id", ""), (row.get("score") or "").strip()
+            if not score:
+                continue
+            if gid not in limits:
+                raise ValueError(f"{path}, line {n}: unknown written answer {gid!r}")
+            value = float(score)
+            if not 0 <= value <= limits[gid]:
+                raise ValueError(
+                    f"{path}, line {n}: score {value:g} of {gid!r} is not in "
+                    f"[0, {limits[gid]:g}]"
+                )
+            out.setdefault(row["student"], {})[gid] = value
+    return out

@@ -1,0 +1,264 @@
+"""What each grading process runs, built from the lab's source and a submission.
+
+- `lab_plan` (once per lab, from ``solutions/``): the set-up cell, the
+  exercises and the names they define, the checks (hidden tests in, a
+  marker before them so their lines are reported as hidden), and the
+  instructor's definitions the checks need: each check's free names are
+  followed back through the solution's top-level statements (functions,
+  classes, imports, assignments) until only the set-up cell's names and the
+  exercises' names are left. A check never sees a name the student's
+  notebook defines, except the exercises' own, through proxies.
+- `student_cells` (per submission): the student's code for each exercise
+  (their cell matched by exercise id, else by cell id) and the cells they
+  added, in order; check cells, the lab's other cells and edited copies of
+  them are left out.
+- `scan_submission`: the static answers-not-shipped pass over those cells.
+
+Imports `notebooks` and `answers` only.
+"""
+
+from __future__ import annotations
+
+import ast
+import builtins
+import symtable
+from dataclasses import dataclass, field
+
+from nbformat import NotebookNode
+
+from . import answers
+from .notebooks import (
+    HIDDEN,
+    META_KEY,
+    CheckCell,
+    Exercise,
+    check_cells,
+    check_meta,
+    exercises,
+    setup_cell,
+)
+from .worker import HIDDEN_MARK
+
+__all__ = ["LabPlan", "lab_plan", "student_cells", "scan_submission"]
+
+
+@dataclass
+class LabPlan:
+    """Everything about a lab the grader needs, computed once."""
+
+    name: str
+    setup: str
+    checks: list[CheckCell]
+    manual: list[CheckCell]
+    exercises: list[Exercise]
+    check_specs: list[dict]
+    defs: list[str]
+    names: dict[str, dict]  # exercise name -> {"exercise", "kind"}
+    writes: list[str]
+    owner: dict[str, str]  # listed function -> exercise
+    aliases: dict[str, str] = field(default_factory=dict)
+    solution_ids: set[str] = field(default_factory=set)
+
+    @property
+    def max_points(self) -> float:
+        """Points of the automatic checks and the written answers."""
+        return float(sum(c.points for c in self.checks + self.manual))
+
+
+def _free_names(source: str) -> set[str]:
+    """Global names a snippet reads and does not bind itself."""
+    try:
+        top = symtable.symtable(source, "<cell>", "exec")
+    except SyntaxError:
+        return set()
+    out: set[str] = set()
+
+    def walk(t, module: bool) -> None:
+        for s in t.get_symbols():
+            if module:
+                if s.is_referenced() and not (s.is_assigned() or s.is_imported()):
+                    out.add(s.get_name())
+            elif s.is_global() and s.is_referenced():
+                out.add(s.get_name())
+        for child in t.get_children():
+            walk(child, False)
+
+    walk(top, True)
+    return out - set(dir(builtins))
+
+
+def _bound(node: ast.stmt) -> set[str]:
+    if isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef | ast.ClassDef):
+        return {node.name}
+    if isinstance(node, ast.Import | ast.ImportFrom):
+        return {(a.asname or a.name).split(".")[0] for a in node.names}
+    if isinstance(node, ast.Assign | ast.AnnAssign | ast.AugAssign):
+        targets = node.targets if isinstance(node, ast.Assign) else [node.target]
+        return {n.id for t in targets for n in ast.walk(t) if isinstance(n, ast.Name)}
+    return set()
+
+
+def _with_marker(source: str) -> str:
+    lines = []
+    for line in source.splitlines():
+        if line.strip() == HIDDEN[0]:
+            indent = line[: len(line) - len(line.lstrip())]
+            lines.append(f"{indent}print({HIDDEN_MARK!r})")
+        elif line.strip() != HIDDEN[1]:
+            lines.append(line)
+    return "\n".join(lines)
+
+
+def lab_plan(solution: NotebookNode, name: str) -> LabPlan:
+    """Compute what grading ``solution``'s lab runs.
+
+    Raises
+    ------
+    NotebookError
+        On malformed metadata.
+    ImportError
+        If an exercise lists a library function that does not exist.
+    """
+    items = check_cells(solution, name)
+    checks = [c for c in items if not c.manual]
+    manual = [c for c in items if c.manual]
+    exs = exercises(solution, name)
+    i0 = setup_cell(solution)
+    setup = solution.cells[i0].source if i0 is not None else ""
+    ex_cells = {e.index: e for e in exs}
+    names: dict[str, dict] = {}
+    for e in exs:
+        try:
+            tree = ast.parse(solution.cells[e.index].source)
+        except SyntaxError:
+            continue
+        for node in tree.body:
+            for n in _bound(node) & set(e.names):
+                kind = (
+                    "function"
+                    if isinstance(node, ast.FunctionDef | ast.ClassDef)
+                    else "value"
+                )
+                names[n] = {"exercise": e.exercise_id, "kind": kind}
+    # the instructor's top-level statements, latest binding of each name first
+    stmts: list[tuple[int, ast.stmt, str]] = []
+    for i, cell in enumerate(solution.cells):
+        if cell.cell_type != "code" or i == i0 or check_meta(cell) is not None:
+            continue
+        try:
+            tree = ast.parse(cell.source)
+        except SyntaxError:
+            continue
+        lines = cell.source.splitlines()
+        for node in tree.body:
+            bound = _bound(node)
+            if i in ex_cells and bound & set(names):
+                continue  # the student's part of an exercise cell
+            if bound:
+                src = "\n".join(lines[node.lineno - 1 : node.end_lineno])
+                stmts.append((i, node, src))
+    setup_names = _bound_all(setup)
+    check_specs, needed = [], []
+    for c in checks:
+        src = solution.cells[c.index].source
+        free = _free_names(src)
+        values = sorted(n for n in free if names.get(n, {}).get("kind") == "value")
+        check_specs.append(
+            {"gid": c.grade_id, "source": _with_marker(src), "values": values}
+        )
+        todo = list(free)
+        while todo:
+            n = todo.pop()
+            if n in names or n in setup_names:
+                continue
+            hit = next(
+                (s for s in reversed(stmts) if s[0] < c.index and n in _bound(s[1])),
+                None,
+            )
+            if hit is None or hit in needed:
+                continue
+            needed.append(hit)
+            todo += list(_free_names(hit[2]))
+    needed.sort(key=lambda s: (s[0], s[1].lineno))
+    writes = sorted({w for e in exs for w in e.writes})
+    owner = {w: e.exercise_id for e in exs for w in e.writes}
+    plan = LabPlan(
+        name,
+        setup,
+        checks,
+        manual,
+        exs,
+        check_specs,
+        [s[2] for s in needed],
+        names,
+        writes,
+        owner,
+    )
+    plan.aliases = answers.aliases(writes) if writes else {}
+    plan.solution_ids = {c.get("id") for c in solution.cells}
+    return plan
+
+
+def _bound_all(source: str) -> set[str]:
+    try:
+        tree = ast.parse(source)
+    except SyntaxError:
+        return set()
+    return set().union(*(_bound(n) for n in tree.body)) if tree.body else set()
+
+
+def _source(cell: dict) -> str:
+    src = cell.get("source", "")
+    return "".join(src) if isinstance(src, list) else str(src)
+
+
+def student_cells(plan: LabPlan, student: dict) -> list[dict]:
+    """Return the student's cells the student process runs, in notebook order.
+
+    Each is ``{"id", "exercise", "source"}``; ``exercise`` is None for a
+    cell the student added.
+    """
+    by_cell = {e.cell_id: e for e in plan.exercises}
+    by_id = {e.exercise_id: e for e in plan.exercises}
+    out, done = [], set()
+    for n, cell in enumerate(student.get("cells", [])):
+        if not isinstance(cell, dict) or cell.get("cell_type") != "code":
+            continue
+        meta = cell.get("metadata", {})
+        meta = meta.get(META_KEY) if isinstance(meta, dict) else None
+        meta = meta if isinstance(meta, dict) else {}
+        if "grade_id" in meta:
+            continue  # a check cell (canonical ones run in the check process)
+        ex = by_id.get(meta.get("exercise")) or by_cell.get(cell.get("id"))
+        cid = str(cell.get("id") or f"cell{n}")[:64]
+        if ex is not None:
+            if ex.exercise_id in done:
+                continue
+            done.add(ex.exercise_id)
+            out.append({"id": cid, "exercise": ex.exercise_id, "source": _source(cell)})
+        elif cell.get("id") not in plan.solution_ids:
+            out.append({"id": cid, "exercise": None, "source": _source(cell)})
+    return out
+
+
+def scan_submission(plan: LabPlan, cells: list[dict]) -> tuple[dict, list[str]]:
+    """Run the static pass; return ``({exercise: [notes]}, flags)``."""
+    zero: dict[str, list[str]] = {}
+    flags: list[str] = []
+    for cell in cells:
+        for f in answers.scan_code(cell["source"], plan.aliases):
+            ex = cell["exercise"] if not f.listed else cell["exercise"]
+            if f.listed:
+                ex = ex or plan.owner.get(f.function)
+                note = f"reaches {f.function} ({f.how}), the exercise's own work"
+            else:
+                note = f"uses {f.function} ({f.how})"
+                if f.function == "solutions/":
+                    note = "reads notebooks or solutions/"
+            if ex is not None and (f.listed or cell["exercise"] is not None):
+                zero.setdefault(ex, [])
+                if note not in zero[ex]:
+                    zero[ex].append(note)
+            if note not in flags:
+                flags.append(note)
+    return zero, flags

@@ -1,0 +1,221 @@
+"""``robotlib bench map`` (also ``slam``): mapping and SLAM, speed and quality.
+
+Prints, in one run: one sonar grid update (8 cones) and one laser scan
+update against plain NumPy versions of the same work; one grid FastSLAM
+step (30 particles, laser, the loop world's grid) and its weighing against
+NumPy; known-pose map F1 in the office (sonar, laser); grid FastSLAM in the
+loop world over seeds (trajectory RMS, map F1; sonar: map error against
+odometry-pose mapping); EKF-SLAM's average NEES over seeds against the 95 %
+chi-square band. A peer (the Robotics Toolbox for Python's EKF) is timed
+when installed, else skipped with a message. Asserts nothing.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+
+import numpy as np
+
+from ..mapping import (
+    GridFastSLAM,
+    OccupancyGrid,
+    inverse_sonar_model,
+    map_laser,
+    map_score,
+    map_sonar,
+    record_drive,
+    run_fastslam,
+)
+from ..mapping.ekfslam import chi2_band, run_ekfslam
+from ..sensing import SonarModel
+from ..sensing.laser import laser_poses
+
+__all__ = ["add_arguments", "run"]
+
+
+def _out(line: str) -> None:
+    print(line)  # noqa: T201 (a benchmark prints)
+
+
+def _time(fn, min_time: float = 0.2) -> float:
+    """Median seconds per call of ``fn`` (warm), over at least ``min_time``."""
+    fn()
+    times, total = [], 0.0
+    while total < min_time or len(times) < 5:
+        t0 = time.perf_counter()
+        fn()
+        dt = time.perf_counter() - t0
+        times.append(dt)
+        total += dt
+    return float(np.median(times))
+
+
+def _numpy_sonar_update(L, cells, pose, ranges, sonar):
+    c, s = np.cos(pose[2]), np.sin(pose[2])
+    for (ax, ay, ah), z in zip(sonar.sensors, ranges, strict=True):
+        sp = (pose[0] + c * ax - s * ay, pose[1] + s * ax + c * ay, pose[2] + ah)
+        L += inverse_sonar_model(cells, sp, z, sonar)
+    np.clip(L, -6.0, 6.0, out=L)
+
+
+def _numpy_weigh(maps, origin, res, lposes, angles, ranges, max_range, p_rand):
+    hit = ranges < max_range
+    a = lposes[:, 2:3] + angles[hit][None, :]
+    px = lposes[:, 0:1] + ranges[hit] * np.cos(a)
+    py = lposes[:, 1:2] + ranges[hit] * np.sin(a)
+    j = np.floor((px - origin[0]) / res).astype(int)
+    i = np.floor((py - origin[1]) / res).astype(int)
+    n, ny, nx = maps.shape
+    best = np.full(i.shape, -np.inf)
+    rows = np.arange(n)[:, None]
+    for di in (-1, 0, 1):
+        for dj in (-1, 0, 1):
+            ii, jj = i + di, j + dj
+            ok = (ii >= 0) & (ii < ny) & (jj >= 0) & (jj < nx)
+            v = np.where(
+                ok, maps[rows, np.clip(ii, 0, ny - 1), np.clip(jj, 0, nx - 1)], 0
+            )
+            best = np.maximum(best, v)
+    p = 1 - 1 / (1 + np.exp(best))
+    return np.log(p_rand + (1 - p_rand) * p).sum(axis=1)
+
+
+def speed(out: dict) -> None:
+    """Time the kernels against NumPy."""
+    log = record_drive("loop", seed=0, every=2)
+    world = log.world
+    sonar = SonarModel()
+    t = len(log) // 3
+    g = OccupancyGrid.for_world(world, 0.05)
+    cells = np.stack(np.meshgrid(
+        g.origin[0] + (np.arange(g.shape[1]) + 0.5) * 0.05,
+        g.origin[1] + (np.arange(g.shape[0]) + 0.5) * 0.05,
+    ), axis=-1)  # fmt: skip
+    k = _time(lambda: g.update_sonar(log.truth[t], log.sonar[t], sonar))
+    L = np.zeros(g.shape)
+    n = _time(lambda: _numpy_sonar_update(L, cells, log.truth[t], log.sonar[t], sonar))
+    out["sonar_update_us"] = k * 1e6
+    out["sonar_update_numpy_us"] = n * 1e6
+    _out(f"sonar grid update (8 cones, 5 cm cells): {k * 1e6:8.1f} us   "
+          f"NumPy {n * 1e6:9.1f} us   x{n / k:6.1f}")  # fmt: skip
+    k = _time(lambda: g.update_laser(log.truth[t], log.laser[t]))
+    out["laser_update_us"] = k * 1e6
+    _out(f"laser grid update (181 beams):           {k * 1e6:8.1f} us")
+    f = GridFastSLAM.for_world(
+        world, 0.05, start=log.odometry[0], n_particles=30, rng=0
+    )
+    for i in range(t):
+        f.step(log.odometry[i], log.laser[i])
+    state = (f.maps.copy(), f.particles.copy(), f.logw.copy(), f._odo.copy())
+
+    def one_step():
+        f.maps[:], f.particles, f.logw, f._odo = (
+            state[0],
+            state[1].copy(),
+            state[2].copy(),
+            state[3].copy(),
+        )
+        f.step(log.odometry[t], log.laser[t])
+
+    copy = _time(lambda: f.maps.__setitem__(slice(None), state[0]))
+    step = _time(one_step) - copy
+    out["fastslam_step_ms"] = step * 1e3
+    out["fastslam_grid"] = list(f.maps.shape)
+    lp = np.ascontiguousarray(laser_poses(f.particles, f.laser))
+    w = _time(lambda: f.weigh_laser(f.particles, log.laser[t]))
+    wn = _time(lambda: _numpy_weigh(
+        f.maps, f.origin, 0.05, lp, f.laser.angles[::2], log.laser[t][::2],
+        f.laser.max_range, f.p_rand,
+    ))  # fmt: skip
+    out["fastslam_weigh_us"] = w * 1e6
+    out["fastslam_weigh_numpy_us"] = wn * 1e6
+    _out(f"FastSLAM step, 30 particles, laser, {f.maps.shape[1]} x "
+          f"{f.maps.shape[2]}: {step * 1e3:6.2f} ms")  # fmt: skip
+    _out(f"  of which weighing:                     {w * 1e6:8.1f} us   "
+          f"NumPy {wn * 1e6:9.1f} us   x{wn / w:6.1f}")  # fmt: skip
+
+
+def quality(out: dict, seeds: int, ekf_seeds: int) -> None:
+    """Map and trajectory quality over seeds."""
+    log = record_drive("office", seed=0, every=2)
+    w = log.world
+    s = map_score(map_sonar(w, log.truth, log.sonar, 0.1), w, 0.1)
+    la = map_score(map_laser(w, log.truth, log.laser, 0.05), w, 0.05)
+    out["office_known_pose"] = {"sonar_f1": s.f1, "laser_f1": la.f1}
+    _out(
+        f"office, known poses: sonar F1 {s.f1:.3f} (10 cm), laser F1 {la.f1:.3f} (5 cm)"
+    )
+    rows = []
+    for seed in range(seeds):
+        log = record_drive("loop", seed=seed, every=2)
+        a = run_fastslam(log, 30, "laser", rng=seed)
+        b = run_fastslam(log, 30, "sonar", rng=seed)
+        odo = map_score(
+            map_sonar(log.world, log.odometry, log.sonar, 0.1), log.world, 0.1
+        )
+        rows.append([a.rms, a.score.f1, a.odometry_rms, b.rms, b.score.mean_distance,
+                     odo.mean_distance])  # fmt: skip
+        _out(f"  loop seed {seed}: laser RMS {a.rms:.3f} m F1 {a.score.f1:.3f} | "
+              f"odometry RMS {a.odometry_rms:.2f} m | sonar RMS {b.rms:.2f} m, map "
+              f"error {b.score.mean_distance:.3f} m vs odometry map "
+              f"{odo.mean_distance:.3f} m")  # fmt: skip
+    r = np.array(rows)
+    out["fastslam_loop"] = {
+        "seeds": seeds, "laser_rms_mean": r[:, 0].mean(),
+        "laser_rms_max": r[:, 0].max(),
+        "laser_f1_min": r[:, 1].min(), "odometry_rms_mean": r[:, 2].mean(),
+        "sonar_rms_mean": r[:, 3].mean(), "sonar_map_error_mean": r[:, 4].mean(),
+        "odometry_sonar_map_error_mean": r[:, 5].mean(),
+    }  # fmt: skip
+    _out(f"FastSLAM loop, {seeds} seeds: laser RMS max {r[:, 0].max():.3f} m, F1 min "
+          f"{r[:, 1].min():.3f}; sonar RMS mean {r[:, 3].mean():.2f} m, map error "
+          f"{r[:, 4].mean():.3f} m vs {r[:, 5].mean():.3f} m (odometry)")  # fmt: skip
+    nees = []
+    for seed in range(ekf_seeds):
+        log = record_drive("loop", seed=seed, every=1, laser=False)
+        nees.append(run_ekfslam(log, rng=seed).nees)
+    T = min(map(len, nees))
+    anees = np.mean([n[:T] for n in nees], axis=0)[1:]
+    lo, hi = (v / ekf_seeds for v in chi2_band(3 * ekf_seeds))
+    inside = float(np.mean((anees >= lo) & (anees <= hi)))
+    out["ekf"] = {"seeds": ekf_seeds, "anees_mean": float(anees.mean()),
+                  "band": [lo, hi], "share_of_steps_in_band": inside}  # fmt: skip
+    _out(f"EKF-SLAM, {ekf_seeds} seeds: average NEES {anees.mean():.2f}, 95 % band "
+          f"[{lo:.2f}, {hi:.2f}], steps in band {inside:.0%}")  # fmt: skip
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """Options of ``robotlib bench map``."""
+    parser.add_argument(
+        "--seeds", type=int, default=2, help="FastSLAM seeds (10: the issue's)"
+    )
+    parser.add_argument(
+        "--ekf-seeds", type=int, default=5, help="EKF seeds (20: the issue's)"
+    )
+    parser.add_argument(
+        "--speed-only", action="store_true", help="skip the quality runs"
+    )
+    parser.add_argument("--json", help="write the numbers to this file")
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run the benchmark; return 0."""
+    out: dict = {}
+    speed(out)
+    try:
+        import roboticstoolbox  # noqa: F401
+    except ImportError:
+        _out("peer: the Robotics Toolbox for Python is not installed "
+              "(pip install roboticstoolbox-python); skipped")  # fmt: skip
+        out["peer"] = None
+    else:
+        _out("peer: roboticstoolbox found, but no side-by-side run is wired; skipped")
+        out["peer"] = None
+    if not args.speed_only:
+        quality(out, args.seeds, args.ekf_seeds)
+    if args.json:
+        with open(args.json, "w", encoding="utf-8") as fh:
+            json.dump(out, fh, indent=1, default=float)
+    return 0

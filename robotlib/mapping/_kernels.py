@@ -1,0 +1,405 @@
+"""Numba kernels for occupancy-grid mapping and grid FastSLAM.
+
+Grids are log-odds arrays ``L[i, j]`` (row ``i`` is y, column ``j`` is x)
+with the lower-left corner of cell ``[0, 0]`` at ``(x0, y0)`` and cells of
+side ``res``; stacks of grids ``L[n, i, j]`` hold one map per particle.
+Every kernel takes contiguous arrays and scalars only; updates clamp each
+cell to ``[l_min, l_max]``. The per-particle kernels (``*_many``,
+`copy_maps`) come serial and ``*_parallel`` (over threads), from one body,
+with the same bits. Imports nothing of robotlib's but the JIT config.
+"""
+
+import math
+
+import numba as nb
+import numpy as np
+
+from .._config import JIT, serial_and_parallel
+
+
+@nb.njit(**JIT)
+def _clamp(v, lo, hi):
+    return lo if v < lo else (hi if v > hi else v)
+
+
+@nb.njit(**JIT)
+def sonar_cone_update(
+    L, x0, y0, res, sx, sy, sth, z, half_cone, max_range, thickness,
+    l_occ, l_free, sigma, max_weight, l_min, l_max,
+):  # fmt: skip
+    """Add one sonar cone's inverse-model log-odds to the grid ``L`` (ny, nx).
+
+    The sensor sits at ``(sx, sy)`` facing ``sth``. A cell whose centre lies
+    within ``half_cone`` of the axis gets ``l_free`` when nearer than
+    ``z - thickness / 2``, ``l_occ`` when within ``thickness / 2`` of ``z``,
+    nothing beyond. A reading at ``max_range`` (no echo) frees the cone to
+    ``max_range`` with weight ``max_weight``. With ``sigma > 0`` every
+    increment is weighted by ``exp(-phi^2 / (2 sigma^2))`` (``phi``: angle
+    off the axis, rad).
+    """
+    ny, nx = L.shape
+    echo = z < max_range
+    half = 0.5 * thickness
+    reach = z + half if echo else max_range
+    w0 = 1.0 if echo else max_weight
+    if reach <= 0.0 or w0 == 0.0:
+        return
+    ux = math.cos(sth)
+    uy = math.sin(sth)
+    tan_half = math.tan(half_cone)
+    # the sector's bounding box: apex, both edge ends, and any axis direction
+    # (E, N, W, S) inside the cone
+    xlo = xhi = sx
+    ylo = yhi = sy
+    for e in range(2):
+        a = sth - half_cone if e == 0 else sth + half_cone
+        ex = sx + reach * math.cos(a)
+        ey = sy + reach * math.sin(a)
+        xlo = min(xlo, ex)
+        xhi = max(xhi, ex)
+        ylo = min(ylo, ey)
+        yhi = max(yhi, ey)
+    for q in range(4):
+        a = 0.5 * math.pi * q
+        d = math.atan2(math.sin(a - sth), math.cos(a - sth))
+        if abs(d) <= half_cone:
+            xlo = min(xlo, sx + reach * math.cos(a))
+            xhi = max(xhi, sx + reach * math.cos(a))
+            ylo = min(ylo, sy + reach * math.sin(a))
+            yhi = max(yhi, sy + reach * math.sin(a))
+    j0 = max(0, int(math.floor((xlo - x0) / res)))
+    j1 = min(nx - 1, int(math.floor((xhi - x0) / res)))
+    i0 = max(0, int(math.floor((ylo - y0) / res)))
+    i1 = min(ny - 1, int(math.floor((yhi - y0) / res)))
+    reach2 = reach * reach
+    inner = z - half
+    inv2s2 = 0.5 / (sigma * sigma) if sigma > 0.0 else 0.0
+    for i in range(i0, i1 + 1):
+        cy = y0 + (i + 0.5) * res - sy
+        for j in range(j0, j1 + 1):
+            cx = x0 + (j + 0.5) * res - sx
+            along = cx * ux + cy * uy
+            if along <= 0.0:
+                continue
+            perp = cy * ux - cx * uy
+            if abs(perp) > along * tan_half:
+                continue
+            d2 = cx * cx + cy * cy
+            if d2 > reach2:
+                continue
+            w = w0
+            if inv2s2 > 0.0:
+                phi = math.atan2(perp, along)
+                w *= math.exp(-phi * phi * inv2s2)
+            if echo and math.sqrt(d2) >= inner:
+                L[i, j] = _clamp(L[i, j] + w * l_occ, l_min, l_max)
+            else:
+                L[i, j] = _clamp(L[i, j] + w * l_free, l_min, l_max)
+
+
+@nb.njit(**JIT)
+def sonar_scan_update(
+    L, x0, y0, res, pose, sensors, ranges, half_cone, max_range, thickness,
+    l_occ, l_free, sigma, max_weight, l_min, l_max,
+):  # fmt: skip
+    """Apply `sonar_cone_update` for each sonar of a ring at robot ``pose`` (3,).
+
+    ``sensors`` (S, 3) are the sonar poses in the robot frame, ``ranges``
+    (S,) the readings, m.
+    """
+    c = math.cos(pose[2])
+    s = math.sin(pose[2])
+    for k in range(sensors.shape[0]):
+        sx = pose[0] + c * sensors[k, 0] - s * sensors[k, 1]
+        sy = pose[1] + s * sensors[k, 0] + c * sensors[k, 1]
+        sonar_cone_update(
+            L, x0, y0, res, sx, sy, pose[2] + sensors[k, 2], ranges[k], half_cone,
+            max_range, thickness, l_occ, l_free, sigma, max_weight, l_min, l_max,
+        )  # fmt: skip
+
+
+@nb.njit(**JIT)
+def laser_beam_update(L, x0, y0, res, ox, oy, a, z, max_range, l_occ, l_free,
+                      l_min, l_max):  # fmt: skip
+    """Trace one beam from ``(ox, oy)`` along angle ``a`` to range ``z``.
+
+    Every cell the beam crosses before its end point's cell gets ``l_free``;
+    the end point's cell gets ``l_occ`` when ``z < max_range`` (a return),
+    else the beam is free to ``max_range`` and marks nothing occupied. Cells
+    are walked in order (Amanatides and Woo's traversal); cells off the grid
+    are skipped.
+    """
+    ny, nx = L.shape
+    echo = z < max_range
+    length = z if echo else max_range
+    gx = (ox - x0) / res
+    gy = (oy - y0) / res
+    dx = math.cos(a)
+    dy = math.sin(a)
+    ex = gx + dx * length / res
+    ey = gy + dy * length / res
+    j = int(math.floor(gx))
+    i = int(math.floor(gy))
+    je = int(math.floor(ex))
+    ie = int(math.floor(ey))
+    step_j = 1 if dx > 0 else -1
+    step_i = 1 if dy > 0 else -1
+    t_dx = abs(1.0 / dx) if dx != 0.0 else np.inf
+    t_dy = abs(1.0 / dy) if dy != 0.0 else np.inf
+    if dx > 0:
+        t_x = (j + 1.0 - gx) * t_dx
+    elif dx < 0:
+        t_x = (gx - j) * t_dx
+    else:
+        t_x = np.inf
+    if dy > 0:
+        t_y = (i + 1.0 - gy) * t_dy
+    elif dy < 0:
+        t_y = (gy - i) * t_dy
+    else:
+        t_y = np.inf
+    n_steps = abs(je - j) + abs(ie - i)
+    for _ in range(n_steps):
+        if 0 <= i < ny and 0 <= j < nx:
+            L[i, j] = _clamp(L[i, j] + l_free, l_min, l_max)
+        if t_x < t_y:
+            j += step_j
+            t_x += t_dx
+        else:
+            i += step_i
+            t_y += t_dy
+    if 0 <= ie < ny and 0 <= je < nx:
+        if echo:
+            L[ie, je] = _clamp(L[ie, je] + l_occ, l_min, l_max)
+        else:
+            L[ie, je] = _clamp(L[ie, je] + l_free, l_min, l_max)
+
+
+@nb.njit(**JIT)
+def laser_scan_update(L, x0, y0, res, lpose, angles, ranges, max_range, l_occ,
+                      l_free, l_min, l_max):  # fmt: skip
+    """Apply `laser_beam_update` for every beam of a scan from laser pose ``lpose``."""
+    for r in range(angles.shape[0]):
+        laser_beam_update(
+            L, x0, y0, res, lpose[0], lpose[1], lpose[2] + angles[r], ranges[r],
+            max_range, l_occ, l_free, l_min, l_max,
+        )  # fmt: skip
+
+
+def _laser_update_many(Ls, x0, y0, res, lposes, angles, ranges, max_range, l_occ,
+                      l_free, l_min, l_max):  # fmt: skip
+    """`laser_scan_update` of one scan into each map ``Ls[n]`` from ``lposes[n]``."""
+    for n in nb.prange(Ls.shape[0]):
+        laser_scan_update(
+            Ls[n], x0, y0, res, lposes[n], angles, ranges, max_range, l_occ,
+            l_free, l_min, l_max,
+        )  # fmt: skip
+
+
+laser_update_many, laser_update_many_parallel = serial_and_parallel(_laser_update_many)
+
+
+def _sonar_update_many(Ls, x0, y0, res, poses, sensors, ranges, half_cone,
+                      max_range, thickness, l_occ, l_free, sigma, max_weight,
+                      l_min, l_max):  # fmt: skip
+    """`sonar_scan_update` of one ring reading into each ``Ls[n]`` at ``poses[n]``."""
+    for n in nb.prange(Ls.shape[0]):
+        sonar_scan_update(
+            Ls[n], x0, y0, res, poses[n], sensors, ranges, half_cone, max_range,
+            thickness, l_occ, l_free, sigma, max_weight, l_min, l_max,
+        )  # fmt: skip
+
+
+sonar_update_many, sonar_update_many_parallel = serial_and_parallel(_sonar_update_many)
+
+
+@nb.njit(**JIT)
+def _occ_prob(L, i, j):
+    """Occupancy probability of cell ``(i, j)``; 0.5 (unknown) off the grid."""
+    if 0 <= i < L.shape[0] and 0 <= j < L.shape[1]:
+        return 1.0 - 1.0 / (1.0 + math.exp(np.float64(L[i, j])))
+    return 0.5
+
+
+@nb.njit(**JIT)
+def _best_near(L, x0, y0, res, px, py):
+    """Largest occupancy probability in the 3 x 3 cells around point ``(px, py)``.
+
+    Cells off the grid count as unknown (log-odds 0); the largest log-odds
+    gives the largest probability, so one exponential does.
+    """
+    j = int(math.floor((px - x0) / res))
+    i = int(math.floor((py - y0) / res))
+    ny, nx = L.shape
+    best = -np.inf
+    for ii in range(i - 1, i + 2):
+        for jj in range(j - 1, j + 2):
+            v = np.float64(L[ii, jj]) if 0 <= ii < ny and 0 <= jj < nx else 0.0
+            if v > best:
+                best = v
+    return 1.0 - 1.0 / (1.0 + math.exp(best))
+
+
+def _laser_loglik_many(Ls, x0, y0, res, lposes, angles, ranges, max_range, p_rand,
+                      out):  # fmt: skip
+    """Log-likelihood of one scan in each particle's own map: ``out[n]``.
+
+    Each return (``z < max_range``) scores ``log(p_rand + (1 - p_rand) p)``,
+    ``p`` the largest occupancy probability within one cell of the beam's end
+    point in map ``Ls[n]`` seen from laser pose ``lposes[n]`` (the end-point
+    model; an unknown cell counts 0.5).
+    """
+    for n in nb.prange(Ls.shape[0]):
+        total = 0.0
+        for r in range(angles.shape[0]):
+            if ranges[r] >= max_range:
+                continue
+            a = lposes[n, 2] + angles[r]
+            px = lposes[n, 0] + ranges[r] * math.cos(a)
+            py = lposes[n, 1] + ranges[r] * math.sin(a)
+            p = _best_near(Ls[n], x0, y0, res, px, py)
+            total += math.log(p_rand + (1.0 - p_rand) * p)
+        out[n] = total
+
+
+laser_loglik_many, laser_loglik_many_parallel = serial_and_parallel(_laser_loglik_many)
+
+
+def _sonar_loglik_many(Ls, x0, y0, res, poses, sensors, ranges, half_cone,
+                      max_range, n_rays, p_rand, out):  # fmt: skip
+    """Log-likelihood of one ring reading in each particle's own map: ``out[n]``.
+
+    An echo at ``z`` says some wall lies on the cone's arc at ``z``: each
+    reading with ``z < max_range`` scores ``log(p_rand + (1 - p_rand) p)``,
+    ``p`` the largest occupancy probability within one cell of ``n_rays``
+    points spread over the arc (map ``Ls[n]``, robot pose ``poses[n]``).
+    """
+    for n in nb.prange(Ls.shape[0]):
+        c = math.cos(poses[n, 2])
+        s = math.sin(poses[n, 2])
+        total = 0.0
+        for k in range(sensors.shape[0]):
+            z = ranges[k]
+            if z >= max_range:
+                continue
+            sx = poses[n, 0] + c * sensors[k, 0] - s * sensors[k, 1]
+            sy = poses[n, 1] + s * sensors[k, 0] + c * sensors[k, 1]
+            best = 0.0
+            for r in range(n_rays):
+                off = 0.0 if n_rays == 1 else half_cone * (2.0 * r / (n_rays - 1) - 1)
+                a = poses[n, 2] + sensors[k, 2] + off
+                p = _best_near(
+                    Ls[n], x0, y0, res, sx + z * math.cos(a), sy + z * math.sin(a)
+                )
+                if p > best:
+                    best = p
+            total += math.log(p_rand + (1.0 - p_rand) * best)
+        out[n] = total
+
+
+sonar_loglik_many, sonar_loglik_many_parallel = serial_and_parallel(_sonar_loglik_many)
+
+
+def _copy_maps(Ls, src, dst):
+    """Copy map ``Ls[src[q]]`` over ``Ls[dst[q]]`` for every ``q`` (in place).
+
+    No ``dst`` may also be a ``src`` (the caller copies survivors over the
+    maps of particles that died).
+    """
+    for q in nb.prange(src.shape[0]):
+        Ls[dst[q]] = Ls[src[q]]
+
+
+copy_maps, copy_maps_parallel = serial_and_parallel(_copy_maps)
+
+
+@nb.njit(**JIT)
+def _evidence(L, i, j):
+    """Positive log-odds of cell ``(i, j)`` (0 if free, unknown or off the grid)."""
+    if 0 <= i < L.shape[0] and 0 <= j < L.shape[1] and L[i, j] > 0:
+        return np.float64(L[i, j])
+    return 0.0
+
+
+@nb.njit(**JIT)
+def _bilinear_evidence(L, x0, y0, res, px, py):
+    """`_evidence` at point ``(px, py)``, bilinear between cell centres."""
+    gx = (px - x0) / res - 0.5
+    gy = (py - y0) / res - 0.5
+    j = int(math.floor(gx))
+    i = int(math.floor(gy))
+    fx = gx - j
+    fy = gy - i
+    return (1 - fy) * ((1 - fx) * _evidence(L, i, j) + fx * _evidence(L, i, j + 1)) + (
+        fy * ((1 - fx) * _evidence(L, i + 1, j) + fx * _evidence(L, i + 1, j + 1))
+    )
+
+
+@nb.njit(**JIT)
+def _match_score(L, x0, y0, res, px, py, pth, mx, my, mth, angles, ranges, max_range):
+    """Sum of `_bilinear_evidence` at the scan's end points from robot pose p."""
+    c = math.cos(pth)
+    s = math.sin(pth)
+    lx = px + c * mx - s * my
+    ly = py + s * mx + c * my
+    total = 0.0
+    for r in range(angles.shape[0]):
+        if ranges[r] >= max_range:
+            continue
+        a = pth + mth + angles[r]
+        total += _bilinear_evidence(
+            L, x0, y0, res, lx + ranges[r] * math.cos(a), ly + ranges[r] * math.sin(a)
+        )
+    return total
+
+
+def _match_laser_many(Ls, x0, y0, res, poses, mount, angles, ranges, max_range,
+                     step_xy, step_th, levels, out):  # fmt: skip
+    """Hill-climb each robot pose ``poses[n]`` to fit the scan to map ``Ls[n]``.
+
+    From each pose, try moves of ``step_xy`` (m) along x and y and
+    ``step_th`` (rad) in heading, both ways; take the best that raises
+    `_match_score`; when none does, halve the steps, ``levels`` times.
+    Writes the fitted poses to ``out`` (N, 3).
+    """
+    for n in nb.prange(Ls.shape[0]):
+        px = poses[n, 0]
+        py = poses[n, 1]
+        pth = poses[n, 2]
+        best = _match_score(Ls[n], x0, y0, res, px, py, pth, mount[0], mount[1],
+                            mount[2], angles, ranges, max_range)  # fmt: skip
+        sxy = step_xy
+        sth = step_th
+        for _ in range(levels):
+            for _it in range(20):
+                bi = -1
+                bx = px
+                by = py
+                bt = pth
+                for k in range(6):
+                    qx = px + (sxy if k == 0 else (-sxy if k == 1 else 0.0))
+                    qy = py + (sxy if k == 2 else (-sxy if k == 3 else 0.0))
+                    qt = pth + (sth if k == 4 else (-sth if k == 5 else 0.0))
+                    v = _match_score(
+                        Ls[n], x0, y0, res, qx, qy, qt, mount[0], mount[1],
+                        mount[2], angles, ranges, max_range,
+                    )  # fmt: skip
+                    if v > best:
+                        best = v
+                        bi = k
+                        bx = qx
+                        by = qy
+                        bt = qt
+                if bi < 0:
+                    break
+                px = bx
+                py = by
+                pth = bt
+            sxy *= 0.5
+            sth *= 0.5
+        out[n, 0] = px
+        out[n, 1] = py
+        out[n, 2] = math.atan2(math.sin(pth), math.cos(pth))
+
+
+match_laser_many, match_laser_many_parallel = serial_and_parallel(_match_laser_many)

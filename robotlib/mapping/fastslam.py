@@ -1,0 +1,412 @@
+"""Grid FastSLAM: a Rao-Blackwellised particle filter, each particle with its map.
+
+Each particle is a pose and a log-odds occupancy grid of its own. A step
+(Probabilistic Robotics, table 13.1, on grids):
+
+1. move every particle by the odometry increment plus slip noise
+   (`robotlib.mapping.motion.sample_arc_motion`);
+2. weigh it by the scan's likelihood in its own map (`weigh_laser`,
+   `weigh_sonar`: the end-point model, raised to a ``temperature`` because
+   beams are not independent);
+3. when the effective sample size falls below ``resample_below * N``,
+   resample (low-variance) and copy the survivors' maps over the maps of
+   the particles that died, in place, so the filter holds exactly N maps
+   (30 particles on a 400 x 400 grid: 19 MB);
+4. add the scan to every particle's map at its pose.
+
+Each step records the particles and who descended from whom, so
+`GridFastSLAM.best_path` is the whole trajectory of the best particle's
+lineage. Seeded: the same ``rng`` gives the same run, bit for bit.
+Imports the sensing models, the localization resampler and this package's
+kernels; never plots.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .._random import as_rng
+from ..localization.resampling import effective_sample_size, systematic_resample
+from ..sensing import SonarModel
+from ..sensing.laser import LaserModel, laser_poses
+from ..sim import OdometryNoise
+from ..world import World
+from . import _kernels
+from .metrics import MapScore, map_score, trajectory_rms
+from .motion import sample_arc_motion
+from .occupancy import InverseLaserModel, InverseSonarModel, OccupancyGrid
+
+PARALLEL_MIN = 64
+"""Particle count from which the per-particle kernels run over threads (below,
+a thread pool's wake-up costs more than it saves, the more so on a busy
+machine)."""
+
+__all__ = [
+    "PARALLEL_MIN",
+    "GridFastSLAM",
+    "FastSLAMResult",
+    "run_fastslam",
+    "normalise_log_weights",
+    "resample_maps",
+]
+
+
+def normalise_log_weights(logw) -> np.ndarray:
+    """Return weights (N,) summing to 1 from log-weights (N,), stably."""
+    lw = np.asarray(logw, dtype=float)
+    w = np.exp(lw - lw.max())
+    return w / w.sum()
+
+
+def resample_maps(maps: np.ndarray, indexes) -> tuple[np.ndarray, np.ndarray]:
+    """Make slot ``k`` hold particle ``indexes[k]``'s map, copying in place.
+
+    A particle drawn at least once keeps its slot (and map); each further
+    copy goes to the slot of a particle that was not drawn.
+
+    Parameters
+    ----------
+    maps : numpy.ndarray, shape (N, ny, nx)
+        One map per particle; changed in place.
+    indexes : array_like of int, shape (N,)
+        The resampler's draw.
+
+    Returns
+    -------
+    parents : numpy.ndarray of int, shape (N,)
+        Which old particle each slot now holds.
+    order : numpy.ndarray of int, shape (N,)
+        The same as ``parents`` (kept for symmetry with ``particles[order]``).
+    """
+    idx = np.asarray(indexes, dtype=np.int64)
+    n = len(maps)
+    counts = np.bincount(idx, minlength=n)
+    dead = np.flatnonzero(counts == 0)
+    extra = np.repeat(np.arange(n), np.maximum(counts - 1, 0))
+    parents = np.arange(n)
+    parents[dead] = extra
+    if len(dead):
+        kernel = (
+            _kernels.copy_maps_parallel if n >= PARALLEL_MIN else _kernels.copy_maps
+        )
+        kernel(maps, np.ascontiguousarray(extra), np.ascontiguousarray(dead))
+    return parents, parents
+
+
+class GridFastSLAM:
+    """Grid FastSLAM with a laser or a sonar ring.
+
+    Parameters
+    ----------
+    shape, origin, resolution
+        The maps' cells: ``(ny, nx)``, lower-left corner (m), side (m).
+    start : array_like, shape (3,)
+        The start pose; the map frame is the odometry frame at the start.
+    n_particles : int
+        Particles (and maps).
+    sensor : {"laser", "sonar"}
+        Which readings `step` takes.
+    laser, sonar : optional
+        The sensor models.
+    laser_model, sonar_model : optional
+        Their inverse models (map updates).
+    motion : OdometryNoise, optional
+        Slip assumed by the prediction (default: the simulator's).
+    inflate : float
+        Motion noise standard deviations times this.
+    beam_step : int
+        Weigh with every ``beam_step``-th laser beam.
+    p_rand : float
+        Floor of each beam's likelihood (a random reading).
+    temperature : float
+        Log-likelihoods times this before they are added to the weights.
+    resample_below : float
+        Resample when the effective sample size is below this share of N.
+    match : bool
+        Laser only: after the motion sample, fit each particle's pose to its
+        own map by hill-climbing on the scan's end points (`match_laser`), a
+        cheap version of GMapping's scan-matched proposal.
+    match_step : tuple of float
+        First hill-climbing steps, m and rad (halved ``match_levels`` times).
+    match_levels : int
+        How many times the steps are halved.
+    match_beam_step : int
+        Fit with every ``match_beam_step``-th beam.
+    rng : numpy.random.Generator, int or None
+        Motion noise and resampling.
+    """
+
+    def __init__(
+        self,
+        shape,
+        origin,
+        resolution: float,
+        start,
+        n_particles: int = 30,
+        sensor: str = "laser",
+        laser: LaserModel | None = None,
+        sonar: SonarModel | None = None,
+        laser_model: InverseLaserModel | None = None,
+        sonar_model: InverseSonarModel | None = None,
+        motion: OdometryNoise | None = None,
+        inflate: float = 1.5,
+        beam_step: int = 2,
+        p_rand: float = 0.1,
+        temperature: float = 0.5,
+        resample_below: float = 0.5,
+        match: bool = True,
+        match_step: tuple[float, float] = (0.04, 0.02),
+        match_levels: int = 3,
+        match_beam_step: int = 4,
+        rng: np.random.Generator | int | None = None,
+    ):
+        if sensor not in ("laser", "sonar"):
+            raise ValueError(f"sensor must be 'laser' or 'sonar', got {sensor!r}")
+        if n_particles < 1:
+            raise ValueError("n_particles must be at least 1")
+        self.sensor = sensor
+        self.laser = LaserModel() if laser is None else laser
+        self.sonar = SonarModel() if sonar is None else sonar
+        self.laser_model = InverseLaserModel() if laser_model is None else laser_model
+        self.sonar_model = InverseSonarModel() if sonar_model is None else sonar_model
+        self.motion = OdometryNoise() if motion is None else motion
+        self.inflate = float(inflate)
+        self.beam_step = int(beam_step)
+        self.p_rand = float(p_rand)
+        self.temperature = float(temperature)
+        self.resample_below = float(resample_below)
+        self.match = bool(match) and sensor == "laser"
+        self.match_step = (float(match_step[0]), float(match_step[1]))
+        self.match_levels = int(match_levels)
+        self.match_beam_step = int(match_beam_step)
+        self.rng = as_rng(rng)
+        self.origin = (float(origin[0]), float(origin[1]))
+        self.resolution = float(resolution)
+        n = int(n_particles)
+        self.maps = np.zeros((n, *(int(v) for v in shape)), dtype=np.float32)
+        self.particles = np.tile(np.asarray(start, dtype=float), (n, 1))
+        self.logw = np.zeros(n)
+        self.resampled = 0
+        self._poses: list[np.ndarray] = [self.particles.copy()]
+        self._parents: list[np.ndarray] = [np.arange(n)]
+        self._odo: np.ndarray | None = None
+
+    @classmethod
+    def for_world(cls, world: World, resolution: float = 0.05, **kw) -> GridFastSLAM:
+        """Return a filter on ``world.occupancy_grid``'s cells, from its start pose."""
+        truth = world.occupancy_grid(resolution)
+        kw.setdefault("start", world.start)
+        return cls(truth.shape, truth.origin, resolution, **kw)
+
+    @property
+    def n(self) -> int:
+        """Number of particles."""
+        return len(self.particles)
+
+    @property
+    def weights(self) -> np.ndarray:
+        """Normalised weights (N,)."""
+        return normalise_log_weights(self.logw)
+
+    # -- the pieces -------------------------------------------------------
+    def _kernel(self, name: str):
+        """Return the serial or threaded kernel ``name`` for this many particles."""
+        return getattr(_kernels, name + ("_parallel" if self.n >= PARALLEL_MIN else ""))
+
+    def _geometry(self):
+        return (*self.origin, self.resolution)
+
+    def weigh_laser(self, poses, scan) -> np.ndarray:
+        """Log-likelihood (N,) of a laser scan in each particle's map at ``poses``."""
+        lp = np.ascontiguousarray(laser_poses(poses, self.laser))
+        k = self.beam_step
+        out = np.empty(len(lp))
+        self._kernel("laser_loglik_many")(
+            self.maps, *self._geometry(), lp,
+            np.ascontiguousarray(self.laser.angles[::k]),
+            np.ascontiguousarray(np.asarray(scan, dtype=float)[::k]),
+            self.laser.max_range, self.p_rand, out,
+        )  # fmt: skip
+        return out
+
+    def weigh_sonar(self, poses, ranges) -> np.ndarray:
+        """Log-likelihood (N,) of a sonar ring reading in each particle's map."""
+        out = np.empty(len(poses))
+        self._kernel("sonar_loglik_many")(
+            self.maps, *self._geometry(), np.ascontiguousarray(poses, dtype=float),
+            self.sonar.sensors, np.ascontiguousarray(ranges, dtype=float),
+            self.sonar.cone / 2, self.sonar.max_range, 5, self.p_rand, out,
+        )  # fmt: skip
+        return out
+
+    def match_laser(self, poses, scan) -> np.ndarray:
+        """Fit each pose (N, 3) to the scan in its particle's map; return the fits."""
+        k = self.match_beam_step
+        out = np.empty((len(poses), 3))
+        self._kernel("match_laser_many")(
+            self.maps, *self._geometry(), np.ascontiguousarray(poses, dtype=float),
+            np.asarray(self.laser.mount, dtype=float),
+            np.ascontiguousarray(self.laser.angles[::k]),
+            np.ascontiguousarray(np.asarray(scan, dtype=float)[::k]),
+            self.laser.max_range, *self.match_step, self.match_levels, out,
+        )  # fmt: skip
+        return out
+
+    def update_maps(self, scan) -> None:
+        """Add a reading to every particle's map at the particle's pose."""
+        z = np.ascontiguousarray(np.asarray(scan, dtype=float))
+        if self.sensor == "laser":
+            m = self.laser_model
+            self._kernel("laser_update_many")(
+                self.maps, *self._geometry(),
+                np.ascontiguousarray(laser_poses(self.particles, self.laser)),
+                np.ascontiguousarray(self.laser.angles), z, self.laser.max_range,
+                m.l_occ, m.l_free, m.l_min, m.l_max,
+            )  # fmt: skip
+        else:
+            m = self.sonar_model
+            self._kernel("sonar_update_many")(
+                self.maps, *self._geometry(), self.particles, self.sonar.sensors, z,
+                self.sonar.cone / 2, self.sonar.max_range, m.thickness, m.l_occ,
+                m.l_free, m.sigma or 0.0, m.max_weight, m.l_min, m.l_max,
+            )  # fmt: skip
+
+    # -- one step -----------------------------------------------------------
+    def step(self, odometry, scan) -> None:
+        """Take one record: the odometry pose (3,) and the reading then.
+
+        The first call only adds the reading to the maps.
+        """
+        odo = np.asarray(odometry, dtype=float)
+        parents = np.arange(self.n)
+        if self._odo is not None:
+            self.particles = sample_arc_motion(
+                self.particles, self._odo, odo, self.motion, self.inflate, self.rng
+            )
+            if self.sensor == "laser":
+                if self.match:
+                    self.particles = self.match_laser(self.particles, scan)
+                ll = self.weigh_laser(self.particles, scan)
+            else:
+                ll = self.weigh_sonar(self.particles, scan)
+            self.logw = self.logw + self.temperature * ll
+            self.logw -= self.logw.max()
+            if effective_sample_size(self.weights) < self.resample_below * self.n:
+                idx = systematic_resample(self.weights, rng=self.rng)
+                parents, _ = resample_maps(self.maps, idx)
+                self.particles = self.particles[parents]
+                self.logw = np.zeros(self.n)
+                self.resampled += 1
+        self._odo = odo.copy()
+        self.update_maps(scan)
+        self._poses.append(self.particles.copy())
+        self._parents.append(parents)
+
+    # -- results ------------------------------------------------------------
+    def best(self) -> int:
+        """Index of the particle with the largest weight."""
+        return int(np.argmax(self.logw))
+
+    def best_map(self) -> OccupancyGrid:
+        """Return the best particle's map (a copy)."""
+        g = OccupancyGrid(self.maps.shape[1:], self.origin, self.resolution)
+        g.logodds[:] = self.maps[self.best()]
+        return g
+
+    def best_path(self) -> np.ndarray:
+        """Return the best particle's lineage: its pose at every record, (T, 3).
+
+        The first row is the start pose (before any record).
+        """
+        k = self.best()
+        out = np.empty((len(self._poses), 3))
+        for t in range(len(self._poses) - 1, -1, -1):
+            out[t] = self._poses[t][k]
+            k = int(self._parents[t][k])
+        return out
+
+    def paths(self) -> np.ndarray:
+        """Return every particle's lineage, (N, T, 3) (for plots)."""
+        paths = []
+        for k0 in range(self.n):
+            k = k0
+            rows = []
+            for t in range(len(self._poses) - 1, -1, -1):
+                rows.append(self._poses[t][k])
+                k = int(self._parents[t][k])
+            paths.append(rows[::-1])
+        return np.array(paths)
+
+
+@dataclass(frozen=True, eq=False)
+class FastSLAMResult:
+    """What `run_fastslam` returns.
+
+    Attributes
+    ----------
+    path : numpy.ndarray, shape (T, 3)
+        The best particle's trajectory, one row per record.
+    map : OccupancyGrid
+        The best particle's map.
+    rms : float
+        Position RMS error of ``path`` against the true poses, m.
+    score : MapScore
+        ``map`` against the world.
+    odometry_rms : float
+        The odometry's RMS error on the same log, m.
+    filter : GridFastSLAM
+        The filter after the run.
+    """
+
+    path: np.ndarray
+    map: OccupancyGrid
+    rms: float
+    score: MapScore
+    odometry_rms: float
+    filter: GridFastSLAM
+
+
+def run_fastslam(
+    log, n_particles: int = 30, sensor: str = "laser", resolution=None, rng=0, **kw
+) -> FastSLAMResult:
+    """Run grid FastSLAM over a `robotlib.mapping.drive.DriveLog`.
+
+    Parameters
+    ----------
+    log : DriveLog
+        The drive (its world gives only the grid's cells and the start pose).
+    n_particles : int
+        Particles.
+    sensor : {"laser", "sonar"}
+        Which readings to use.
+    resolution : float, optional
+        Cell side, m (default 0.05 for the laser, 0.1 for the sonar).
+    rng : numpy.random.Generator, int or None
+        The filter's randomness.
+    **kw
+        More `GridFastSLAM` parameters.
+
+    Returns
+    -------
+    FastSLAMResult
+    """
+    res = (0.05 if sensor == "laser" else 0.1) if resolution is None else resolution
+    f = GridFastSLAM.for_world(
+        log.world, res, start=log.odometry[0], n_particles=n_particles,
+        sensor=sensor, laser=log.laser_model, sonar=log.sonar_model, rng=rng, **kw,
+    )  # fmt: skip
+    scans = log.laser if sensor == "laser" else log.sonar
+    for t in range(len(log)):
+        f.step(log.odometry[t], scans[t])
+    path = f.best_path()[1:]
+    m = f.best_map()
+    return FastSLAMResult(
+        path=path,
+        map=m,
+        rms=trajectory_rms(path, log.truth),
+        score=map_score(m, log.world, res),
+        odometry_rms=trajectory_rms(log.odometry, log.truth),
+        filter=f,
+    )

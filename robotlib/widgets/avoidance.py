@@ -1,0 +1,301 @@
+"""Notebook panels for obstacle avoidance (Lab 2).
+
+Thin wrappers over plain, tested functions:
+
+- `make_controller` builds a controller from the panel's choices (`KINDS`,
+  with its gains), `episode_for` runs it on one seeded start/goal pair of an
+  avoidance world; `EpisodePanel` adds sliders for the gains and the VFH
+  threshold (``continuous_update=False``: an episode runs when a slider is
+  released) and redraws the path and the clearance.
+- `vfh_replay` replays an episode's sonar and odometry through a VFH and
+  records its polar histogram, chosen direction and goal bearing at every
+  cycle; `HistogramPanel` shows them with a time slider, beside the map.
+
+Panels run headless (their callbacks are plain methods), so tests set their
+values programmatically and read the results.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import partial
+
+import matplotlib.pyplot as plt
+import numpy as np
+
+from ..avoidance import (
+    VFH,
+    Braitenberg,
+    Bug2,
+    PotentialField,
+    run_episode,
+    start_goal_pairs,
+)
+from ..plotting.avoidance import plot_clearance, plot_episode, plot_polar_histogram
+from ..world import load_world
+
+__all__ = [
+    "KINDS",
+    "make_controller",
+    "episode_for",
+    "EpisodePanel",
+    "Replay",
+    "vfh_replay",
+    "HistogramPanel",
+]
+
+KINDS = ("VFH", "potential field", "Braitenberg explorer", "Bug2")
+"""Controllers the episode panel offers."""
+
+_DEFAULTS = {"threshold": 150.0, "k_rep": 0.5, "d0": 1.2, "reach": 1.5}
+
+
+def make_controller(
+    kind: str,
+    threshold=150.0,
+    k_rep=0.5,
+    d0=1.2,
+    reach=1.5,
+    histogram=None,
+    direction=None,
+    force=None,
+    weights=None,
+):
+    """Build a controller of `KINDS` with the panel's gains.
+
+    ``threshold``: VFH's upper threshold (the lower one is half of it);
+    ``k_rep``, ``d0``: the potential field's repulsion; ``reach``: the range
+    at which a Braitenberg vehicle's sonars start to respond, m.
+    ``histogram``, ``direction`` (VFH), ``force`` (potential field) and
+    ``weights`` (the explorer's matrix) replace the library's parts (Lab 2
+    passes the student's).
+    """
+    if kind == "VFH":
+        return VFH(
+            threshold_high=threshold,
+            threshold_low=threshold / 2,
+            histogram=histogram,
+            direction=direction,
+        )
+    if kind == "potential field":
+        if force is not None:
+            return PotentialField(force=partial(force, k_rep=k_rep, d0=d0))
+        return PotentialField(k_rep=k_rep, d0=d0)
+    if kind == "Braitenberg explorer":
+        return Braitenberg("explorer" if weights is None else weights, reach=reach)
+    if kind == "Bug2":
+        return Bug2()
+    raise ValueError(f"unknown controller {kind!r}; choose from {KINDS}")
+
+
+def episode_for(world: str, pair: int, kind: str, seed: int = 0, **gains):
+    """Run one episode of ``kind`` on pair ``pair`` of ``start_goal_pairs(world)``.
+
+    ``gains``: `make_controller` keywords.
+    """
+    p = start_goal_pairs(world, pair + 1, seed=seed)[pair]
+    c = make_controller(kind, **gains)
+    return run_episode(world, c, p.goal, start=p.start, seed=seed)
+
+
+class EpisodePanel:
+    """Choose a controller and its gains; the episode re-runs and is redrawn.
+
+    Parameters
+    ----------
+    world : str
+        An avoidance world.
+    kind : str
+        Initial controller (`KINDS`).
+    pair : int
+        Initial start/goal pair (index into ``start_goal_pairs(world, .., seed)``).
+    seed : int
+        Seed of the pairs and of the simulator.
+    **gains
+        Initial ``threshold``, ``k_rep``, ``d0``, ``reach``; and parts that
+        replace the library's (``histogram``, ``direction``, ``force``,
+        ``weights``: see `make_controller`).
+
+    Attributes
+    ----------
+    episode : robotlib.avoidance.Episode
+        The last run.
+    figure : matplotlib.figure.Figure
+    widget : ipywidgets.VBox
+    """
+
+    def __init__(self, world="utrap", kind="VFH", pair=0, seed=0, **gains):
+        import ipywidgets as w
+
+        parts = ("histogram", "direction", "force", "weights")
+        self.parts = {k: gains.pop(k) for k in parts if k in gains}
+        start = {**_DEFAULTS, **gains}
+        self.world_name, self.seed = world, seed
+        self.world = load_world(world)
+        opts = {"continuous_update": False}
+        self.kind = w.Dropdown(options=KINDS, value=kind, description="controller")
+        self.pair = w.IntSlider(value=pair, min=0, max=19, description="pair", **opts)
+        self.threshold = w.FloatSlider(
+            value=start["threshold"], min=20.0, max=1000.0, step=10.0,
+            description="VFH thr.", **opts,
+        )  # fmt: skip
+        self.k_rep = w.FloatSlider(
+            value=start["k_rep"], min=0.05, max=3.0, step=0.05,
+            description="PF k_rep", **opts,
+        )  # fmt: skip
+        self.d0 = w.FloatSlider(
+            value=start["d0"], min=0.4, max=3.0, step=0.1, description="PF d0", **opts
+        )
+        self.reach = w.FloatSlider(
+            value=start["reach"], min=0.3, max=3.0, step=0.1,
+            description="Br. reach", **opts,
+        )  # fmt: skip
+        self.status = w.Label()
+        self.output = w.Output()
+        for c in (
+            self.kind,
+            self.pair,
+            self.threshold,
+            self.k_rep,
+            self.d0,
+            self.reach,
+        ):
+            c.observe(lambda change: self.refresh(), names="value")
+        self.widget = w.VBox(
+            [
+                w.HBox([self.kind, self.pair]),
+                w.HBox([self.threshold, self.k_rep]),
+                w.HBox([self.d0, self.reach]),
+                self.status,
+                self.output,
+            ]
+        )
+        self.figure = plt.figure(figsize=(10, 4))
+        plt.close(self.figure)
+        self.episode = None
+        self.refresh()
+
+    def settings(self) -> dict:
+        """Return the current gains, as `make_controller` keywords."""
+        return {
+            "threshold": float(self.threshold.value),
+            "k_rep": float(self.k_rep.value),
+            "d0": float(self.d0.value),
+            "reach": float(self.reach.value),
+        }
+
+    def refresh(self):
+        """Run the episode with the current choices and redraw."""
+        from IPython.display import display
+
+        self.episode = ep = episode_for(
+            self.world_name, int(self.pair.value), self.kind.value, self.seed,
+            **self.settings(), **self.parts,
+        )  # fmt: skip
+        self.figure.clf()
+        a, b = self.figure.subplots(1, 2, gridspec_kw={"width_ratios": [1.3, 1]})
+        plot_episode(a, ep, self.world, echoes=False)
+        plot_clearance(b, ep)
+        self.status.value = (
+            f"{ep.controller}: {ep.outcome} after {ep.duration:.1f} s, "
+            f"min clearance {ep.min_clearance:.2f} m, {ep.collisions} collision(s)"
+        )
+        self.output.clear_output(wait=True)
+        with self.output:
+            display(self.figure)
+        return ep
+
+    def _ipython_display_(self):
+        from IPython.display import display
+
+        display(self.widget)
+
+
+@dataclass
+class Replay:
+    """What a VFH saw and chose at each cycle of an episode.
+
+    Attributes
+    ----------
+    histograms : numpy.ndarray, shape (T, n_sectors)
+    steer : numpy.ndarray, shape (T,)
+        Chosen direction, rad, robot frame (nan: all blocked).
+    target : numpy.ndarray, shape (T,)
+        The goal's bearing, rad, robot frame.
+    threshold : float
+        The VFH's upper threshold.
+    controller : VFH
+        The controller after the last cycle (its grid is the final map).
+    """
+
+    histograms: np.ndarray
+    steer: np.ndarray
+    target: np.ndarray
+    threshold: float
+    controller: VFH
+
+
+def vfh_replay(episode, controller: VFH | None = None) -> Replay:
+    """Feed an episode's sonar and odometry through a VFH; record each cycle."""
+    c = VFH() if controller is None else controller
+    c.goal = None if episode.goal is None else np.array(episode.goal)
+    c.reset()
+    hists, steer, target = [], [], []
+    for s, p in zip(episode.sonar, episode.odometry, strict=True):
+        c.command(s, p)
+        hists.append(c.histogram.copy())
+        steer.append(c.steer)
+        target.append(c.goal_direction(p)[0] if c.goal is not None else 0.0)
+    return Replay(np.array(hists), np.array(steer), np.array(target),
+                  c.threshold_high, c)  # fmt: skip
+
+
+class HistogramPanel:
+    """A time slider over an episode: the robot on the map and VFH's histogram.
+
+    Parameters
+    ----------
+    episode : robotlib.avoidance.Episode
+    world : robotlib.world.World, optional
+    controller : VFH, optional
+        The VFH to replay the episode through (default settings if None).
+    """
+
+    def __init__(self, episode, world=None, controller=None):
+        import ipywidgets as w
+
+        self.episode, self.world = episode, world
+        self.replay = vfh_replay(episode, controller)
+        self.step = w.IntSlider(
+            value=0, min=0, max=len(episode.time) - 1, description="cycle",
+            continuous_update=False,
+        )  # fmt: skip
+        self.output = w.Output()
+        self.step.observe(lambda change: self.refresh(), names="value")
+        self.widget = w.VBox([self.step, self.output])
+        self.figure = plt.figure(figsize=(10, 4))
+        plt.close(self.figure)
+        self.refresh()
+
+    def refresh(self):
+        """Redraw the map and the histogram at the slider's cycle."""
+        from IPython.display import display
+
+        k = int(self.step.value)
+        ep, r = self.episode, self.replay
+        self.figure.clf()
+        a = self.figure.add_subplot(1, 2, 1)
+        b = self.figure.add_subplot(1, 2, 2, projection="polar")
+        plot_episode(a, ep, self.world, echoes=False)
+        poses = ep.truth if ep.truth is not None else ep.odometry
+        a.plot(*poses[k, :2], "o", color="k", ms=8)
+        a.set_title(f"t = {ep.time[k]:.1f} s")
+        plot_polar_histogram(b, r.histograms[k], r.threshold, r.steer[k], r.target[k])
+        self.output.clear_output(wait=True)
+        with self.output:
+            display(self.figure)
+
+    def _ipython_display_(self):
+        from IPython.display import display
+
+        display(self.widget)

@@ -1,0 +1,173 @@
+"""Plain NumPy references for robotlib.mapping's numba kernels (slow, obvious)."""
+
+import math
+
+import numpy as np
+
+
+def cell_centres(shape, origin, res):
+    ny, nx = shape
+    xs = origin[0] + (np.arange(nx) + 0.5) * res
+    ys = origin[1] + (np.arange(ny) + 0.5) * res
+    return np.meshgrid(xs, ys)
+
+
+def sonar_cone_increments(
+    shape,
+    origin,
+    res,
+    sx,
+    sy,
+    sth,
+    z,
+    half_cone,
+    max_range,
+    thickness,
+    l_occ,
+    l_free,
+    sigma,
+    max_weight,
+):
+    """Every cell centre tested by its polar coordinates about the sensor."""
+    gx, gy = cell_centres(shape, origin, res)
+    dx, dy = gx - sx, gy - sy
+    r = np.hypot(dx, dy)
+    phi = np.arctan2(dy, dx) - sth
+    phi = np.arctan2(np.sin(phi), np.cos(phi))
+    echo = z < max_range
+    reach = z + thickness / 2 if echo else max_range
+    inside = (np.abs(phi) <= half_cone) & (r <= reach) & (np.abs(phi) < math.pi / 2)
+    w = 1.0 if echo else max_weight
+    weight = w * (np.exp(-(phi**2) / (2 * sigma**2)) if sigma > 0 else 1.0)
+    occ = echo & (r >= z - thickness / 2)
+    return np.where(inside, np.where(occ, l_occ, l_free) * weight, 0.0)
+
+
+def sonar_scan(
+    L,
+    origin,
+    res,
+    pose,
+    sensors,
+    ranges,
+    half_cone,
+    max_range,
+    thickness,
+    l_occ,
+    l_free,
+    sigma,
+    max_weight,
+    l_min,
+    l_max,
+):
+    L = L.astype(np.float64).copy()
+    x, y, th = pose
+    for (ax, ay, ah), z in zip(sensors, ranges, strict=True):
+        sx = x + math.cos(th) * ax - math.sin(th) * ay
+        sy = y + math.sin(th) * ax + math.cos(th) * ay
+        inc = sonar_cone_increments(
+            L.shape,
+            origin,
+            res,
+            sx,
+            sy,
+            th + ah,
+            z,
+            half_cone,
+            max_range,
+            thickness,
+            l_occ,
+            l_free,
+            sigma,
+            max_weight,
+        )
+        L = np.clip(L + inc, l_min, l_max)
+    return L
+
+
+def beam_cells(shape, origin, res, ox, oy, a, z, max_range):
+    """Cells a beam crosses, in order: every crossing of a grid line, sorted by
+    distance, and the cell at the middle of each piece between crossings."""
+    length = z if z < max_range else max_range
+    dx, dy = math.cos(a), math.sin(a)
+    gx, gy = (ox - origin[0]) / res, (oy - origin[1]) / res
+    ex, ey = gx + dx * length / res, gy + dy * length / res
+    ts = [0.0, length]
+    for g, e, d in ((gx, ex, dx), (gy, ey, dy)):
+        if d != 0.0:
+            lo, hi = sorted((g, e))
+            lines = np.arange(math.floor(lo) + 1, math.ceil(hi))
+            ts.extend(((lines - g) * res / d).tolist())
+    ts = np.unique(np.clip(ts, 0.0, length))
+    mids = np.append(0.5 * (ts[:-1] + ts[1:]), length)
+    j = np.floor(gx + mids * dx / res).astype(int)
+    i = np.floor(gy + mids * dy / res).astype(int)
+    cells = []
+    for c in zip(i.tolist(), j.tolist(), strict=True):
+        if not cells or cells[-1] != c:
+            cells.append(c)
+    return cells
+
+
+def laser_scan(
+    L, origin, res, lpose, angles, ranges, max_range, l_occ, l_free, l_min, l_max
+):
+    L = L.astype(np.float64).copy()
+    ny, nx = L.shape
+    for a, z in zip(angles, ranges, strict=True):
+        cells = beam_cells(
+            L.shape, origin, res, lpose[0], lpose[1], lpose[2] + a, z, max_range
+        )
+        for k, (i, j) in enumerate(cells):
+            if 0 <= i < ny and 0 <= j < nx:
+                last = k == len(cells) - 1
+                inc = l_occ if (last and z < max_range) else l_free
+                L[i, j] = min(max(L[i, j] + inc, l_min), l_max)
+    return L
+
+
+def best_near(L, origin, res, px, py):
+    j = math.floor((px - origin[0]) / res)
+    i = math.floor((py - origin[1]) / res)
+    p = np.full((3, 3), 0.5)  # off the grid: unknown
+    for di in range(-1, 2):
+        for dj in range(-1, 2):
+            if 0 <= i + di < L.shape[0] and 0 <= j + dj < L.shape[1]:
+                p[di + 1, dj + 1] = 1 / (1 + math.exp(-float(L[i + di, j + dj])))
+    return p.max()
+
+
+def laser_loglik(L, origin, res, lpose, angles, ranges, max_range, p_rand):
+    total = 0.0
+    for a, z in zip(angles, ranges, strict=True):
+        if z >= max_range:
+            continue
+        px = lpose[0] + z * math.cos(lpose[2] + a)
+        py = lpose[1] + z * math.sin(lpose[2] + a)
+        total += math.log(p_rand + (1 - p_rand) * best_near(L, origin, res, px, py))
+    return total
+
+
+def sonar_loglik(
+    L, origin, res, pose, sensors, ranges, half_cone, max_range, n_rays, p_rand
+):
+    total = 0.0
+    x, y, th = pose
+    for (ax, ay, ah), z in zip(sensors, ranges, strict=True):
+        if z >= max_range:
+            continue
+        sx = x + math.cos(th) * ax - math.sin(th) * ay
+        sy = y + math.sin(th) * ax + math.cos(th) * ay
+        offs = np.linspace(-half_cone, half_cone, n_rays) if n_rays > 1 else [0.0]
+        best = max(
+            best_near(
+                L,
+                origin,
+                res,
+                sx + z * math.cos(th + ah + o),
+                sy + z * math.sin(th + ah + o),
+            )
+            for o in offs
+        )
+        total += math.log(p_rand + (1 - p_rand) * best)
+    return total

@@ -1,0 +1,139 @@
+import math
+
+import numpy as np
+import pytest
+
+from robotlib.localization import MCL
+from robotlib.pioneer.server import SimServer
+from robotlib.planning import (
+    GOALS,
+    PathFollower,
+    PurePursuit,
+    StopAndTurn,
+    astar,
+    configuration_space,
+    cross_track,
+    navigate,
+    office_with_boxes,
+    pure_pursuit,
+)
+from robotlib.planning.navigate import TURN_MARGIN
+from robotlib.robot import robot
+from robotlib.sim import OdometryNoise, SimRobot, Simulator
+from robotlib.world import load_world
+
+
+def test_pure_pursuit_law():
+    assert pure_pursuit((0, 0, 0), (1, 0), 0.3) == (0.3, 0.0)
+    v, w = pure_pursuit((0, 0, 0), (1, 1), 0.3, w_max=10)
+    alpha, dist = math.pi / 4, math.sqrt(2)
+    assert v == 0.3 and w == pytest.approx(0.3 * 2 * math.sin(alpha) / dist)
+    v, w = pure_pursuit((0, 0, 0), (1, -1), 0.3, w_max=10)
+    assert w < 0
+    assert pure_pursuit((0, 0, math.pi / 2), (0, -1), 0.3, 0.7) == (0.0, 0.7)
+    assert pure_pursuit((0, 0, 0), (1, 1), 0.3, w_max=0.1)[1] == 0.1
+
+
+def test_cross_track():
+    path = np.array([[0.0, 0.0], [2.0, 0.0], [2.0, 2.0]])
+    pts = np.array([[1.0, 0.5], [3.0, 1.0], [-1.0, 0.0], [2.0, 3.0]])
+    np.testing.assert_allclose(cross_track(path, pts), [0.5, 1.0, 1.0, 1.0])
+
+
+@pytest.fixture(scope="module")
+def office():
+    return load_world("office")
+
+
+def test_pure_pursuit_tracks_an_astar_path(office):
+    cs = configuration_space(office, margin=TURN_MARGIN)
+    plan = astar(cs, (1.5, 7.5), (12.5, 3.0))
+    r = SimRobot(Simulator(office, seed=0, odometry=OdometryNoise.none()))
+    pp = PurePursuit(plan.path, lookahead=0.3, speed=0.3)
+    xy = []
+    for _ in range(1500):
+        v, w = pp.command(r.true_pose())
+        if pp.done:
+            break
+        r.setvel(v)
+        r.setrotvel(w)
+        r.readsonar()
+        assert not r.state.stalled
+        xy.append(r.true_pose()[:2])
+    assert pp.done
+    ct = cross_track(plan.path, np.array(xy))
+    assert np.sqrt(np.mean(ct**2)) < 0.05
+    assert np.hypot(*(xy[-1] - plan.path[-1])) < 0.15
+
+
+def test_follower_hands_only_unmapped_obstacles_to_the_avoider():
+    f = PathFollower(PurePursuit([[0, 0], [5, 0]]), StopAndTurn())
+    open_ = np.full(8, 5.0)
+    near = open_.copy()
+    near[3:5] = 0.5
+    assert f.command(open_, (0, 0, 0), open_) == pytest.approx((0.3, 0.0), abs=0.2)
+    assert not f.avoiding
+    f.command(near, (0, 0, 0), near + 0.05)  # a mapped wall: keep following
+    assert not f.avoiding
+    v, w = f.command(near, (0, 0, 0), open_)  # unmapped: the avoider steers
+    assert f.avoiding and f.avoider.goal is not None
+    f.command(np.full(8, 0.3), (0, 0, 0), np.full(8, 0.3))  # too close anyway
+    assert f.avoiding
+    for _ in range(f.release_cycles):
+        f.command(open_, (0, 0, 0), open_)
+    assert not f.avoiding
+
+
+def test_goal_sets_are_free_and_reachable():
+    for name, sets in GOALS.items():
+        world = load_world(name)
+        cs = configuration_space(world, margin=TURN_MARGIN)
+        assert len(sets) >= 2
+        for goals in sets.values():
+            for g in goals:
+                assert astar(cs, world.start, g).found, (name, g)
+
+
+def test_bad_goal_is_a_clear_error(office):
+    r = SimRobot(Simulator(office, seed=0))
+    with pytest.raises(ValueError, match="goal .* inside an obstacle"):
+        navigate(r, office, (5.0, 3.0))
+
+
+def run(world_map, world_sim, goal, seed):
+    r = SimRobot(Simulator(world_sim, seed=seed))
+    return navigate(r, world_map, goal, rng=seed)
+
+
+def test_navigate_past_an_unmapped_box_from_global_localization(office):
+    sim_world = office_with_boxes()
+    a = run(office, sim_world, (7.5, 5.2), 2)
+    assert a.success, (a.outcome, a.final_error)
+    assert a.localized_at > 0 and len(a.plans) >= 1 and len(a.hits) > 0
+    assert a.duration <= 180 and not a.stalled.any()
+    # clearance from every wall and box along the true path
+    assert sim_world.distance_to_walls(a.truth[:, :2]).min() > 0.2
+    b = run(office, sim_world, (7.5, 5.2), 2)
+    for field in ("truth", "estimate", "command", "sonar", "mode"):
+        assert np.array_equal(getattr(a, field), getattr(b, field)), field
+
+
+def test_navigate_in_the_maze():
+    maze = load_world("maze")
+    nav = run(maze, maze, GOALS["maze"]["corners"][1], 1)
+    assert nav.success and nav.duration <= 180
+
+
+def test_navigate_over_tcp(office):
+    start = np.array(office.start)
+    with SimServer(office, robots=1, port=0, speed=20.0, seed=0) as srv:
+        srv.sim.step()
+        r = robot(srv.addresses[0])
+        try:
+            mcl = MCL.best(office, rng=0, n=2000, init=start)  # tracking start
+            nav = navigate(r, office, (2.5, 3.0), mcl=mcl, min_filter_steps=3)
+        finally:
+            r.disconnect()
+    assert nav.reached, nav.outcome
+    assert np.isnan(nav.truth).all()  # a Pioneer reports no true pose
+    assert np.hypot(*(nav.estimate[-1, :2] - (2.5, 3.0))) < 0.2

@@ -1,0 +1,206 @@
+"""What a student sees, headless: warm-up, progress, unsolved errors, panels."""
+
+from __future__ import annotations
+
+import json
+import threading
+import time
+
+import nbformat
+import numba
+import pytest
+from nbclient import NotebookClient
+
+import robotlib.notebook as nb
+from robotlib.cli import main
+from robotlib.experiments import drive_route
+from robotlib.widgets import mcl as widgets
+from robotlib.widgets._live import Cancelled, LiveRunner
+from robotlib.world import load_world
+
+
+def test_compile_watch_names_a_kernel_that_compiles_and_progress_shows_it(capsys):
+    @numba.njit  # new each run: never in the cache
+    def _ux_fresh_kernel(x):
+        return x + 1
+
+    _ux_fresh_kernel.py_func.__module__ = "robotlib.tests_ux"
+    nb.WARMUPS["_ux"] = [("a fresh kernel", lambda: _ux_fresh_kernel(1))]
+    try:
+        spent = nb.warm_up(["_ux"])
+    finally:
+        del nb.WARMUPS["_ux"]
+    assert set(spent) == {"_ux"}
+    err = capsys.readouterr().err
+    assert "compiling kernels (once)" in err and "tests_ux._ux_fresh_kernel" in err
+    assert "1 kernels compiled" in err
+    # a second warm-up loads (nothing compiles): no bar at all
+    nb.WARMUPS["_ux"] = lambda: _ux_fresh_kernel(2)
+    try:
+        nb.warm_up(["_ux"])
+    finally:
+        del nb.WARMUPS["_ux"]
+    assert "compiling" not in capsys.readouterr().err
+
+
+def test_warm_up_rejects_unknown_parts():
+    with pytest.raises(ValueError, match="unknown warm-up"):
+        nb.warm_up(["nope"])
+
+
+def test_warmup_command_lists_and_warms(capsys):
+    assert main(["warmup", "--list"]) == 0
+    listed = capsys.readouterr().out
+    assert "sim" in listed and "MCL.best" in listed
+    assert main(["warmup", "sim"]) == 0
+    assert "sim" in capsys.readouterr().out
+    assert "sim" in nb.warmed_parts()  # setup(warm=("sim",)) now only loads
+
+
+def _run(cells, tmp_path):
+    (tmp_path / "lib.py").write_text("def later():\n    raise NotImplementedError\n")
+    book = nbformat.v4.new_notebook()
+    for kind, src in cells:
+        v4 = nbformat.v4
+        make = v4.new_code_cell if kind == "code" else v4.new_markdown_cell
+        book.cells.append(make(src))
+    (tmp_path / "lab.ipynb").write_text(nbformat.writes(book))
+    client = NotebookClient(
+        book, timeout=120, allow_errors=True, kernel_name="python3",
+        resources={"metadata": {"path": str(tmp_path)}},
+    )  # fmt: skip
+    client.execute()
+    return [
+        out for cell in book.cells if cell.cell_type == "code" for out in cell.outputs
+        if out.output_type == "error"
+    ]  # fmt: skip
+
+
+def test_an_unsolved_exercise_is_said_plainly_and_still_fails(tmp_path):
+    errors = _run(
+        [
+            ("code", "import robotlib.notebook\nrobotlib.notebook.explain_unsolved()"),
+            ("markdown", "### Exercise 3\nWrite `resize`."),
+            ("code", "def resize(n):\n    raise NotImplementedError()"),
+            ("code", "resize(3)"),
+            ("code", "import lib\nlib.later()"),
+        ],
+        tmp_path,
+    )
+    assert len(errors) == 2  # both cells fail: the grader and Run All see them
+    unsolved, library = errors
+    text = "\n".join(unsolved.traceback)
+    assert unsolved.ename == "NotImplementedError"
+    assert "Exercise 3 is not done yet: write `resize` in the cell above" in text
+    assert len(text.splitlines()) <= 4
+    # a NotImplementedError from the library keeps its traceback
+    assert "is not done yet" not in "\n".join(library.traceback)
+
+
+def test_live_runner_coalesces_and_cancels():
+    started, release = threading.Event(), threading.Event()
+    done = []
+
+    def job(request):
+        started.set()
+        while not release.is_set():
+            runner.check()  # a newer request stops this one here
+            time.sleep(0.005)
+        return request * 10
+
+    runner = LiveRunner(job, lambda req, res: done.append(res), background=True)
+    runner.submit(1)
+    assert started.wait(5)
+    for k in (2, 3, 4):  # arrive while 1 runs: 1 is cancelled, 2 and 3 never run
+        runner.submit(k)
+    release.set()
+    assert runner.wait(10)
+    assert done == [40]
+    assert runner.cancelled == 1 and runner.runs == 2
+    with pytest.raises(Cancelled):
+        runner.check(generation=0)
+
+
+@pytest.fixture(scope="module")
+def route():
+    return drive_route(load_world("corridor"), seed=0, n_steps=8)
+
+
+def test_mcl_panel_controls(route):
+    panel = widgets.MCLPanel(route, n_steps=4, n=300, lam=0.5)
+    values = [v for _, v in panel.n.options]
+    assert {50, 300, 1000, 50_000} <= set(values)
+    assert all(b / a <= 2.0 for a, b in zip(values, values[1:], strict=False))  # log
+    assert not panel.lam.disabled
+    panel.resampler.value = "KLD"  # lambda does nothing for KLD
+    assert panel.lam.disabled
+    panel.resampler.value = widgets.RESAMPLERS[0]
+    assert not panel.lam.disabled
+    panel.n_typed.value = 420  # a typed count that is not a stop of the slider
+    assert panel.n.value == 420 and panel.history.n_particles[0] == 420
+    panel.n.value = 1000
+    assert panel.n_typed.value == 1000
+    assert "1,000 particles" in panel.figure.texts[0].get_text()
+
+
+def test_mcl_panel_answers_at_once_and_runs_the_newest_in_the_background(route):
+    panel = widgets.MCLPanel(route, n_steps=8, n=300, background=True)
+    first = panel.image.value
+    t0 = time.perf_counter()
+    panel.n.value = 500
+    assert time.perf_counter() - t0 < 0.1  # the change returns at once...
+    assert panel.status.value.startswith("running")  # ...saying it runs
+    assert "robotlib-stale" in panel.image._dom_classes
+    panel.n.value = 750  # supersedes the run of 500
+    panel.n.value = 1000
+    assert panel.runner.wait(120)
+    assert panel.history.n_particles[0] == 1000  # the newest settings won
+    assert panel.runner.runs <= 3 and panel.image.value != first
+    assert "robotlib-stale" not in panel.image._dom_classes
+    assert panel.timings["feedback_s"] < 0.1
+    assert json.dumps(panel.timings)
+
+
+def test_run_mcl_keeps_snapshots_and_times_and_they_plot(route):
+    from matplotlib.figure import Figure
+
+    from robotlib.plotting.mcl import plot_particle_snapshots
+
+    seen = []
+    h = widgets.run_mcl(
+        route, n=200, seed=0, snapshot_steps=(1, 5), on_step=lambda k, n: seen.append(k)
+    )
+    assert seen == list(range(1, len(route) + 1))
+    assert sorted(h.snapshots) == [1, 5]
+    first = h.snapshots[1]  # after step 1's resampling
+    assert first["particles"].shape == (len(first["weights"]), 3)
+    assert abs(h.snapshots[5]["weights"].sum() - 1) < 1e-9
+    assert all(t > 0 for t in h.time_ms)
+    again = widgets.run_mcl(route, n=200, seed=0)  # snapshots change nothing
+    assert again.estimate[-1].tolist() == h.estimate[-1].tolist()
+    fig = Figure()
+    axes = plot_particle_snapshots(fig, route.world, h.snapshots)
+    assert [a.get_title(loc="left") for a in axes[:2]] == [
+        f"step 1: {len(first['particles'])} particles",
+        f"step 5: {len(h.snapshots[5]['particles'])} particles",
+    ]
+    assert all(a.get_aspect() == 1.0 for a in axes[:2])
+
+
+def test_legends_go_outside_the_map():
+    from matplotlib.figure import Figure
+
+    from robotlib.plotting import plot_world
+    from robotlib.plotting.style import PALETTE, legend_outside, map_figsize
+
+    fig = Figure(figsize=map_figsize(load_world("corridor").bounds))
+    ax = fig.add_subplot()
+    plot_world(ax, load_world("corridor"))
+    ax.plot([1, 2], [4, 4], label="path")
+    legend = legend_outside(ax)  # a wide map: the legend goes above it
+    fig.canvas.draw()
+    box, axbox = legend.get_window_extent(), ax.get_window_extent()
+    assert box.y0 >= axbox.y1 - 1
+    assert len(set(PALETTE)) == 8
+    w, h = map_figsize((0, 0, 29, 8))
+    assert w == 9.0 and 1.8 <= h <= 6.0
