@@ -2,11 +2,23 @@
 
 Also `serial_and_parallel`, which compiles one kernel body both ways. Only
 kernels import this module; it imports nothing of robotlib.
+
+Threads wait passively: unless the environment says otherwise
+(``OMP_WAIT_POLICY`` or ``GOMP_SPINCOUNT`` set), importing this module sets
+``OMP_WAIT_POLICY=PASSIVE`` before numba starts its OpenMP threads, so a
+thread with no work sleeps instead of spinning. On a machine shared with
+other work the spinning default made the median step of 10,000 particles
+over a hundred times its fastest; ``bench/bench_threads.py`` compares the
+layers and policies.
 """
 
+import os
 import types
 
-import numba as nb
+if "OMP_WAIT_POLICY" not in os.environ and "GOMP_SPINCOUNT" not in os.environ:
+    os.environ["OMP_WAIT_POLICY"] = "PASSIVE"
+
+import numba as nb  # noqa: E402  (after the wait policy: libgomp reads it once)
 
 JIT = {"cache": True, "nogil": True, "fastmath": False, "error_model": "numpy"}
 """Options for ``numba.njit`` on serial kernels."""

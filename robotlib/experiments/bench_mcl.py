@@ -9,6 +9,10 @@ the same run, and prints milliseconds and ratios; ``--json`` writes
 measures the cone table's build time and memory for worlds
 (``--table-world``, default the office and a 20 m x 20 m square of rooms).
 
+Beside them, in the same run, Robotics Toolbox for Python's particle filter
+(a landmark model; the optional ``bench`` extra, skipped with a message
+when missing).
+
 It also times the first step of filters in a fresh process (numba's cache
 warm: run it twice), import and construction apart (``--first-step``).
 Results carry the median (``ms_per_step``) and the fastest (``ms_min``) of
@@ -229,6 +233,44 @@ def bench_mcl(
     return results
 
 
+def bench_rtb(counts, reps: int = 10) -> list[dict] | str:
+    """Time Robotics Toolbox for Python's particle filter step per particle count.
+
+    Its standard set-up (a bicycle on a random path among 20 landmarks,
+    range-bearing readings of one landmark a step): a simpler sensor model
+    than eight sonar cones, the peer the issue compares with. Returns rows
+    like `bench_mcl`'s (``path`` ``"rtb"``, ``model`` ``"landmark"``), or a
+    message when the package is missing (``pip install robotlib[bench]``).
+    """
+    try:
+        from roboticstoolbox import (
+            Bicycle,
+            LandmarkMap,
+            ParticleFilter,
+            RandomPath,
+            RangeBearingSensor,
+        )
+    except ImportError:
+        return "Robotics Toolbox not installed (pip install 'robotlib[bench]'): skipped"
+    lmap = LandmarkMap(20, workspace=10, seed=0)
+    robot = Bicycle(covar=np.diag([0.02, np.deg2rad(0.5)]) ** 2, workspace=lmap)
+    robot.control = RandomPath(workspace=lmap, seed=0)
+    sensor = RangeBearingSensor(
+        robot, lmap, covar=np.diag([0.1, np.deg2rad(1)]) ** 2, plot=False, seed=0
+    )
+    rows = []
+    for n in counts:
+        pf = ParticleFilter(
+            robot, sensor, np.diag([0.1, 0.1, np.deg2rad(1)]) ** 2,
+            np.diag([0.1, 0.1]), nparticles=n, history=False, seed=0,
+        )  # fmt: skip
+        pf._init()
+        ms, ms_min = _time(pf._step, reps)
+        rows.append({"path": "rtb", "model": "landmark", "n": n, "ms_per_step": ms,
+                     "ms_min": ms_min})  # fmt: skip
+    return rows
+
+
 def square_world(side: float = 20.0, room: float = 4.0, door: float = 1.0):
     """Build a ``side`` x ``side`` m world of ``room`` m rooms, ``door`` m doors.
 
@@ -346,6 +388,22 @@ def run(args: argparse.Namespace) -> int:
     results = bench_mcl(args.world, tuple(args.n), tuple(args.model), reps=args.reps)
     _print_mcl(results)
     out = {"results": results}
+    if args.peers:
+        rtb = bench_rtb(tuple(args.n), max(3, args.reps // 2))
+        if isinstance(rtb, str):
+            print(rtb)  # noqa: T201
+        else:
+            out["results"] += rtb
+            fast = {(r["model"], r["n"]): r for r in results if r["path"] == "fast"}
+            for r in rtb:
+                ours = fast.get(("beam", r["n"]))
+                ratio = r["ms_per_step"] / ours["ms_per_step"] if ours else math.nan
+                print(  # noqa: T201
+                    f"Robotics Toolbox PF (landmarks) n={r['n']}: "
+                    f"{r['ms_per_step']:.3f}"
+                    f" ms (fastest {r['ms_min']:.3f}); rtb / robotlib fast beam: "
+                    f"{ratio:.1f}"
+                )
     if args.table_world:
         out["table"] = [bench_table(name) for name in args.table_world.split(",")]
         for t in out["table"]:
@@ -375,6 +433,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument("--model", nargs="+", default=["paper", "beam"])
     parser.add_argument("--reps", type=int, default=20)
+    parser.add_argument(
+        "--peers",
+        action=argparse.BooleanOptionalAction,
+        default=True,
+        help="time Robotics Toolbox's particle filter too (if installed)",
+    )
     parser.add_argument(
         "--first-step",
         action=argparse.BooleanOptionalAction,

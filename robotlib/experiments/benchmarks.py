@@ -23,6 +23,7 @@ BENCHES = {
     "plan": "robotlib.experiments.bench_plan",
     "nav": "robotlib.experiments.bench_nav",
     "large-map": "robotlib.experiments.bench_large_map",
+    "buildings": "robotlib.experiments.bench_buildings",
 }
 """Topic name to the module that measures it."""
 

@@ -26,7 +26,7 @@ from ..world.index import INDEX_MIN_SEGMENTS
 from . import _kernels
 from .motion import PARALLEL_MIN, _particles
 
-__all__ = ["ConeTable", "cone_table", "expected_readings"]
+__all__ = ["MAX_TABLE_BYTES", "ConeTable", "cone_table", "expected_readings"]
 
 
 class ConeTable:
@@ -49,6 +49,10 @@ class ConeTable:
         Cell side, m.
     n_bins : int
         Direction bins over the full turn.
+    max_bytes : int
+        Largest table to build, bytes (default `MAX_TABLE_BYTES`): a larger
+        one raises a `MemoryError` saying how big it would be and what to
+        change, instead of exhausting the machine.
 
     Attributes
     ----------
@@ -66,6 +70,7 @@ class ConeTable:
         sonar: SonarModel | None = None,
         resolution: float = 0.05,
         n_bins: int = 72,
+        max_bytes: int | None = None,
     ):
         sonar = SonarModel() if sonar is None else sonar
         if sonar.max_range * 1000 > np.iinfo(np.uint16).max:
@@ -87,8 +92,7 @@ class ConeTable:
             steps = sonar.cone / (sonar.n_rays - 1) / bin_width
             if abs(steps - round(steps)) < 1e-9 and round(steps) >= 1:
                 ray_step = int(round(steps))
-        if ny * nx * n_bins >= 2**31:  # the fused steps index it with int32
-            raise ValueError("cone table too large: use a coarser resolution")
+        _check_size(world, ny, nx, self.resolution, self.n_bins, max_bytes)
         self.table = np.empty((ny, nx, n_bins), dtype=np.uint16)
         t0 = time.perf_counter()
         model = (
@@ -101,9 +105,12 @@ class ConeTable:
             float(sonar.min_range),
             sonar.cos_specular,
         )
-        if len(world.obstacles) >= INDEX_MIN_SEGMENTS:
-            # a large map: rays through the walls' bucket index, jumping over
-            # clear space by the distance field (the same table, much sooner)
+        if ray_step == 0 and len(world.obstacles) >= INDEX_MIN_SEGMENTS:
+            # cones cast whole on a large map: rays through the walls' bucket
+            # index, jumping over clear space by the distance field (the same
+            # table, much sooner). With shared rays (``ray_step > 0``) the
+            # sweep of `build_cone_table` is sooner still: 4.6 s against 9.5 s
+            # of processor time on a 50 m building of 532 walls.
             index = world.segment_index()
             field = world.distance_field(self.resolution)
             _kernels.build_cone_table_indexed(
@@ -155,6 +162,27 @@ class ConeTable:
         return out
 
 
+MAX_TABLE_BYTES = 1 << 30
+"""Largest cone table `ConeTable` builds unless told otherwise, bytes (1 GiB)."""
+
+
+def _check_size(world, ny, nx, resolution, n_bins, max_bytes) -> None:
+    """Raise a `MemoryError` naming the size and the remedy if the table is too big."""
+    limit = MAX_TABLE_BYTES if max_bytes is None else int(max_bytes)
+    nbytes = ny * nx * n_bins * 2
+    if nbytes <= limit and ny * nx * n_bins < 2**31:  # fused steps index with int32
+        return
+    w, h = world.size
+    coarser = math.ceil(math.sqrt(nbytes / min(limit, 2**32 - 2)) * resolution * 100)
+    raise MemoryError(
+        f"cone table too large: a {w:g} m x {h:g} m world at {resolution:g} m "
+        f"and {n_bins} direction bins needs {ny} x {nx} x {n_bins} entries "
+        f"({nbytes / 1e6:,.0f} MB; the limit is {limit / 1e6:,.0f} MB). Use a "
+        f"coarser resolution (resolution={coarser / 100:g} fits), fewer bins "
+        f"(n_bins), the exact path (fast=False), or a larger max_bytes"
+    )
+
+
 _TABLES: dict = {}
 
 
@@ -163,11 +191,12 @@ def cone_table(
     sonar: SonarModel | None = None,
     resolution: float = 0.05,
     n_bins: int = 72,
+    max_bytes: int | None = None,
 ) -> ConeTable:
     """Return the `ConeTable` for a world, built on first use and then reused.
 
     Tables are kept while their world is alive, one per sonar geometry,
-    resolution and bin count.
+    resolution and bin count. ``max_bytes`` as for `ConeTable`.
     """
     sonar = SonarModel() if sonar is None else sonar
     key = (
@@ -184,7 +213,7 @@ def cone_table(
     entry = _TABLES.get(key)
     if entry is not None and entry[0]() is world:
         return entry[1]
-    table = ConeTable(world, sonar, resolution, n_bins)
+    table = ConeTable(world, sonar, resolution, n_bins, max_bytes)
     _TABLES[key] = (weakref.ref(world, lambda _: _TABLES.pop(key, None)), table)
     return table
 

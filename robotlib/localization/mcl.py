@@ -29,6 +29,7 @@ from . import _kernels
 from .motion import (
     PARALLEL_MIN,
     OdometryMotionModel,
+    Scratch,
     _noise_std,
     _particles,
     odometry_increment,
@@ -154,6 +155,7 @@ class MCL:
         self._adm_origin = grid.origin
         self.n_initial = int(n)
         self.init_std = tuple(float(s) for s in init_std)
+        self._scratch = Scratch()
         self.reset(init)
 
     # -- set up ---------------------------------------------------------------
@@ -299,9 +301,10 @@ class MCL:
             w = np.ascontiguousarray(w, dtype=np.float64)
         if w.shape != (len(p),):
             raise ValueError("weights must have shape (N,) like the particles")
-        noise = standard_normals(self.rng, len(p))
+        scratch = self._scratch
+        noise = standard_normals(self.rng, len(p), scratch.take("normals", p.shape))
         self.particles, weights, log_mean, ess, self.last_estimate = sensor._step(
-            p, w, motion, noise, z
+            p, w, motion, noise, z, scratch
         )
         self._weighed(weights, log_mean, ess)
         return True
@@ -377,12 +380,19 @@ class MCL:
             The estimate after the update (before resampling).
         """
         n = len(self.particles)
-        if not self._fused_step(odo_prev, odo_now, z):
+        fused = self._fused_step(odo_prev, odo_now, z)
+        if not fused:
             self.predict(odo_prev, odo_now)
             self.update(z)
             self.last_estimate = self.estimate()
         est, log_mean = self.last_estimate, self._log_mean
+        lent = (self.particles, self.weights)
         resampled, injected, regenerated = self.resample()
+        if fused:  # arrays lent by the scratch and still in use are not lent again
+            own = type(self.resampling) in _OWN_POLICIES
+            for a in lent:
+                if not own or a is self.particles or a is self.weights:
+                    self._scratch.drop(a)
         self.info = StepInfo(
             n, self.ess, resampled, len(self.particles), injected, regenerated, log_mean
         )
@@ -405,6 +415,9 @@ class MCL:
             raise ValueError("weights must have shape (N,)")
         self.particles, self.weights = p, w
 
+
+_OWN_POLICIES = (ThresholdResampling, KLDResampling, PaperResampling)
+"""Policies known to keep no reference to the particles or weights they resample."""
 
 BEST = {
     "n": 50_000,

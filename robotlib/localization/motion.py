@@ -51,7 +51,36 @@ def _fill(key: int, chunk: int, out: np.ndarray) -> None:
     gen.standard_normal(out=out)
 
 
-def standard_normals(rng: np.random.Generator, n: int) -> np.ndarray:
+class Scratch:
+    """Arrays a filter lends its kernels from step to step, by name.
+
+    A step of many particles writes several arrays of the same shapes every
+    time; making them afresh costs a page fault per 4 kB (a few ms at 100k
+    particles), so the filter keeps them here. An array handed out of the
+    filter (its particles or weights) must be `drop`-ped so it is not
+    written again.
+    """
+
+    def __init__(self):
+        self._arrays: dict[str, np.ndarray] = {}
+
+    def take(self, name: str, shape: tuple, dtype=np.float64) -> np.ndarray:
+        """Return the array ``name`` of this shape and dtype (new if none yet)."""
+        a = self._arrays.get(name)
+        if a is None or a.shape != shape or a.dtype != dtype:
+            a = self._arrays[name] = np.empty(shape, dtype=dtype)
+        return a
+
+    def drop(self, a: np.ndarray) -> None:
+        """Forget ``a`` (if lent): the next `take` of its name makes a new one."""
+        for name, b in list(self._arrays.items()):
+            if b is a:
+                del self._arrays[name]
+
+
+def standard_normals(
+    rng: np.random.Generator, n: int, out: np.ndarray | None = None
+) -> np.ndarray:
     """Draw standard normals (n, 3) for the motion noise of ``n`` particles.
 
     Up to `NORMALS_CHUNK` rows: ``rng.standard_normal((n, 3))``. Beyond, one
@@ -66,15 +95,20 @@ def standard_normals(rng: np.random.Generator, n: int) -> np.ndarray:
         The randomness.
     n : int
         Particles.
+    out : numpy.ndarray, shape (n, 3), optional
+        Filled and returned instead of a new array (the same numbers).
 
     Returns
     -------
     numpy.ndarray, shape (n, 3)
     """
+    if out is None:
+        out = np.empty((n, 3))
+    elif out.shape != (n, 3) or out.dtype != np.float64 or not out.flags.c_contiguous:
+        raise ValueError(f"out must be a contiguous float64 array ({n}, 3)")
     if n <= NORMALS_CHUNK:
-        return rng.standard_normal((n, 3))
+        return rng.standard_normal(out=out)
     key = int(rng.integers(np.iinfo(np.int64).max))
-    out = np.empty((n, 3))
     chunks = [
         (key, c, out[lo : lo + NORMALS_CHUNK])
         for c, lo in enumerate(range(0, n, NORMALS_CHUNK))

@@ -74,6 +74,26 @@ def innovation_loglik(z, zhat, n: int | None = None) -> np.ndarray:
     return out
 
 
+def _outputs(scratch, n: int, s: int) -> tuple:
+    """Arrays a fused step writes: particles (n, 3), weights (n,), and its work.
+
+    The work arrays (heading cosines and sines (n, 2), table entries (n, s)
+    int32) are used by the threaded kernels only. From ``scratch`` (a
+    `robotlib.localization.motion.Scratch`) when given, else new.
+    """
+    if scratch is None:
+        return (
+            np.empty((n, 3)), np.empty(n), np.empty((n, 2)),
+            np.empty((n, s), dtype=np.int32),
+        )  # fmt: skip
+    return (
+        scratch.take("particles", (n, 3)),
+        scratch.take("weights", (n,)),
+        scratch.take("cs", (n, 2)),
+        scratch.take("mm", (n, s), np.int32),
+    )
+
+
 class _ExpectedModel:
     """Shared part of the models that compare with expected readings."""
 
@@ -140,18 +160,22 @@ class PaperSensorModel(_ExpectedModel):
         )
         return out
 
-    def _step(self, particles, weights, motion, normals, z):
-        """Move, weigh, estimate in one kernel (see `MCL.step`; fast path only)."""
+    def _step(self, particles, weights, motion, normals, z, scratch=None):
+        """Move, weigh, estimate in one kernel (see `MCL.step`; fast path only).
+
+        ``scratch`` (a `robotlib.localization.motion.Scratch`) lends the
+        output and work arrays; None makes new ones.
+        """
         z = _scan(z, len(self.sonar.sensors))
         n = len(particles)
-        out_p, out_w = np.empty((n, 3)), np.empty(n)
+        out_p, out_w, cs, mm = _outputs(scratch, n, len(z))
         table, where = self._where()
         if n >= PARALLEL_MIN:  # each reading's term per millimetre, then lookups
             k = np.arange(int(round(self.sonar.max_range * 1000)) + 1)
             terms = np.abs((z[:, None] - k * 0.001) / z[:, None])
             log_mean, ess, est = _kernels.paper_lut_step_parallel(
                 particles, normals, motion, self.sonar.sensors, table, where, terms,
-                1.0 / n, weights, out_p, out_w,
+                1.0 / n, weights, out_p, out_w, cs, mm,
             )  # fmt: skip
         else:
             log_mean, ess, est = _kernels.paper_table_step(
@@ -292,18 +316,21 @@ class BeamSensorModel(_ExpectedModel):
         _kernels.beam_scan_lut(*model, lut)
         return lut
 
-    def _step(self, particles, weights, motion, normals, z):
-        """Move, weigh, estimate in one kernel (see `MCL.step`; fast path only)."""
+    def _step(self, particles, weights, motion, normals, z, scratch=None):
+        """Move, weigh, estimate in one kernel (see `MCL.step`; fast path only).
+
+        ``scratch`` as for `PaperSensorModel._step`.
+        """
         z = _scan(z, len(self.sonar.sensors))
         n = len(particles)
-        out_p, out_w = np.empty((n, 3)), np.empty(n)
+        out_p, out_w, cs, mm = _outputs(scratch, n, len(z))
         model = self._model(z)
         table, where = self._where()
         sensors, exponent = self.sonar.sensors, float(self.params.exponent)
         if n >= PARALLEL_MIN:  # one model table per scan, then lookups
             log_mean, ess, est = _kernels.lut_table_step_parallel(
                 particles, normals, motion, sensors, table, where, self._lut(model),
-                model[2], exponent, weights, out_p, out_w,
+                model[2], exponent, weights, out_p, out_w, cs, mm,
             )  # fmt: skip
         else:
             log_mean, ess, est = _kernels.beam_table_step(

@@ -139,8 +139,14 @@ def clearance_field(occupied, out):
                 out[i, j] = max(math.sqrt(d[i]) - math.sqrt(2.0), 0.0)
 
 
-@nb.njit(**JIT)
-def _cast_grid_pose(k, poses, ca, sa, max_range, field, x0, y0, resolution, out):
+_GRID_CHUNK = 32
+"""Poses one thread casts with one set of scratch arrays (`cast_grid`)."""
+
+
+@nb.njit(**JIT, inline="always")
+def _cast_grid_pose(
+    k, poses, ca, sa, max_range, field, x0, y0, resolution, out, ray, active
+):  # fmt: skip
     """Cast every ray of pose ``k`` on a `clearance_field`; write ``out[k]``.
 
     Each ray advances from its origin by the clearance of the cell it is in
@@ -149,6 +155,9 @@ def _cast_grid_pose(k, poses, ca, sa, max_range, field, x0, y0, resolution, out)
     cell (0 if it starts in one or outside the grid, the grid's edge counting
     as a wall) or past ``max_range``. The rays of a pose advance together, one
     step each per round, so that their reads of ``field`` overlap in memory.
+    ``ray`` (7, R) float64 and ``active`` (R,) int64 are scratch: per ray its
+    direction, the inverse of each component, its distance so far (cells)
+    and the offsets to the cell boundary ahead (1 or 0 in x and y).
     """
     n_rays = ca.shape[0]
     gx = (poses[k, 0] - x0) / resolution + 1.0
@@ -159,17 +168,22 @@ def _cast_grid_pose(k, poses, ca, sa, max_range, field, x0, y0, resolution, out)
     limit = max_range / resolution
     c0 = math.cos(poses[k, 2])
     s0 = math.sin(poses[k, 2])
-    dx = np.empty(n_rays)
-    dy = np.empty(n_rays)
-    inv_dx = np.empty(n_rays)
-    inv_dy = np.empty(n_rays)
-    t = np.zeros(n_rays)
-    active = np.arange(n_rays)
+    dx = ray[0]
+    dy = ray[1]
+    inv_dx = ray[2]
+    inv_dy = ray[3]
+    t = ray[4]
+    ox = ray[5]
+    oy = ray[6]
     for r in range(n_rays):
         dx[r] = c0 * ca[r] - s0 * sa[r]
         dy[r] = s0 * ca[r] + c0 * sa[r]
         inv_dx[r] = 1.0 / dx[r] if dx[r] != 0.0 else np.inf
         inv_dy[r] = 1.0 / dy[r] if dy[r] != 0.0 else np.inf
+        ox[r] = 1.0 if dx[r] >= 0 else 0.0
+        oy[r] = 1.0 if dy[r] >= 0 else 0.0
+        t[r] = 0.0
+        active[r] = r
     n = n_rays
     while n > 0:
         still = 0
@@ -177,15 +191,16 @@ def _cast_grid_pose(k, poses, ca, sa, max_range, field, x0, y0, resolution, out)
             r = active[q]
             px = gx + t[r] * dx[r]
             py = gy + t[r] * dy[r]
-            fj = math.floor(px)
-            fi = math.floor(py)
+            # px, py >= 1 (the ring of the field is occupied): int() floors
+            fj = float(int(px))
+            fi = float(int(py))
             c = field[int(fi), int(fj)]
             if c < 0.0:
                 out[k, r] = t[r] * resolution
                 continue
             if c < 1.0:
-                bx = ((fj + 1.0 - px) if dx[r] >= 0 else (fj - px)) * inv_dx[r]
-                by = ((fi + 1.0 - py) if dy[r] >= 0 else (fi - py)) * inv_dy[r]
+                bx = (fj + ox[r] - px) * inv_dx[r]
+                by = (fi + oy[r] - py) * inv_dy[r]
                 c = min(bx, by) + 1e-9
             t[r] += c
             if t[r] >= limit:
@@ -201,11 +216,20 @@ def cast_grid(poses, angles, max_range, field, x0, y0, resolution, out):
     """Grid version of `cast_segments` on a `clearance_field`: ``out[k, r]``.
 
     Ranges are to the boundary where each ray enters its first occupied cell.
+    Poses are cast in chunks of `_GRID_CHUNK`, each chunk with its own scratch.
     """
     ca = np.cos(angles)
     sa = np.sin(angles)
-    for k in nb.prange(poses.shape[0]):
-        _cast_grid_pose(k, poses, ca, sa, max_range, field, x0, y0, resolution, out)
+    n_rays = angles.shape[0]
+    n = poses.shape[0]
+    for q in nb.prange((n + _GRID_CHUNK - 1) // _GRID_CHUNK):
+        ray = np.empty((7, n_rays))
+        active = np.empty(n_rays, dtype=np.int64)
+        for k in range(q * _GRID_CHUNK, min(n, (q + 1) * _GRID_CHUNK)):
+            _cast_grid_pose(
+                k, poses, ca, sa, max_range, field, x0, y0, resolution, out, ray,
+                active,
+            )  # fmt: skip
 
 
 @nb.njit(**JIT)

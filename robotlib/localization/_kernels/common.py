@@ -10,7 +10,7 @@ _TWO_PI = 2.0 * math.pi
 _LOG_SQRT_2PI = 0.5 * math.log(2.0 * math.pi)
 
 
-@nb.njit(**JIT)
+@nb.njit(**JIT, inline="always")
 def wrap(a):
     """Wrap an angle to (-pi, pi]."""
     w = a - _TWO_PI * math.floor((a + math.pi) / _TWO_PI)

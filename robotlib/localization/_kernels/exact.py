@@ -85,13 +85,58 @@ def expected_scan_blocks_parallel(
         )  # fmt: skip
 
 
+@nb.njit(**JIT)
+def _block_span(lo, hi, origin, side, count):
+    """Blocks ``[first, last]`` of ``count`` whose span overlaps ``[lo, hi]``."""
+    first = 0
+    while first < count and origin + side * first + side < lo:
+        first += 1
+    last = first - 1
+    while last + 1 < count and hi >= origin + side * (last + 1):
+        last += 1
+    return first, last
+
+
+@nb.njit(**JIT)
+def _wall_blocks(seg, xmin, ymin, side, nbx, nby, grow):
+    """`wall_blocks` in two passes over the walls: count, then fill."""
+    m = seg.shape[0]
+    spans = np.empty((m, 4), dtype=np.int64)
+    counts = np.zeros(nby * nbx + 1, dtype=np.int64)
+    for k in range(m):
+        bx0, bx1 = _block_span(
+            min(seg[k, 0], seg[k, 2]) - grow, max(seg[k, 0], seg[k, 2]) + grow,
+            xmin, side, nbx,
+        )  # fmt: skip
+        by0, by1 = _block_span(
+            min(seg[k, 1], seg[k, 3]) - grow, max(seg[k, 1], seg[k, 3]) + grow,
+            ymin, side, nby,
+        )  # fmt: skip
+        spans[k, 0], spans[k, 1], spans[k, 2], spans[k, 3] = bx0, bx1, by0, by1
+        for by in range(by0, by1 + 1):
+            for bx in range(bx0, bx1 + 1):
+                counts[by * nbx + bx + 1] += 1
+    start = np.cumsum(counts)
+    fill = start[:-1].copy()
+    block_segs = np.empty((start[-1], 4))
+    for k in range(m):  # walls in order: each block's list keeps it
+        for by in range(spans[k, 2], spans[k, 3] + 1):
+            for bx in range(spans[k, 0], spans[k, 1] + 1):
+                b = by * nbx + bx
+                for t in range(4):
+                    block_segs[fill[b], t] = seg[k, t]
+                fill[b] += 1
+    return start, block_segs
+
+
 def wall_blocks(segments, bounds, max_range, side=1.0):
     """List the walls each block of ``side`` m may reach (`expected_scan_blocks`).
 
     A wall is listed for a block when its bounding box, grown by
     ``max_range`` (and 1e-6 m), overlaps the block: then and only then can a
     sensor in the block pass `robotlib.sensing._kernels.cone_walls`'s range test for
-    it. Walls keep their order.
+    it. Walls keep their order. Memory: the lists themselves (no block by
+    wall table).
 
     Returns
     -------
@@ -103,19 +148,7 @@ def wall_blocks(segments, bounds, max_range, side=1.0):
     xmin, ymin, xmax, ymax = (float(v) for v in bounds)
     nbx = max(1, math.ceil((xmax - xmin) / side))
     nby = max(1, math.ceil((ymax - ymin) / side))
-    grow = float(max_range) + 1e-6
-    lo_x = np.minimum(seg[:, 0], seg[:, 2]) - grow
-    hi_x = np.maximum(seg[:, 0], seg[:, 2]) + grow
-    lo_y = np.minimum(seg[:, 1], seg[:, 3]) - grow
-    hi_y = np.maximum(seg[:, 1], seg[:, 3]) + grow
-    bx0 = xmin + side * np.arange(nbx)
-    by0 = ymin + side * np.arange(nby)
-    in_x = (lo_x[None, :] <= bx0[:, None] + side) & (hi_x[None, :] >= bx0[:, None])
-    in_y = (lo_y[None, :] <= by0[:, None] + side) & (hi_y[None, :] >= by0[:, None])
-    keep = in_y[:, None, :] & in_x[None, :, :]  # (nby, nbx, M)
-    counts = keep.reshape(nby * nbx, -1).sum(axis=1)
-    start = np.zeros(nby * nbx + 1, dtype=np.int64)
-    np.cumsum(counts, out=start[1:])
-    idx = np.nonzero(keep.reshape(nby * nbx, -1))[1]
-    block_segs = np.ascontiguousarray(seg[idx]).reshape(-1, 4)
+    start, block_segs = _wall_blocks(
+        seg, xmin, ymin, float(side), nbx, nby, float(max_range) + 1e-6
+    )
     return start, block_segs, (xmin, ymin, 1.0 / side, nbx, nby)

@@ -27,18 +27,6 @@ from .weights import _finish_weights, _pose_mean
 
 
 @nb.njit(**JIT)
-def _move(j, particles, motion, normals, out, cs):
-    """Move particle ``j`` into ``out``; return (and keep) its heading's cos, sin."""
-    rot1, trans, rot2, sd1, sdt, sd2 = motion
-    _odometry_one(j, particles, rot1, trans, rot2, sd1, sdt, sd2, normals, out)
-    c = math.cos(out[j, 2])
-    s = math.sin(out[j, 2])
-    cs[j, 0] = c
-    cs[j, 1] = s
-    return c, s
-
-
-@nb.njit(**JIT)
 def _top(loglik):
     top = -np.inf
     for j in range(loglik.shape[0]):
@@ -59,34 +47,54 @@ def _weigh_estimate(weights, particles, cs, out_w):
 _weigh_estimate, _weigh_estimate_parallel = serial_and_parallel(_weigh_estimate)
 
 
-@nb.njit(**JIT)
-def _move_cells(
-    j, particles, motion, normals, sensors, table, where, skip, out, cs, cells
-):
-    """Move particle ``j``; its sensors' flat table indexes into ``cells[j]``.
+def _move_and_read(
+    particles, normals, motion, sensors, table, where, skip, out_p, cs, mm
+):  # fmt: skip
+    """Move every particle, then read its sensors' cone-table entries.
 
-    The cell and bin of `table_bin` (0 where ``skip[i]``: not read);
-    ``cells`` is int32 (`ConeTable` keeps below 2^31 entries).
+    Passes one and two of a fused step. Pass one moves particle ``j`` into
+    ``out_p[j]`` (as `sample_odometry`), keeps the cosine and sine of its new
+    heading in ``cs[j]`` (N, 2) and its sensors' flat table indexes (the cell
+    and bin of `table_bin`; 0 where ``skip[i]``: not read) in ``mm[j]`` (N, S)
+    int32 (`ConeTable` keeps below 2^31 entries). Pass two replaces each
+    index by the table's entry (mm): independent reads the processor
+    overlaps, the table being larger than its caches. Every helper is
+    inlined: a call per particle inside the threaded loop costs more than
+    the particle's arithmetic.
     """
+    rot1, trans, rot2, sd1, sdt, sd2 = motion
     x0, y0, inv_res = where
     ny, nx, n_bins = table.shape
-    c, s = _move(j, particles, motion, normals, out, cs)
-    for i in range(sensors.shape[0]):
-        if skip[i]:
-            cells[j, i] = 0
-            continue
-        row, col, b = table_bin(
-            out[j, 0], out[j, 1], out[j, 2], c, s, sensors, i, ny, nx, n_bins,
-            x0, y0, inv_res,
-        )  # fmt: skip
-        cells[j, i] = (row * nx + col) * n_bins + b
+    s_count = sensors.shape[0]
+    for j in nb.prange(particles.shape[0]):
+        x, y, th = _odometry_one(
+            j, particles, rot1, trans, rot2, sd1, sdt, sd2, normals, out_p
+        )
+        c = math.cos(th)
+        s = math.sin(th)
+        cs[j, 0] = c
+        cs[j, 1] = s
+        for i in range(s_count):
+            if skip[i]:
+                mm[j, i] = 0
+                continue
+            row, col, b = table_bin(
+                x, y, th, c, s, sensors, i, ny, nx, n_bins, x0, y0, inv_res
+            )
+            mm[j, i] = (row * nx + col) * n_bins + b
+    flat = table.reshape(table.size)
+    for j in nb.prange(particles.shape[0]):
+        for i in range(s_count):
+            mm[j, i] = flat[mm[j, i]]
+
+
+move_and_read, move_and_read_parallel = serial_and_parallel(_move_and_read)
 
 
 @nb.njit(**JIT)
-def _gather_mm(j, flat, cells):
-    """Replace particle ``j``'s flat indexes by the table's entries (mm)."""
-    for i in range(cells.shape[1]):
-        cells[j, i] = flat[cells[j, i]]
+def _buffers(n, s_count):
+    """Scratch for `move_and_read`: ``cs`` (n, 2) and ``mm`` (n, S) int32."""
+    return np.empty((n, 2)), np.empty((n, s_count), dtype=np.int32)
 
 
 @nb.njit(**JIT)
@@ -127,55 +135,15 @@ def _beam_mm_row(
 
 
 @nb.njit(**JIT)
-def _lut_mm_row(j, mm, lut, exponent, out):
-    """`_lut_cs` on looked-up entries ``mm[j]``."""
-    ll = 0.0
-    prod = 1.0
-    for i in range(mm.shape[1]):
-        if i % 16 == 15:
-            ll += math.log(prod)
-            prod = 1.0
-        prod *= lut[i, mm[j, i]]
-    out[j] = (ll + math.log(prod)) * exponent
-
-
-def _move_and_read(particles, normals, motion, sensors, table, where, skip, out_p):
-    """Move every particle, then read its sensors' cone-table entries.
-
-    Passes one and two of a fused step: particles are moved into ``out_p``
-    (`_move_cells`), and their sensors' entries (mm) read into ``mm`` (N, S)
-    int32, with the cosine and sine of each new heading in ``cs`` (N, 2).
-    Returns ``(cs, mm)``.
-    """
-    n = particles.shape[0]
-    cs = np.empty((n, 2))
-    mm = np.empty((n, sensors.shape[0]), dtype=np.int32)
-    for j in nb.prange(n):
-        _move_cells(j, particles, motion, normals, sensors, table, where, skip,
-                    out_p, cs, mm)  # fmt: skip
-    flat = table.reshape(table.size)
-    for j in nb.prange(n):
-        _gather_mm(j, flat, mm)
-    return cs, mm
-
-
-move_and_read, move_and_read_parallel = serial_and_parallel(_move_and_read)
-
-
-# The fused steps run in three passes: move and compute every table index,
-# read the table (independent reads the processor overlaps: the table is
-# larger than its caches), then the model. The same arithmetic as one pass.
-
-
-@nb.njit(**JIT)
 def paper_table_step(
     particles, normals, motion, sensors, table, where, z, inv_n, weights, out_p, out_w
 ):
     """Fused step with the paper's model (`paper_table_loglik`)."""
     n = particles.shape[0]
     skip = np.zeros(sensors.shape[0], dtype=np.bool_)
-    cs, mm = move_and_read(
-        particles, normals, motion, sensors, table, where, skip, out_p
+    cs, mm = _buffers(n, sensors.shape[0])
+    move_and_read(
+        particles, normals, motion, sensors, table, where, skip, out_p, cs, mm
     )
     for j in range(n):
         _paper_mm(j, mm, z, inv_n, out_w)
@@ -185,19 +153,20 @@ def paper_table_step(
 @nb.njit(**JIT_PARALLEL)
 def paper_lut_step_parallel(
     particles, normals, motion, sensors, table, where, terms, inv_n, weights, out_p,
-    out_w,
+    out_w, cs, mm,
 ):  # fmt: skip
     """`paper_table_step` over threads, each term read from a table (same result).
 
     ``terms[i, k]`` is ``|(z_i - k / 1000) / z_i|`` for every millimetre ``k``
     a table entry can hold (as `beam_scan_lut` for the beam model): a lookup
-    instead of a division per beam. Sums serial.
+    instead of a division per beam. Sums serial. ``cs`` (N, 2) and ``mm``
+    (N, S) int32 are scratch (`move_and_read`), kept by the caller.
     """
     n = particles.shape[0]
     s_count = sensors.shape[0]
     skip = np.zeros(s_count, dtype=np.bool_)
-    cs, mm = move_and_read_parallel(
-        particles, normals, motion, sensors, table, where, skip, out_p
+    move_and_read_parallel(
+        particles, normals, motion, sensors, table, where, skip, out_p, cs, mm
     )
     for j in nb.prange(n):
         d = 0.0
@@ -218,8 +187,9 @@ def beam_table_step(
     """
     z_max, p_rand, inv_sigma, exponent, u2_skip = beam
     n = particles.shape[0]
-    cs, mm = move_and_read(
-        particles, normals, motion, sensors, table, where, is_max, out_p
+    cs, mm = _buffers(n, sensors.shape[0])
+    move_and_read(
+        particles, normals, motion, sensors, table, where, is_max, out_p, cs, mm
     )
     for j in range(n):
         _beam_mm_row(
@@ -232,17 +202,27 @@ def beam_table_step(
 @nb.njit(**JIT_PARALLEL)
 def lut_table_step_parallel(
     particles, normals, motion, sensors, table, where, lut, skip, exponent, weights,
-    out_p, out_w,
+    out_p, out_w, cs, mm,
 ):  # fmt: skip
     """Fused step with the beam model read from `beam_scan_lut`'s table, over threads.
 
     The same numbers as `beam_table_step`; ``skip`` marks the max readings
-    (``lut[i]`` is constant there: the table is not read).
+    (``lut[i]`` is constant there: the table is not read). ``cs`` and ``mm``
+    are scratch, as for `paper_lut_step_parallel`.
     """
     n = particles.shape[0]
-    cs, mm = move_and_read_parallel(
-        particles, normals, motion, sensors, table, where, skip, out_p
+    s_count = sensors.shape[0]
+    move_and_read_parallel(
+        particles, normals, motion, sensors, table, where, skip, out_p, cs, mm
     )
     for j in nb.prange(n):
-        _lut_mm_row(j, mm, lut, exponent, out_w)
+        # `_lut_mm_row`, written out (no call per particle in a threaded loop)
+        ll = 0.0
+        prod = 1.0
+        for i in range(s_count):
+            if i % 16 == 15:
+                ll += math.log(prod)
+                prod = 1.0
+            prod *= lut[i, mm[j, i]]
+        out_w[j] = (ll + math.log(prod)) * exponent
     return _weigh_estimate_parallel(weights, out_p, cs, out_w)

@@ -12,7 +12,7 @@ from ..._config import JIT, serial_and_parallel
 from .common import wrap
 
 
-@nb.njit(**JIT)
+@nb.njit(**JIT, inline="always")
 def _odometry_one(j, particles, rot1, trans, rot2, sd1, sdt, sd2, normals, out):
     r1 = rot1 + sd1 * normals[j, 0]
     t = trans + sdt * normals[j, 1]
@@ -21,6 +21,7 @@ def _odometry_one(j, particles, rot1, trans, rot2, sd1, sdt, sd2, normals, out):
     out[j, 0] = particles[j, 0] + t * math.cos(th + r1)
     out[j, 1] = particles[j, 1] + t * math.sin(th + r1)
     out[j, 2] = wrap(th + r1 + r2)
+    return out[j, 0], out[j, 1], out[j, 2]
 
 
 def _sample_odometry(particles, rot1, trans, rot2, sd1, sdt, sd2, normals, out):

@@ -10,9 +10,81 @@ import numba as nb
 import numpy as np
 
 from ..._config import JIT, JIT_PARALLEL, serial_and_parallel
-from ...sensing._kernels import indexed_cone_echo, sonar_cone
+from ...sensing._kernels import _EPS, cone_echo, indexed_cone_echo
 from ...world._kernels import point_segment_distance
 from .common import _TWO_PI
+
+
+@nb.njit(**JIT)
+def _ray_echoes(cx, cy, segments, max_range, cos_specular, dirs, best, best_m, rays):
+    """Single-ray echoes from ``(cx, cy)`` along every direction bin, into ``rays``.
+
+    ``rays[b]`` is `robotlib.sensing._kernels.cone_echo` of one ray along
+    ``dirs[b]`` (the cosine and sine of ``b * 2 pi / n_bins``), but each wall
+    is tried only on the bins within one bin of the directions it subtends
+    (all bins when it nearly faces the point), and walls further than
+    ``max_range`` are left out: a pair left out cannot be a hit the ray
+    keeps, and the walls are taken in order (the first of equal hits wins),
+    so the echoes are the same numbers. ``best`` and ``best_m`` are scratch.
+    """
+    n_bins = dirs.shape[0]
+    w = _TWO_PI / n_bins
+    for b in range(n_bins):
+        best[b] = np.inf
+        best_m[b] = -1
+    far = max_range * (1.0 + 1e-9) + 1e-9
+    for m in range(segments.shape[0]):
+        px = segments[m, 0]
+        py = segments[m, 1]
+        qx = segments[m, 2]
+        qy = segments[m, 3]
+        if point_segment_distance(cx, cy, px, py, qx, qy) > far:
+            continue
+        ex = qx - px
+        ey = qy - py
+        wx = px - cx
+        wy = py - cy
+        vx = qx - cx
+        vy = qy - cy
+        first = 0
+        count = n_bins
+        if wx * wx + wy * wy > 1e-18 and vx * vx + vy * vy > 1e-18:
+            a0 = math.atan2(wy, wx)
+            span = math.atan2(vy, vx) - a0
+            if span > math.pi:
+                span -= _TWO_PI
+            elif span <= -math.pi:
+                span += _TWO_PI
+            if abs(span) < math.pi - 3.0 * w:
+                lo = a0 if span >= 0.0 else a0 + span
+                first = int(math.floor(lo / w)) - 1
+                count = min(int(math.ceil((lo + abs(span)) / w)) + 2 - first, n_bins)
+        for q in range(count):
+            b = (first + q) % n_bins
+            dx = dirs[b, 0]
+            dy = dirs[b, 1]
+            denom = dx * ey - dy * ex  # `ray_segments`, step for step
+            if abs(denom) < _EPS:
+                continue
+            t = (wx * ey - wy * ex) / denom
+            if t < 0.0 or t >= best[b]:
+                continue
+            s = (wx * dy - wy * dx) / denom
+            if 0.0 <= s <= 1.0:
+                best[b] = t
+                best_m[b] = m
+    for b in range(n_bins):  # `_cone`'s echo test on each ray's first hit
+        t = best[b]
+        m = best_m[b]
+        rays[b] = np.inf
+        if m < 0 or t >= max_range:
+            continue
+        ex = segments[m, 2] - segments[m, 0]
+        ey = segments[m, 3] - segments[m, 1]
+        length = math.sqrt(ex * ex + ey * ey)
+        cos_inc = abs(dirs[b, 0] * (-ey / length) + dirs[b, 1] * (ex / length))
+        if cos_inc >= cos_specular:
+            rays[b] = t
 
 
 @nb.njit(**JIT)
@@ -28,6 +100,9 @@ def _cone_cell(
     min_range,
     cos_specular,
     rays,
+    dirs,
+    best,
+    best_m,
     table,
     i,
     j,
@@ -35,11 +110,7 @@ def _cone_cell(
     """Fill ``table[i, j, :]`` for a sonar at ``(cx, cy)`` (see `build_cone_table`)."""
     half = (n_rays - 1) // 2 if n_rays > 1 else 0
     if ray_step > 0:
-        for b in range(n_bins):
-            echo, _ = sonar_cone(
-                cx, cy, b * _TWO_PI / n_bins, segments, 1, 0.0, max_range, cos_specular
-            )
-            rays[b] = echo
+        _ray_echoes(cx, cy, segments, max_range, cos_specular, dirs, best, best_m, rays)
     for b in range(n_bins):
         if ray_step > 0:
             echo = np.inf
@@ -48,7 +119,7 @@ def _cone_cell(
                 if r < echo:
                     echo = r
         else:
-            echo, _ = sonar_cone(
+            echo = cone_echo(
                 cx,
                 cy,
                 b * _TWO_PI / n_bins,
@@ -119,6 +190,12 @@ def build_cone_table(
                     near[c, t] = segments[m, t]
                 c += 1
         rays = np.empty(n_bins)
+        best = np.empty(n_bins)
+        best_m = np.empty(n_bins, dtype=np.int64)
+        dirs = np.empty((n_bins, 2))
+        for b in range(n_bins):  # as `cone_echo` computes each ray's direction
+            dirs[b, 0] = math.cos(b * _TWO_PI / n_bins)
+            dirs[b, 1] = math.sin(b * _TWO_PI / n_bins)
         for i in range(bi * block, min((bi + 1) * block, ny)):
             cy = y0 + (i + 0.5) * resolution
             for j in range(bj * block, min((bj + 1) * block, nx)):
@@ -135,6 +212,9 @@ def build_cone_table(
                     min_range,
                     cos_specular,
                     rays,
+                    dirs,
+                    best,
+                    best_m,
                     table,
                     i,
                     j,

@@ -1,0 +1,123 @@
+"""``robotlib bench buildings``: MCL set-up time and memory on generated buildings.
+
+``robotlib bench buildings [--sides 50 100 200] [--timeout 120] [--json FILE]``
+generates square buildings of 4 m rooms with a 1 m door in every wall
+(`robotlib.experiments.bench_mcl.square_world`), and for each side, in a
+fresh process, times what `MCL.best` needs before its first step: the
+admissible free space (`World.free_space`), the cone table (`ConeTable`) and
+the filter itself (its 50,000 particles drawn), and the exact path's wall
+blocks; it reports each part's seconds, the process's peak resident memory
+(MB) and any error (a table too large for `MAX_TABLE_BYTES` says so). A size
+that takes longer than ``--timeout`` seconds is reported as such.
+
+Targets (issue 16, measured and reported, not asserted): 50 m x 50 m at 5 cm
+ready in at most 3 s and 300 MB, 200 m x 200 m in at most 30 s and 1.5 GB,
+a clear error beyond.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+__all__ = ["add_arguments", "run", "bench_building"]
+
+_CHILD = """
+import json, resource, sys, time
+t0 = time.perf_counter()
+import numpy as np
+from robotlib.experiments.bench_mcl import square_world
+from robotlib.localization import MCL, cone_table
+from robotlib.localization.cones import _wall_blocks
+side = float(sys.argv[1])
+out = {"side_m": side}
+def mark(name, t):
+    out[name + "_s"] = time.perf_counter() - t
+    out["peak_mb"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    print(json.dumps(out), flush=True)
+t = time.perf_counter()
+world = square_world(side)
+out["walls"] = int(len(world.obstacles))
+mark("import_world", t0)
+t = time.perf_counter()
+_wall_blocks(world, 5.0)
+mark("wall_blocks", t)
+t = time.perf_counter()
+world.free_space(0.05, 0.2)
+mark("free_space", t)
+t = time.perf_counter()
+try:
+    table = cone_table(world)
+    out["table_mb"] = table.nbytes / 1e6
+    mark("cone_table", t)
+    t = time.perf_counter()
+    MCL.best(world, rng=0)
+    mark("mcl_best", t)
+except MemoryError as e:
+    out["error"] = str(e)
+    mark("cone_table", t)
+"""
+
+
+def bench_building(side: float, timeout: float = 120.0) -> dict:
+    """Set MCL up on a ``side`` m square building in a fresh process.
+
+    Returns
+    -------
+    dict
+        ``side_m``, ``walls``, seconds per part (``wall_blocks_s``,
+        ``free_space_s``, ``cone_table_s``, ``mcl_best_s``), ``table_mb``,
+        ``peak_mb``, and ``error`` or ``timeout`` when it did not finish.
+    """
+    cmd = [sys.executable, "-c", _CHILD, repr(float(side))]
+    try:
+        done = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout)
+        lines = done.stdout.strip().splitlines()
+        out = json.loads(lines[-1]) if lines else {"side_m": side}
+        if done.returncode != 0:
+            out["error"] = (done.stderr.strip().splitlines() or ["failed"])[-1]
+    except subprocess.TimeoutExpired as e:
+        text = e.stdout.decode() if isinstance(e.stdout, bytes) else (e.stdout or "")
+        lines = text.strip().splitlines()
+        out = json.loads(lines[-1]) if lines else {"side_m": side}
+        out["timeout"] = timeout
+    return out
+
+
+def _print(r: dict) -> None:
+    parts = [
+        f"{k[:-2]} {r[k]:.2f} s" for k in
+        ("wall_blocks_s", "free_space_s", "cone_table_s", "mcl_best_s") if k in r
+    ]  # fmt: skip
+    total = sum(r[k] for k in r if k.endswith("_s") and k != "import_world_s")
+    tail = ""
+    if "timeout" in r:
+        tail = f"; stopped after {r['timeout']:g} s"
+    if "error" in r:
+        tail += f"; {r['error']}"
+    print(  # noqa: T201
+        f"{r['side_m']:g} m x {r['side_m']:g} m ({r.get('walls', '?')} walls): "
+        f"{total:.2f} s set-up, peak {r.get('peak_mb', float('nan')):.0f} MB, "
+        f"table {r.get('table_mb', float('nan')):.0f} MB ({', '.join(parts)}){tail}"
+    )
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run ``robotlib bench buildings``; return the exit status."""
+    results = []
+    for side in args.sides:
+        results.append(bench_building(side, args.timeout))
+        _print(results[-1])
+    if args.json is not None:
+        Path(args.json).write_text(json.dumps({"buildings": results}, indent=2))
+    return 0
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """Options of ``robotlib bench buildings``."""
+    parser.add_argument("--sides", type=float, nargs="+", default=[50, 100, 200])
+    parser.add_argument("--timeout", type=float, default=120.0, help="s per size")
+    parser.add_argument("--json", type=Path, default=None, help="write results here")
