@@ -191,6 +191,7 @@ class Browser:
         """A new page that records console errors and blocks external requests."""
         context = self.browser.new_context(viewport={"width": 1280, "height": 900})
         page = context.new_page()
+        page.set_default_timeout(120_000)  # a loaded 2-core machine renders slowly
 
         def route(r):
             url = r.request.url

@@ -61,12 +61,14 @@ LAB5_CONSTANTS = (
 )
 WRONG = {
     "lab3_mcl": {
-        # ignores the sonar (dead reckoning) and never resamples (identity)
+        # ignores the sonar (dead reckoning) and never resamples (identity);
+        # on the check's route dead reckoning drifts past 0.3 m, so the first
+        # bound rejects it (within it, "the sonar must help" would)
         "wrong_dr_identity": (
             "solution",
             {"l3-19": LAB3_DEAD_RECKONING, "l3-37": LAB3_IDENTITY},
             {
-                "tracking": "the sonar must help",
+                "tracking": "the filter loses the robot",
                 "low_variance": "indexes in order",
                 "global": "the resampler loses the robot",
             },
