@@ -19,10 +19,12 @@ Results carry the median (``ms_per_step``) and the fastest (``ms_min``) of
 the repetitions: on a machine shared with other work the fastest is the
 steadier figure.
 
-Targets (measured and reported, not asserted): fast path N=300 at most
-0.1 ms per step and N=100k at most 15 ms on 2 cores; exact path N=300 at
-most 1 ms; the table build at most 3 s and 50 MB for 20 m x 20 m at 5 cm;
-the first step in a fresh process at most 1.5 s with the numba cache warm.
+Targets (issue 16; measured and reported, not asserted): fast path N=300 at
+most 0.035 ms, N=100k at most 8 ms and N=1M at most 90 ms on 2 cores; exact
+path N=300 in the office at most 0.5 ms; the first step of `MCL.best` in a
+fresh process at most 3 s with an empty numba cache and 0.7 s with a warm
+one. ``robotlib bench buildings`` measures large buildings,
+``bench/bench_threads.py`` the step under a second busy process.
 """
 
 from __future__ import annotations
