@@ -171,3 +171,101 @@ def sonar_loglik(
         )
         total += math.log(p_rand + (1 - p_rand) * best)
     return total
+
+
+def sonar_beam_loglik(
+    L, origin, res, pose, sensors, ranges, half_cone, max_range, n_rays, sigma,
+    p_rand, occ, c_unknown,
+):  # fmt: skip
+    """The sonar beam model, one ray point at a time (see the kernel's docstring)."""
+    ny, nx = L.shape
+
+    def cell(px, py):
+        return int(math.floor((py - origin[1]) / res)), int(
+            math.floor((px - origin[0]) / res)
+        )
+
+    total = 0.0
+    x, y, th = pose
+    for (ax, ay, ah), z in zip(sensors, ranges, strict=True):
+        if z >= max_range:
+            continue
+        sx = x + math.cos(th) * ax - math.sin(th) * ay
+        sy = y + math.sin(th) * ax + math.cos(th) * ay
+        zhat, q = math.inf, 0.0
+        offs = np.linspace(-half_cone, half_cone, n_rays) if n_rays > 1 else [0.0]
+        for k, o in enumerate(offs):
+            a = (
+                th
+                + ah
+                + (half_cone * (2.0 * k / (n_rays - 1) - 1.0) if n_rays > 1 else o)
+            )
+            d = 0.5 * res
+            while d < z + 3 * sigma and d < zhat:
+                i, j = cell(sx + d * math.cos(a), sy + d * math.sin(a))
+                if 0 <= i < ny and 0 <= j < nx and L[i, j] > occ:
+                    zhat = d
+                    break
+                d += 0.5 * res
+            i, j = cell(sx + z * math.cos(a), sy + z * math.sin(a))
+            v = float(L[i, j]) if 0 <= i < ny and 0 <= j < nx else 0.0
+            q = max(q, 1.0 - 1.0 / (1.0 + math.exp(v)))
+        p = 0.0
+        if zhat < math.inf:
+            p = math.exp(-0.5 * ((z - zhat) / sigma) ** 2)
+            if zhat < z - 3 * sigma:
+                q = 0.0
+        p = max(p, c_unknown * q)
+        total += math.log(p_rand + (1 - p_rand) * p)
+    return total
+
+
+def bilinear_evidence(L, origin, res, px, py):
+    """Positive log-odds at a point, bilinear between cell centres (0 off the grid)."""
+    gx, gy = (px - origin[0]) / res - 0.5, (py - origin[1]) / res - 0.5
+    j, i = math.floor(gx), math.floor(gy)
+    fx, fy = gx - j, gy - i
+
+    def ev(ii, jj):
+        ok = 0 <= ii < L.shape[0] and 0 <= jj < L.shape[1]
+        return max(float(L[ii, jj]), 0.0) if ok else 0.0
+
+    return (1 - fy) * ((1 - fx) * ev(i, j) + fx * ev(i, j + 1)) + fy * (
+        (1 - fx) * ev(i + 1, j) + fx * ev(i + 1, j + 1)
+    )
+
+
+def match_laser(L, origin, res, pose, mount, angles, ranges, max_range, steps, levels):
+    """Hill-climb a pose to fit the scan's end points to the map (the kernel's rule)."""
+
+    def score(p):
+        x, y, th = p
+        lx = x + math.cos(th) * mount[0] - math.sin(th) * mount[1]
+        ly = y + math.sin(th) * mount[0] + math.cos(th) * mount[1]
+        return sum(
+            bilinear_evidence(
+                L,
+                origin,
+                res,
+                lx + z * math.cos(th + mount[2] + a),
+                ly + z * math.sin(th + mount[2] + a),
+            )  # fmt: skip
+            for a, z in zip(angles, ranges, strict=True)
+            if z < max_range
+        )
+
+    p = [float(v) for v in pose]
+    best = score(p)
+    sxy, sth = steps
+    for _ in range(levels):
+        for _ in range(20):
+            moves = [(sxy, 0, 0), (-sxy, 0, 0), (0, sxy, 0), (0, -sxy, 0)]
+            moves += [(0, 0, sth), (0, 0, -sth)]
+            cands = [[p[0] + dx, p[1] + dy, p[2] + dt] for dx, dy, dt in moves]
+            vals = [score(q) for q in cands]
+            k = int(np.argmax(vals))
+            if vals[k] <= best:
+                break
+            best, p = vals[k], cands[k]
+        sxy, sth = sxy / 2, sth / 2
+    return np.array([p[0], p[1], math.atan2(math.sin(p[2]), math.cos(p[2]))])

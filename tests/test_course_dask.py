@@ -18,8 +18,9 @@ from pathlib import Path
 
 import pytest
 
-from robotlib.course import sandbox as sb
 from robotlib.course.notebooks import read_notebook, release_notebook, write_notebook
+
+from .sandboxing import need_sandbox
 
 TINY = Path(__file__).parent / "data" / "course" / "tiny.ipynb"
 
@@ -35,8 +36,7 @@ def test_grade_on_a_local_dask_cluster(tmp_path):
         import dask.distributed  # noqa: F401
     except ImportError:
         pytest.skip("dask.distributed is not installed (extra grade-dask)")
-    if sb.available():
-        pytest.skip(f"no sandbox here: {sb.available()}")
+    need_sandbox()
     sol = read_notebook(TINY)
     subs = {
         "solution_a": sol,

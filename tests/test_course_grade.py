@@ -26,8 +26,9 @@ import nbformat
 import pytest
 
 from robotlib.course import grade as g
-from robotlib.course import sandbox as sb
 from robotlib.course.notebooks import read_notebook, release_notebook, write_notebook
+
+from .sandboxing import need_sandbox
 
 DATA = Path(__file__).parent / "data" / "course"
 TINY = DATA / "tiny.ipynb"
@@ -182,8 +183,7 @@ def _procs(needle: bytes) -> list[int]:
 
 @pytest.fixture(scope="module")
 def graded(tmp_path_factory):
-    if sb.available():
-        pytest.skip(f"no sandbox here: {sb.available()}")
+    need_sandbox()
     root = tmp_path_factory.mktemp("grade")
     folder, outside = root / "subs", root / "outside"
     folder.mkdir()
@@ -301,8 +301,7 @@ def test_report_time(graded, capsys):
 
 
 def test_interrupt_leaves_no_process(tmp_path):
-    if sb.available():
-        pytest.skip("no sandbox here")
+    need_sandbox()
     folder = tmp_path / "subs"
     for i in range(3):
         d = folder / f"s{i}"

@@ -265,6 +265,17 @@ def test_many_particle_kernels_match_single_map_kernels_and_references():
             0.05,
         )
         assert out[k] == pytest.approx(want, rel=1e-9)
+    for c_unknown in (0.0, 0.5):
+        kern.sonar_beam_loglik_many(
+            Ls, *origin, res, poses, sonar.sensors, zs, sonar.cone / 2, 5.0, 5,
+            0.15, 0.2, 0.5, c_unknown, out,
+        )  # fmt: skip
+        for k in range(n):
+            want = naive.sonar_beam_loglik(
+                Ls[k], origin, res, poses[k], sonar.sensors, zs, sonar.cone / 2,
+                5.0, 5, 0.15, 0.2, 0.5, c_unknown,
+            )  # fmt: skip
+            assert out[k] == pytest.approx(want, rel=1e-9)
     many = Ls.copy()
     kern.laser_update_many(many, *origin, res, poses, angles, z, 4.0, 0.9, -0.4, -6, 6)
     kern.sonar_update_many(
@@ -352,3 +363,27 @@ def test_known_pose_maps_of_a_seeded_drive():
     again = record_drive(door_corridor(), route, seed=2, every=2)
     np.testing.assert_array_equal(again.sonar, log.sonar)
     np.testing.assert_array_equal(again.laser, log.laser)
+
+
+def test_scan_fitting_kernel_matches_the_reference():
+    rng = np.random.default_rng(8)
+    shape, origin, res = (40, 60), (-0.5, -0.5), 0.1
+    n = 4
+    Ls = np.maximum(rng.normal(0, 2, (n, *shape)), 0).astype(np.float32)
+    poses = np.column_stack(
+        [rng.uniform(1, 4, n), rng.uniform(1, 2.5, n), rng.uniform(-3, 3, n)]
+    )
+    mount = np.array([0.16, 0.01, 0.02])
+    angles = np.linspace(-math.pi / 2, math.pi / 2, 23)
+    z = rng.uniform(0.2, 2.0, 23)
+    z[[2, 9]] = 4.0  # no return
+    out = np.empty((n, 3))
+    kern.match_laser_many(
+        Ls, *origin, res, poses, mount, angles, z, 4.0, 0.05, 0.03, 3, out
+    )
+    for k in range(n):
+        want = naive.match_laser(
+            Ls[k], origin, res, poses[k], mount, angles, z, 4.0, (0.05, 0.03), 3
+        )
+        np.testing.assert_allclose(out[k], want, atol=1e-9)
+        assert not np.allclose(out[k], poses[k])  # it moved

@@ -139,13 +139,14 @@ def _bwrap(scratch: Path, uid: int | None, cwd: str) -> list[str]:
             args += ["--symlink", os.readlink(lib), lib]
         elif os.path.isdir(lib):
             args += ["--ro-bind", lib, lib]
+    # /tmp first: a checkout or venv under /tmp is then bound on top of it
+    args += ["--proc", "/proc", "--dev", "/dev", "--tmpfs", "/tmp"]
     ro = [p for p in readonly_paths() if not str(p).startswith(_SYSTEM)]
     for parent in _parents(ro):
         if not str(parent).startswith(_SYSTEM):
             args += ["--perms", "0755", "--dir", str(parent)]
     for p in ro:
         args += ["--ro-bind", str(p), str(p)]
-    args += ["--proc", "/proc", "--dev", "/dev", "--tmpfs", "/tmp"]
     args += ["--bind", str(scratch), SCRATCH, "--chdir", cwd, "--clearenv"]
     return args
 

@@ -5,9 +5,10 @@ Each particle is a pose and a log-odds occupancy grid of its own. A step
 
 1. move every particle by the odometry increment plus slip noise
    (`robotlib.mapping.motion.sample_arc_motion`);
-2. weigh it by the scan's likelihood in its own map (`weigh_laser`,
-   `weigh_sonar`: the end-point model, raised to a ``temperature`` because
-   beams are not independent);
+2. weigh it by the scan's likelihood in its own map (`weigh_laser`: the
+   end-point model; `weigh_sonar`: a beam model, the echo against the
+   nearest confirmed wall in the cone; both raised to a ``temperature``
+   because beams are not independent);
 3. when the effective sample size falls below ``resample_below * N``,
    resample (low-variance) and copy the survivors' maps over the maps of
    the particles that died, in place, so the filter holds exactly N maps
@@ -43,8 +44,20 @@ PARALLEL_MIN = 64
 a thread pool's wake-up costs more than it saves, the more so on a busy
 machine)."""
 
+SONAR_DEFAULTS = {
+    "temperature": 0.03,
+    "inflate": 1.0,
+    "resample_below": 0.5,
+    "p_rand": 0.2,
+}
+"""`run_fastslam`'s defaults for the sonar (measured on the loop world: eight
+wide cones tell little per record, so each weighs little. 30 particles, 10
+seeds: position RMS 0.58 m against the odometry's 1.32 m, map error 0.29 m
+against 0.41 m for mapping with the odometry's poses)."""
+
 __all__ = [
     "PARALLEL_MIN",
+    "SONAR_DEFAULTS",
     "GridFastSLAM",
     "FastSLAMResult",
     "run_fastslam",
@@ -134,6 +147,16 @@ class GridFastSLAM:
         How many times the steps are halved.
     match_beam_step : int
         Fit with every ``match_beam_step``-th beam.
+    sonar_likelihood : {"beam", "endpoint"}
+        Sonar weighing: the beam model (`_kernels.sonar_beam_loglik`) or the
+        end-point model over the arc (as the laser's).
+    sonar_sigma : float
+        Beam model: standard deviation of an echo about the expected range, m.
+    sonar_occ : float
+        Beam model: log-odds above which a cell is a wall (confirmed by
+        several echoes, so the arcs' stray cells do not count).
+    sonar_unknown : float
+        Beam model: weight of an echo from cells the map has not seen.
     rng : numpy.random.Generator, int or None
         Motion noise and resampling.
     """
@@ -160,13 +183,23 @@ class GridFastSLAM:
         match_step: tuple[float, float] = (0.04, 0.02),
         match_levels: int = 3,
         match_beam_step: int = 4,
+        sonar_likelihood: str = "beam",
+        sonar_sigma: float = 0.15,
+        sonar_occ: float = 2.0,
+        sonar_unknown: float = 0.5,
         rng: np.random.Generator | int | None = None,
     ):
         if sensor not in ("laser", "sonar"):
             raise ValueError(f"sensor must be 'laser' or 'sonar', got {sensor!r}")
         if n_particles < 1:
             raise ValueError("n_particles must be at least 1")
+        if sonar_likelihood not in ("beam", "endpoint"):
+            raise ValueError("sonar_likelihood must be 'beam' or 'endpoint'")
         self.sensor = sensor
+        self.sonar_likelihood = sonar_likelihood
+        self.sonar_sigma = float(sonar_sigma)
+        self.sonar_occ = float(sonar_occ)
+        self.sonar_unknown = float(sonar_unknown)
         self.laser = LaserModel() if laser is None else laser
         self.sonar = SonarModel() if sonar is None else sonar
         self.laser_model = InverseLaserModel() if laser_model is None else laser_model
@@ -234,6 +267,14 @@ class GridFastSLAM:
     def weigh_sonar(self, poses, ranges) -> np.ndarray:
         """Log-likelihood (N,) of a sonar ring reading in each particle's map."""
         out = np.empty(len(poses))
+        if self.sonar_likelihood == "beam":
+            self._kernel("sonar_beam_loglik_many")(
+                self.maps, *self._geometry(), np.ascontiguousarray(poses, dtype=float),
+                self.sonar.sensors, np.ascontiguousarray(ranges, dtype=float),
+                self.sonar.cone / 2, self.sonar.max_range, 5, self.sonar_sigma,
+                self.p_rand, self.sonar_occ, self.sonar_unknown, out,
+            )  # fmt: skip
+            return out
         self._kernel("sonar_loglik_many")(
             self.maps, *self._geometry(), np.ascontiguousarray(poses, dtype=float),
             self.sonar.sensors, np.ascontiguousarray(ranges, dtype=float),
@@ -386,13 +427,16 @@ def run_fastslam(
     rng : numpy.random.Generator, int or None
         The filter's randomness.
     **kw
-        More `GridFastSLAM` parameters.
+        More `GridFastSLAM` parameters (for the sonar, `SONAR_DEFAULTS`
+        unless given).
 
     Returns
     -------
     FastSLAMResult
     """
     res = (0.05 if sensor == "laser" else 0.1) if resolution is None else resolution
+    if sensor == "sonar":
+        kw = {**SONAR_DEFAULTS, **kw}
     f = GridFastSLAM.for_world(
         log.world, res, start=log.odometry[0], n_particles=n_particles,
         sensor=sensor, laser=log.laser_model, sonar=log.sonar_model, rng=rng, **kw,

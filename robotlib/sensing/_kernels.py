@@ -46,12 +46,13 @@ def ray_segments(ox, oy, dx, dy, segments):
     return best, best_m
 
 
-@nb.njit(**JIT_PARALLEL)
-def cast_segments(poses, angles, max_range, segments, out):
+def _cast_segments(poses, angles, max_range, segments, out):
     """Cast rays from many poses: ``out[k, r]`` is ray ``r`` of pose ``k``.
 
     ``poses`` (K, 3), ``angles`` (R,) relative to each pose's heading,
     ``out`` (K, R). A ray with no hit within ``max_range`` gives ``max_range``.
+    ``cast_segments`` runs over threads, ``cast_segments_serial`` in one (for
+    a few poses, e.g. one laser scan, where waking threads costs more).
     """
     for k in nb.prange(poses.shape[0]):
         for r in range(angles.shape[0]):
@@ -60,6 +61,9 @@ def cast_segments(poses, angles, max_range, segments, out):
                 poses[k, 0], poses[k, 1], math.cos(a), math.sin(a), segments
             )
             out[k, r] = t if t < max_range else max_range
+
+
+cast_segments_serial, cast_segments = serial_and_parallel(_cast_segments)
 
 
 @nb.njit(**JIT)

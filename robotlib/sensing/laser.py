@@ -141,7 +141,8 @@ def expected_laser(walls, poses, model: LaserModel | None = None) -> np.ndarray:
             lp, a, float(model.max_range), field, x0, y0, walls.resolution, out
         )
     else:
-        _kernels.cast_segments(lp, a, float(model.max_range), _segments(walls), out)
+        cast = _kernels.cast_segments if len(lp) >= 8 else _kernels.cast_segments_serial
+        cast(lp, a, float(model.max_range), _segments(walls), out)
     return out
 
 

@@ -1,0 +1,21 @@
+"""Skip a grading test where the sandbox cannot run, unless CI requires it.
+
+``.ci/run`` sets ``ROBOTLIB_REQUIRE_SANDBOX=1``: there a missing sandbox is a
+failure, so the grading tests can never pass by being skipped.
+"""
+
+import os
+
+import pytest
+
+from robotlib.course import sandbox as sb
+
+
+def need_sandbox() -> None:
+    """Skip (or, in CI, fail) the calling test when bubblewrap cannot run here."""
+    why = sb.available()
+    if not why:
+        return
+    if os.environ.get("ROBOTLIB_REQUIRE_SANDBOX") == "1":
+        pytest.fail(f"the grading sandbox is required here and does not run: {why}")
+    pytest.skip(f"no sandbox here: {why}")
