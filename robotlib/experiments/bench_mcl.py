@@ -5,7 +5,8 @@ estimate, systematic resampling) per particle count for the fast path (cone
 table lookup), the exact path (cone casting) and a plain NumPy implementation
 of the same model (the paper's or the tempered beam) on the same table, in
 the same run, and prints milliseconds and ratios; ``--json`` writes
-``{"results": [{"path", "model", "n", "ms_per_step"}, ...]}``. It also
+``{"results": [{"path", "model", "n", "ms_per_step"}, ...]}`` (and the
+peer's rows under ``"peers"``). It also
 measures the cone table's build time and memory for worlds
 (``--table-world``, default the office and a 20 m x 20 m square of rooms).
 
@@ -395,7 +396,7 @@ def run(args: argparse.Namespace) -> int:
         if isinstance(rtb, str):
             print(rtb)  # noqa: T201
         else:
-            out["results"] += rtb
+            out["peers"] = rtb
             fast = {(r["model"], r["n"]): r for r in results if r["path"] == "fast"}
             for r in rtb:
                 ours = fast.get(("beam", r["n"]))
