@@ -32,6 +32,7 @@ import numpy as np
 from robotlib.experiments.bench_mcl import square_world
 from robotlib.localization import MCL, cone_table
 from robotlib.localization.cones import _wall_blocks
+from robotlib.sensing import SonarModel
 side = float(sys.argv[1])
 out = {"side_m": side}
 def mark(name, t):
@@ -43,7 +44,7 @@ world = square_world(side)
 out["walls"] = int(len(world.obstacles))
 mark("import_world", t0)
 t = time.perf_counter()
-_wall_blocks(world, 5.0)
+_wall_blocks(world, 5.0, SonarModel().cone)
 mark("wall_blocks", t)
 t = time.perf_counter()
 world.free_space(0.05, 0.2)

@@ -255,7 +255,7 @@ def expected_readings(
     kernel(
         p,
         sonar.sensors,
-        *_wall_blocks(world, float(sonar.max_range)),
+        *_wall_blocks(world, float(sonar.max_range), float(sonar.cone)),
         int(sonar.n_rays),
         float(sonar.cone),
         float(sonar.max_range),
@@ -269,13 +269,18 @@ def expected_readings(
 _BLOCKS: dict = {}
 
 
-def _wall_blocks(world: World, max_range: float) -> tuple:
-    """Walls, and the walls near each 1 m block (`_kernels.wall_blocks`), cached."""
-    key = (id(world), max_range)
+def _wall_blocks(world: World, max_range: float, cone: float | None = None) -> tuple:
+    """Walls, and the walls near each 1 m block (`_kernels.wall_blocks`), cached.
+
+    Per sector of sensor heading too when a ``cone`` (rad) is given.
+    """
+    key = (id(world), max_range, cone)
     entry = _BLOCKS.get(key)
     if entry is not None and entry[0]() is world:
         return entry[1]
     segments = np.ascontiguousarray(world.obstacles, dtype=np.float64).reshape(-1, 4)
-    blocks = (segments, *_kernels.wall_blocks(segments, world.bounds, max_range))
+    blocks = (
+        segments, *_kernels.wall_blocks(segments, world.bounds, max_range, cone=cone)
+    )  # fmt: skip
     _BLOCKS[key] = (weakref.ref(world, lambda _: _BLOCKS.pop(key, None)), blocks)
     return blocks

@@ -11,6 +11,7 @@ import numpy as np
 
 from ..._config import JIT, JIT_PARALLEL
 from ...sensing._kernels import cone_echo, cone_walls
+from .common import _TWO_PI
 
 _CULL_MARGIN = 1e-6
 """Widening of each cone for `robotlib.sensing._kernels.cone_walls`, rad."""
@@ -21,7 +22,8 @@ def _expected_pose_blocks(
     k, poses, sensors, segments, start, block_segs, grid, n_rays, cone, max_range,
     min_range, cos_specular, near, out,
 ):  # fmt: skip
-    x0, y0, inv_block, nbx, nby = grid
+    x0, y0, inv_block, nbx, nby, n_sectors = grid
+    inv_sector = n_sectors / _TWO_PI
     half = 0.5 * cone + _CULL_MARGIN
     ch = math.cos(half) if half < 0.5 * math.pi else 0.0
     sh = math.sin(half)
@@ -33,7 +35,9 @@ def _expected_pose_blocks(
         bx = math.floor((sx - x0) * inv_block)
         by = math.floor((sy - y0) * inv_block)
         if 0 <= bx < nbx and 0 <= by < nby:
-            b = int(by) * int(nbx) + int(bx)
+            a = poses[k, 2] + sensors[i, 2]
+            sector = int((a - _TWO_PI * math.floor(a / _TWO_PI)) * inv_sector)
+            b = (int(by) * int(nbx) + int(bx)) * n_sectors + min(sector, n_sectors - 1)
             walls = block_segs[start[b] : start[b + 1]]
         else:
             walls = segments
@@ -57,9 +61,11 @@ def expected_scan_blocks(
 ):  # fmt: skip
     """`expected_scan` (of `robotlib.sensing._kernels`), each cone against nearby walls.
 
-    ``grid`` ``(x0, y0, 1 / side, nbx, nby)`` cuts the plane into square
-    blocks; the walls a sensor in block ``b`` may reach within ``max_range``
-    are ``block_segs[start[b]:start[b + 1]]`` (`wall_blocks`), and of those
+    ``grid`` ``(x0, y0, 1 / side, nbx, nby, n_sectors)`` cuts the plane into
+    square blocks and the sensor headings into sectors; the walls a sensor in
+    block ``b`` heading into sector ``q`` may reach within ``max_range`` are
+    ``block_segs[start[b * n_sectors + q]:start[b * n_sectors + q + 1]]``
+    (`wall_blocks`), and of those
     the ones in its cone (`robotlib.sensing._kernels.cone_walls`). A sensor outside
     the blocks tests all ``segments``. The same readings as `expected_scan`.
     """
@@ -98,57 +104,111 @@ def _block_span(lo, hi, origin, side, count):
 
 
 @nb.njit(**JIT)
-def _wall_blocks(seg, xmin, ymin, side, nbx, nby, grow):
+def _outside_wedge(seg, k, bx0, by0, side, a_lo, a_hi):
+    """Whether wall ``k`` lies beyond every ray from the block along [a_lo, a_hi].
+
+    The rays from the square block at ``(bx0, by0)`` of ``side`` m with
+    directions in ``[a_lo, a_hi]`` (``a_hi - a_lo < pi``) sweep a region
+    bounded by two lines: along ``a_hi`` through the block's corner furthest
+    to its left, and along ``a_lo`` through the corner furthest to its right.
+    A wall with both end points beyond one of them is outside.
+    """
+    for edge in range(2):
+        if edge == 0:  # left of the a_hi edge
+            nx = -math.sin(a_hi)
+            ny = math.cos(a_hi)
+        else:  # right of the a_lo edge
+            nx = math.sin(a_lo)
+            ny = -math.cos(a_lo)
+        bound = -np.inf
+        for cx, cy in ((bx0, by0), (bx0 + side, by0), (bx0, by0 + side),
+                       (bx0 + side, by0 + side)):  # fmt: skip
+            bound = max(bound, nx * cx + ny * cy)
+        bound += 1e-7
+        if nx * seg[k, 0] + ny * seg[k, 1] > bound and (
+            nx * seg[k, 2] + ny * seg[k, 3] > bound
+        ):
+            return True
+    return False
+
+
+@nb.njit(**JIT)
+def _wall_blocks(seg, xmin, ymin, side, nbx, nby, grow, n_sectors, half):
     """`wall_blocks` in two passes over the walls: count, then fill."""
     m = seg.shape[0]
+    width = _TWO_PI / n_sectors
     spans = np.empty((m, 4), dtype=np.int64)
-    counts = np.zeros(nby * nbx + 1, dtype=np.int64)
-    for k in range(m):
-        bx0, bx1 = _block_span(
-            min(seg[k, 0], seg[k, 2]) - grow, max(seg[k, 0], seg[k, 2]) + grow,
-            xmin, side, nbx,
-        )  # fmt: skip
-        by0, by1 = _block_span(
-            min(seg[k, 1], seg[k, 3]) - grow, max(seg[k, 1], seg[k, 3]) + grow,
-            ymin, side, nby,
-        )  # fmt: skip
-        spans[k, 0], spans[k, 1], spans[k, 2], spans[k, 3] = bx0, bx1, by0, by1
-        for by in range(by0, by1 + 1):
-            for bx in range(bx0, bx1 + 1):
-                counts[by * nbx + bx + 1] += 1
-    start = np.cumsum(counts)
-    fill = start[:-1].copy()
-    block_segs = np.empty((start[-1], 4))
-    for k in range(m):  # walls in order: each block's list keeps it
-        for by in range(spans[k, 2], spans[k, 3] + 1):
-            for bx in range(spans[k, 0], spans[k, 1] + 1):
-                b = by * nbx + bx
-                for t in range(4):
-                    block_segs[fill[b], t] = seg[k, t]
-                fill[b] += 1
+    counts = np.zeros(nby * nbx * n_sectors + 1, dtype=np.int64)
+    for fill_pass in range(2):
+        if fill_pass == 1:
+            start = np.cumsum(counts)
+            fill = start[:-1].copy()
+            block_segs = np.empty((start[-1], 4))
+        for k in range(m):  # walls in order: each list keeps it
+            if fill_pass == 0:
+                bx0, bx1 = _block_span(
+                    min(seg[k, 0], seg[k, 2]) - grow, max(seg[k, 0], seg[k, 2]) + grow,
+                    xmin, side, nbx,
+                )  # fmt: skip
+                by0, by1 = _block_span(
+                    min(seg[k, 1], seg[k, 3]) - grow, max(seg[k, 1], seg[k, 3]) + grow,
+                    ymin, side, nby,
+                )  # fmt: skip
+                spans[k, 0], spans[k, 1], spans[k, 2], spans[k, 3] = bx0, bx1, by0, by1
+            for by in range(spans[k, 2], spans[k, 3] + 1):
+                for bx in range(spans[k, 0], spans[k, 1] + 1):
+                    for q in range(n_sectors):
+                        if n_sectors > 1 and _outside_wedge(
+                            seg, k, xmin + side * bx, ymin + side * by, side,
+                            q * width - half, (q + 1) * width + half,
+                        ):  # fmt: skip
+                            continue
+                        b = (by * nbx + bx) * n_sectors + q
+                        if fill_pass == 0:
+                            counts[b + 1] += 1
+                        else:
+                            for t in range(4):
+                                block_segs[fill[b], t] = seg[k, t]
+                            fill[b] += 1
     return start, block_segs
 
 
-def wall_blocks(segments, bounds, max_range, side=1.0):
+SECTORS = 16
+"""Sensor-heading sectors per block of `wall_blocks` (fewer walls per cone)."""
+
+
+def wall_blocks(segments, bounds, max_range, side=1.0, cone=None):
     """List the walls each block of ``side`` m may reach (`expected_scan_blocks`).
 
     A wall is listed for a block when its bounding box, grown by
     ``max_range`` (and 1e-6 m), overlaps the block: then and only then can a
     sensor in the block pass `robotlib.sensing._kernels.cone_walls`'s range test for
-    it. Walls keep their order. Memory: the lists themselves (no block by
-    wall table).
+    it. With a ``cone`` (full width, rad) the lists are per block and per
+    `SECTORS` sector of sensor heading, and a wall is left out of a sector's
+    list when no ray of a cone from the block heading into the sector (its
+    width widened by 1e-6 rad) can meet it; a cone of half a turn or more
+    (or none given) gets one sector. Walls keep their order. Memory: the
+    lists themselves (no block by wall table).
 
     Returns
     -------
     tuple
-        ``(start, block_segs, grid)``: offsets (nby * nbx + 1,) int64, the
-        walls of each block in turn (K, 4), and ``(x0, y0, 1 / side, nbx, nby)``.
+        ``(start, block_segs, grid)``: offsets (nby * nbx * n_sectors + 1,)
+        int64, the walls of each list in turn (K, 4), and ``(x0, y0, 1 /
+        side, nbx, nby, n_sectors)``.
     """
     seg = np.ascontiguousarray(segments, dtype=np.float64).reshape(-1, 4)
     xmin, ymin, xmax, ymax = (float(v) for v in bounds)
     nbx = max(1, math.ceil((xmax - xmin) / side))
     nby = max(1, math.ceil((ymax - ymin) / side))
+    n_sectors = 1
+    half = 0.0
+    if cone is not None:
+        half = 0.5 * float(cone) + 1e-6
+        if 2.0 * math.pi / SECTORS + 2.0 * half < math.pi - 1e-3:
+            n_sectors = SECTORS
     start, block_segs = _wall_blocks(
-        seg, xmin, ymin, float(side), nbx, nby, float(max_range) + 1e-6
-    )
-    return start, block_segs, (xmin, ymin, 1.0 / side, nbx, nby)
+        seg, xmin, ymin, float(side), nbx, nby, float(max_range) + 1e-6,
+        n_sectors, half,
+    )  # fmt: skip
+    return start, block_segs, (xmin, ymin, 1.0 / side, nbx, nby, n_sectors)
