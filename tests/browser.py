@@ -361,49 +361,89 @@ def run_notebook(lab, browser, path, timeout, panel_bound: float = 60.0) -> Run:
     return run_notebooks(lab, browser, [path], timeout, panel_bound)[0]
 
 
+_PANEL_ERROR = """(root) => {
+  const e = root.querySelector(
+    '[data-mime-type="application/vnd.jupyter.stderr"], .jp-RenderedText.jp-mod-error');
+  if (!e) return null;
+  const lines = e.innerText.trim().split('\\n').filter(l => l.trim());
+  return lines.slice(-1)[0] || 'error';
+}"""
+
+_OUTSIDE = """(root, moved) => {
+  const parts = [];
+  for (const el of root.querySelectorAll('*')) {
+    if (moved.contains(el)) continue;
+    parts.push(el.tagName + '.' + el.className + (el.style.opacity || ''));
+  }
+  const walk = document.createTreeWalker(root, NodeFilter.SHOW_TEXT);
+  for (let n = walk.nextNode(); n; n = walk.nextNode()) {
+    if (!moved.contains(n)) parts.push(n.textContent);
+  }
+  return parts.join('|');
+}"""
+"""The panel's text and classes outside the slider that moved (whose own
+readout changes at once, which is no sign that the panel is running)."""
+
+_AT_TOP = """(h) => parseFloat(h.getAttribute('aria-valuenow'))
+  >= parseFloat(h.getAttribute('aria-valuemax'))"""
+
+
 def check_panels(page, stem: Path, bound: float = 60.0) -> list[dict]:
     """Move the first enabled slider of each panel; time feedback and redraw.
 
-    A panel is an output holding both a slider and an image. Returns, per
-    panel, ``feedback_s`` (until the panel's text or classes change: a status
-    line, a greyed figure), ``redraw_s`` (until its image's pixels change;
-    None if they did not within ``bound`` s) and the slider's label.
+    A panel is an output holding both a slider and an image, found once
+    before any slider moves (so a panel whose image is replaced while it
+    redraws, or by an error, is still the same panel). Its first enabled
+    slider moves one step right (left when it sits at its maximum). Returns,
+    per panel, ``feedback_s`` (until the panel's text or classes change: a
+    status line, a greyed figure, or the new figure itself; the moved
+    slider's own readout does not count), ``redraw_s`` (until its image's pixels
+    change; None if they did not within ``bound`` s), ``error`` (the last
+    line of an error the panel shows instead, else None) and the slider's
+    label.
     """
     results = []
     outputs = page.locator(".jp-OutputArea-output:has(.widget-slider):has(img)")
-    for k in range(outputs.count()):
-        panel = outputs.nth(k)
+    for k, panel in enumerate(outputs.element_handles()):
         panel.scroll_into_view_if_needed()
-        sliders = panel.locator(".widget-slider:not(.mod-disabled)")
-        if sliders.count() == 0:
+        handles = panel.query_selector_all(
+            ".widget-slider:not(.mod-disabled) .noUi-handle"
+        )
+        if not handles:
             continue
-        slider = sliders.first
-        label = slider.locator(".widget-label").first.text_content() or ""
+        handle = handles[0]
+        slider = handle.evaluate_handle("h => h.closest('.widget-slider')")
+        label = slider.evaluate(
+            "s => s.querySelector('.widget-label')?.textContent || ''"
+        )
+        key = "ArrowLeft" if handle.evaluate(_AT_TOP) else "ArrowRight"
         before_pixels = panel.evaluate(_HASH_IMAGES)
-        before_text = panel.evaluate("e => e.innerText + e.innerHTML.length")
+        before_text = panel.evaluate(_OUTSIDE, slider)
         panel.screenshot(path=f"{stem}-panel{k}-before.png")
-        handle = slider.locator(".noUi-handle").first
         handle.focus()
         t0 = time.monotonic()
-        page.keyboard.press("ArrowRight")
-        feedback = redraw = None
+        page.keyboard.press(key)
+        feedback = redraw = error = None
         while time.monotonic() - t0 < bound:
             now = time.monotonic() - t0
             if feedback is None:
-                text = panel.evaluate("e => e.innerText + e.innerHTML.length")
-                if text != before_text:
+                if panel.evaluate(_OUTSIDE, slider) != before_text:
                     feedback = now
+            error = panel.evaluate(_PANEL_ERROR)
+            if error is not None:
+                break
             pixels = panel.evaluate(_HASH_IMAGES)
-            if pixels != before_pixels and "loading" not in pixels:
+            if pixels not in (before_pixels, "") and "loading" not in pixels:
                 redraw = now
+                feedback = now if feedback is None else feedback  # the answer itself
                 break
             time.sleep(0.02)
-        if redraw is not None:
+        if redraw is not None or error is not None:
             page.wait_for_timeout(300)
             panel.screenshot(path=f"{stem}-panel{k}-after.png")
         results.append(
-            {"panel": k, "slider": label.strip(), "feedback_s": feedback,
-             "redraw_s": redraw}
+            {"panel": k, "slider": label.strip(), "key": key, "feedback_s": feedback,
+             "redraw_s": redraw, "error": error}
         )  # fmt: skip
     return results
 
@@ -412,12 +452,11 @@ def check_animations(page, wait: float = 2.0) -> list[dict]:
     """Press play on each jshtml player; return its frame before and after."""
     results = []
     players = page.locator(".jp-OutputArea-output .animation")
-    for k in range(players.count()):
-        player = players.nth(k)
+    for k, player in enumerate(players.element_handles()):
         player.scroll_into_view_if_needed()
-        frame = player.locator("input[type=range]").first
+        frame = player.query_selector("input[type=range]")
         start = int(frame.input_value())
-        player.locator("button[title='Play']").first.click()
+        player.query_selector("button[title='Play']").click()
         page.wait_for_timeout(int(wait * 1000))
         results.append({"player": k, "start": start, "after": int(frame.input_value())})
     return results
