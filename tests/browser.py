@@ -163,6 +163,8 @@ class Run:
     animations: list = field(default_factory=list)
     figures: list = field(default_factory=list)  # (natural, shown) widths, px
     cells_s: list = field(default_factory=list)  # each code cell's run time, s
+    open_s: float | None = None  # page load to an idle kernel, s
+    check_s: float | None = None  # screenshots, panels, animations and save, s
     notebook: dict = field(default_factory=dict)
 
 
@@ -184,24 +186,27 @@ class Browser:
                 "--disable-sync", "--disable-background-timer-throttling",
                 "--disable-renderer-backgrounding",
                 "--disable-backgrounding-occluded-windows",
+                # Every request but loopback goes to a proxy that is not there
+                # (chromium never proxies loopback), so nothing leaves the
+                # machine without passing every request through this process (as
+                # a playwright route would, slowly, and only while it is called).
+                f"--proxy-server=http://127.0.0.1:{_closed_port()}",
             ],
         )  # fmt: skip
 
     def page(self, run: Run):
-        """A new page that records console errors and blocks external requests."""
+        """A new page that records console errors and the external requests it tried."""
+        # A context of its own: two JupyterLab pages of one context opening
+        # at once fight over their window name (a page error).
         context = self.browser.new_context(viewport={"width": 1280, "height": 900})
         page = context.new_page()
         page.set_default_timeout(120_000)  # a loaded 2-core machine renders slowly
 
-        def route(r):
-            url = r.request.url
-            if url.startswith(("http://127.0.0.1", "ws://127.0.0.1", "data:", "blob:")):
-                r.continue_()
-            else:
-                run.blocked.append(url)
-                r.abort()
+        def request(r):
+            if not r.url.startswith(_LOCAL):
+                run.blocked.append(r.url)  # it fails: see the proxy in __init__
 
-        page.route("**/*", route)
+        page.on("request", request)
         page.on(
             "console",
             lambda m: run.console.append(m.text) if m.type == "error" else None,
@@ -215,11 +220,23 @@ class Browser:
         self._pw.stop()
 
 
+_LOCAL = ("http://127.0.0.1", "ws://127.0.0.1", "data:", "blob:")
+_BLOCKED = ("net::ERR_PROXY_CONNECTION_FAILED", "net::ERR_TUNNEL_CONNECTION_FAILED",
+            "net::ERR_FAILED")  # fmt: skip
+
+
+def _closed_port() -> int:
+    """A loopback port nothing listens on (bound, then released at once)."""
+    return _free_port()
+
+
 def unexplained_console_errors(run: Run) -> list[str]:
     """Console errors other than those of requests the test blocked."""
     out = []
     for text in run.console:
-        blocked = "net::ERR_FAILED" in text or any(u in text for u in run.blocked)
+        blocked = any(e in text for e in _BLOCKED) or any(
+            u in text for u in run.blocked
+        )
         if not (blocked and run.blocked):
             out.append(text)
     return out
@@ -252,38 +269,72 @@ def _cell_seconds(cell) -> float | None:
     ).total_seconds()
 
 
+_READY = """() => !!document.querySelector('.jp-Notebook .jp-CodeCell')
+  && !!document.querySelector('.jp-Notebook-ExecutionIndicator')
+  && /\\|\\s*Idle/.test(
+    document.querySelector('#jp-main-statusbar')?.innerText || '')"""
+"""The notebook is shown and its kernel has started and answers."""
+
+
 class _Session:
-    """One notebook open in its own page, from Run All to its saved file."""
+    """One notebook open in its own page, from Run All to its saved file.
+
+    Nothing here blocks for long, so several notebooks are watched at once:
+    `ready` says when the page is up with an idle kernel (a page opens while
+    other notebooks run), `start` runs all cells, `poll` says when they are
+    done.
+    """
+
+    OPEN_LIMIT = 150.0  # s for JupyterLab's page and a kernel, on a loaded machine
 
     def __init__(self, lab: Lab, browser: Browser, path: str):
         self.lab, self.browser, self.path = lab, browser, path
         self.run = Run(path)
-        self.page = page = browser.page(self.run)
-        page.goto(lab.url(path))
-        page.wait_for_selector(".jp-Notebook .jp-CodeCell", timeout=60_000)
-        page.wait_for_selector(".jp-Notebook-ExecutionIndicator", timeout=60_000)
-        page.wait_for_function(  # the kernel has started and answers
-            "() => /\\|\\s*Idle/.test("
-            "document.querySelector('#jp-main-statusbar')?.innerText || '')",
-            timeout=90_000,
-        )
-        self.t0 = time.monotonic()
-        for _attempt in range(3):
-            page.locator(".jp-Notebook").first.click()
-            _menu(page, "Run", "Run All Cells")
-            started = time.monotonic() + 15
-            while time.monotonic() < started:  # until a cell is queued or done
-                if any(p not in ("[ ]:", "") for p in _prompts(page)):
-                    break
-                time.sleep(0.05)
-            else:
-                continue  # the kernel was not listening yet: ask again
-            break
+        self.opened = time.monotonic()
+        self.t0: float | None = None  # when Run All was asked
+        self._asked = 0.0  # the last time Run All was asked
+        self._attempts = 0
+        self._running = False
+        self.page = browser.page(self.run)
+        self.page.goto(lab.url(path), wait_until="commit")
+
+    def ready(self) -> bool:
+        """Return True once the notebook shows and its kernel is idle."""
+        if self.run.open_s is not None:
+            return True
+        from playwright.sync_api import Error
+
+        try:
+            shown = self.page.evaluate(_READY)
+        except Error:  # still navigating
+            shown = False
+        if shown:
+            self.run.open_s = time.monotonic() - self.opened
+            return True
+        if time.monotonic() - self.opened > self.OPEN_LIMIT:
+            raise TimeoutError(f"{self.path}: JupyterLab did not open it with a kernel")
+        return False
+
+    def start(self) -> None:
+        """Run All Cells from the menu (asked again if the kernel did not hear)."""
+        self.page.locator(".jp-Notebook").first.click()
+        _menu(self.page, "Run", "Run All Cells")
+        self._asked = time.monotonic()
+        self.t0 = self.t0 or self._asked
+        self._attempts += 1
 
     def poll(self) -> bool:
         """Note the first cell's time; return True once every cell has run."""
         run, page = self.run, self.page
         prompts = _prompts(page)
+        if not self._running:  # until a cell is queued or done
+            if any(p not in ("[ ]:", "") for p in prompts):
+                self._running = True
+            elif time.monotonic() - self._asked > 15 and self._attempts < 3:
+                self.start()  # the kernel was not listening yet: ask again
+                return False
+            else:
+                return False
         if run.first_cell_s is None and prompts and prompts[0] not in ("[*]:", "[ ]:"):
             run.first_cell_s = time.monotonic() - self.t0
         status = page.get_attribute(".jp-Notebook-ExecutionIndicator", "data-status")
@@ -295,6 +346,7 @@ class _Session:
     def finish(self, panel_bound: float) -> Run:
         """Screenshot, check panels and animations, save, read the errors."""
         run, page = self.run, self.page
+        started = time.monotonic()
         stem = self.path.replace("/", "_").removesuffix(".ipynb")
         page.screenshot(path=str(self.browser.screenshots / f"{stem}.png"))
         run.figures = page.eval_on_selector_all(
@@ -306,9 +358,14 @@ class _Session:
             shots = self.browser.screenshots / stem
             run.panels = check_panels(page, shots, panel_bound)
             run.animations = check_animations(page)
+        saved = self.lab.root / self.path
+        before = saved.stat().st_mtime_ns
         page.keyboard.press("Control+s")
-        page.wait_for_timeout(1500)
-        run.notebook = json.loads((self.lab.root / self.path).read_text())
+        waited = time.monotonic()
+        while saved.stat().st_mtime_ns == before and time.monotonic() - waited < 15:
+            page.wait_for_timeout(50)  # (playwright's calls keep the page served)
+        page.wait_for_timeout(200)  # the write is done (JupyterLab writes at once)
+        run.notebook = json.loads(saved.read_text())
         code = [c for c in run.notebook["cells"] if c["cell_type"] == "code"]
         run.cells_s = [_cell_seconds(c) for c in code]
         if run.cells_s and run.cells_s[0] is not None:
@@ -320,6 +377,7 @@ class _Session:
                     run.errors.append((i, out.get("ename"), text))
         page.context.close()
         self.lab.shutdown_kernels(self.path)  # the next notebooks get the cores
+        run.check_s = time.monotonic() - started
         return run
 
 
@@ -333,26 +391,29 @@ def run_notebooks(
 ) -> list[Run]:
     """Open each notebook, Run All Cells, wait (``timeout`` s each), check, save.
 
-    Up to ``at_once`` notebooks run at the same time (one kernel per core);
-    panels are checked once a notebook is done, while no other notebook of
-    the batch is running. Returns the `Run` of each path, in order; its
-    ``notebook`` is the saved file (outputs and all), ``errors`` the error
-    outputs in it.
+    Up to ``at_once`` notebooks run at the same time (one kernel per core),
+    in the order given, and the next one's page opens meanwhile: as soon as
+    one has finished and been checked (its panels and animations, while the
+    others keep running), the next one starts. Returns the `Run` of each
+    path, in order; its ``notebook`` is the saved file (outputs and all),
+    ``errors`` the error outputs in it.
     """
     runs: dict[str, Run] = {}
-    todo = list(paths)
-    while todo:
-        batch = [_Session(lab, browser, p) for p in todo[:at_once]]
-        todo = todo[at_once:]
-        waiting = list(batch)
-        while waiting:
-            for session in list(waiting):
-                late = time.monotonic() - session.t0 > timeout
-                if session.poll() or late:
-                    waiting.remove(session)
-            time.sleep(0.25)
-        for session in batch:
-            runs[session.path] = session.finish(panel_bound)
+    todo, opening, running = list(paths), [], []
+    while todo or opening or running:
+        if todo and len(opening) + len(running) < at_once + 1:
+            opening.append(_Session(lab, browser, todo.pop(0)))  # one opens ahead
+        for session in list(opening):
+            if len(running) < at_once and session.ready():
+                opening.remove(session)
+                session.start()
+                running.append(session)
+        for session in list(running):
+            late = time.monotonic() - session.t0 > timeout
+            if session.poll() or late:
+                running.remove(session)
+                runs[session.path] = session.finish(panel_bound)
+        time.sleep(0.25)
     return [runs[p] for p in paths]
 
 

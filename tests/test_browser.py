@@ -109,6 +109,8 @@ def _record(run) -> None:
         "errors": len(run.errors),
         "figures": run.figures,
         "cells_s": run.cells_s,
+        "open_s": run.open_s,
+        "check_s": run.check_s,
     }
     path.write_text(json.dumps(timings, indent=1))
 
@@ -155,6 +157,12 @@ SELFTEST = {
                 "    return w.VBox([s, label, img])",
                 "panel(live=True)",
                 "panel(live=False)  # a panel that stopped redrawing",
+                "from IPython.display import Image, display\n\n\n"
+                "def broken(v=1.0):  # a panel whose redraw fails\n"
+                "    if v != 1.0:\n        raise ValueError('the panel broke')\n"
+                "    display(Image(data=png(v)))\n\n\n"
+                "w.interact(broken, v=w.FloatSlider(value=1.0, min=0, max=5, step=0.1,"
+                " continuous_update=False));",
             ]
         )
     ],
@@ -177,11 +185,15 @@ def test_the_browser_test_fails_when_a_panel_stops_redrawing(lab, browser):
     t0 = time.monotonic()
     run = run_notebook(lab, browser, "selftest/panels.ipynb", 60, panel_bound=5.0)
     assert run.finished and not run.errors
-    assert [p["panel"] for p in run.panels] == [0, 1]
-    live, stuck = run.panels
+    assert [p["panel"] for p in run.panels] == [0, 1, 2]
+    live, stuck, broken = run.panels
     assert live["redraw_s"] is not None and live["feedback_s"] is not None
     assert stuck["redraw_s"] is None  # waited the whole bound, saw no new pixels
     assert stuck["feedback_s"] is not None  # its label still said "running"
+    assert broken["redraw_s"] is None and "the panel broke" in broken["error"]
     found = problems(run, solution=True)
-    assert found == ["panel 1 did not redraw after ''"], found
+    assert found == [
+        "panel 1 did not redraw after ''",
+        "panel 2 shows an error after 'v': ValueError: the panel broke",
+    ], found
     assert time.monotonic() - t0 < 90
