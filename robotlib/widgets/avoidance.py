@@ -192,10 +192,14 @@ class EpisodePanel:
 
         self.status.value = f"running {self.kind.value} on pair {self.pair.value} ..."
         self.output.add_class("robotlib-stale")  # the old figure greys at once
-        self.episode = ep = episode_for(
-            self.world_name, int(self.pair.value), self.kind.value, self.seed,
-            **self.settings(), **self.parts,
-        )  # fmt: skip
+        try:
+            self.episode = ep = episode_for(
+                self.world_name, int(self.pair.value), self.kind.value, self.seed,
+                **self.settings(), **self.parts,
+            )  # fmt: skip
+        except Exception as e:  # a student's piece failed: say so, keep the trace
+            self.status.value = f"the run failed: {type(e).__name__}: {e}"
+            raise
         self.figure.clf()
         a, b = self.figure.subplots(1, 2, gridspec_kw={"width_ratios": [1.3, 1]})
         plot_episode(a, ep, self.world, echoes=False)

@@ -89,10 +89,14 @@ class MappingPanel:
         what = f"{self.sensor.value}, {self.poses.value} poses"
         self.status.value = f"mapping: {what} ..."
         self.out.add_class("robotlib-stale")  # the old map greys at once
-        grid, self.score = build_map(
-            self.log, self.sensor.value, self.poses.value, self.l_occ.value,
-            self.l_free.value, self.n.value,
-        )  # fmt: skip
+        try:
+            grid, self.score = build_map(
+                self.log, self.sensor.value, self.poses.value, self.l_occ.value,
+                self.l_free.value, self.n.value,
+            )  # fmt: skip
+        except Exception as e:  # say so in the panel, keep the trace
+            self.status.value = f"the map failed: {type(e).__name__}: {e}"
+            raise
         with self.out:
             self.out.clear_output(wait=True)
             fig, ax = plt.subplots(figsize=(6, 4.5))
