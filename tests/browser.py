@@ -404,7 +404,7 @@ def run_notebooks(
         if todo and len(opening) + len(running) < at_once + 1:
             opening.append(_Session(lab, browser, todo.pop(0)))  # one opens ahead
         for session in list(opening):
-            if len(running) < at_once and session.ready():
+            if session.ready() and len(running) < at_once:
                 opening.remove(session)
                 session.start()
                 running.append(session)
@@ -449,19 +449,39 @@ _AT_TOP = """(h) => parseFloat(h.getAttribute('aria-valuenow'))
   >= parseFloat(h.getAttribute('aria-valuemax'))"""
 
 
+def _settle(panel, slider, bound: float, quiet: float = 1.0) -> float:
+    """Wait until the panel has not changed for ``quiet`` s; return the wait, s.
+
+    A panel that draws its first figure in the background (the MCL panel)
+    may still be drawing when the notebook's kernel turns idle: a change of
+    its image then would not be an answer to the slider.
+    """
+    t0 = time.monotonic()
+    state, since = None, t0
+    while time.monotonic() - t0 < bound:
+        now = panel.evaluate(_HASH_IMAGES) + panel.evaluate(_OUTSIDE, slider)
+        if now != state or "loading" in now:
+            state, since = now, time.monotonic()
+        elif time.monotonic() - since >= quiet:
+            break
+        time.sleep(0.05)
+    return since - t0
+
+
 def check_panels(page, stem: Path, bound: float = 60.0) -> list[dict]:
     """Move the first enabled slider of each panel; time feedback and redraw.
 
     A panel is an output holding both a slider and an image, found once
     before any slider moves (so a panel whose image is replaced while it
     redraws, or by an error, is still the same panel). Its first enabled
-    slider moves one step right (left when it sits at its maximum). Returns,
-    per panel, ``feedback_s`` (until the panel's text or classes change: a
-    status line, a greyed figure, or the new figure itself; the moved
-    slider's own readout does not count), ``redraw_s`` (until its image's pixels
-    change; None if they did not within ``bound`` s), ``error`` (the last
-    line of an error the panel shows instead, else None) and the slider's
-    label.
+    slider moves one step right (left when it sits at its maximum), once the
+    panel has been still for a second (``settle_s``: how long it was still
+    changing). Returns, per panel, ``feedback_s`` (until the panel's text or
+    classes change: a status line, a greyed figure, or the new figure
+    itself; the moved slider's own readout does not count), ``redraw_s``
+    (until its image's pixels change; None if they did not within ``bound``
+    s), ``error`` (the last line of an error the panel shows instead, else
+    None) and the slider's label.
     """
     results = []
     outputs = page.locator(".jp-OutputArea-output:has(.widget-slider):has(img)")
@@ -478,6 +498,7 @@ def check_panels(page, stem: Path, bound: float = 60.0) -> list[dict]:
             "s => s.querySelector('.widget-label')?.textContent || ''"
         )
         key = "ArrowLeft" if handle.evaluate(_AT_TOP) else "ArrowRight"
+        settled = _settle(panel, slider, bound)  # a first run may still be drawing
         before_pixels = panel.evaluate(_HASH_IMAGES)
         before_text = panel.evaluate(_OUTSIDE, slider)
         panel.screenshot(path=f"{stem}-panel{k}-before.png")
@@ -503,7 +524,8 @@ def check_panels(page, stem: Path, bound: float = 60.0) -> list[dict]:
             page.wait_for_timeout(300)
             panel.screenshot(path=f"{stem}-panel{k}-after.png")
         results.append(
-            {"panel": k, "slider": label.strip(), "key": key, "feedback_s": feedback,
+            {"panel": k, "slider": label.strip(), "key": key, "settle_s": settled,
+             "feedback_s": feedback,
              "redraw_s": redraw, "error": error}
         )  # fmt: skip
     return results
