@@ -116,7 +116,14 @@ def _record(run) -> None:
 
 
 def test_every_notebook_in_a_real_browser(lab, browser):
-    runs = run_notebooks(lab, browser, NOTEBOOKS, RUN_ALL_LIMIT, PANEL_REDRAW)
+    runs = run_notebooks(
+        lab,
+        browser,
+        NOTEBOOKS,
+        RUN_ALL_LIMIT,
+        PANEL_REDRAW,
+        feedback_bound=PANEL_FEEDBACK,
+    )
     found = {}
     for run in runs:
         _record(run)

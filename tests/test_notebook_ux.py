@@ -230,6 +230,7 @@ def test_interact_panel_says_it_runs_then_redraws_and_shows_errors():
     panel = InteractPanel(show, k=slider)
     names["panel"] = panel
     assert panel.runs == 1 and seen == [(1.0, None)]
+    assert slider.description == "k"
     assert panel.status.value.startswith("k = 1 (drawn in")
     slider.value = 2.0
     assert seen[-1] == (2.0, "running: k = 2 ...")  # said before drawing

@@ -55,7 +55,9 @@ class InteractPanel:
         )
         self.widget.add_class("robotlib-panel")
         self.runs, self.seconds = 0, 0.0
-        for c in controls.values():
+        for name, c in controls.items():
+            if hasattr(c, "description") and not c.description:
+                c.description = name  # as ipywidgets.interact labels it
             c.observe(self.run, names="value")
         self.run()
 
