@@ -136,8 +136,8 @@ class Lab:
         except OSError:
             pass
 
-    def close(self) -> None:
-        """Stop the server (its own process only)."""
+    def close(self, keep_log: Path | None = None) -> None:
+        """Stop the server (its own process only); copy its log to ``keep_log``."""
         self.shutdown_kernels()
         self.proc.terminate()
         try:
@@ -146,6 +146,9 @@ class Lab:
             self.proc.kill()
             self.proc.wait()
         self.log.close()
+        if keep_log is not None:
+            Path(keep_log).parent.mkdir(parents=True, exist_ok=True)
+            shutil.copyfile(self.log.name, keep_log)
 
 
 @dataclass
@@ -207,10 +210,13 @@ class Browser:
                 run.blocked.append(r.url)  # it fails: see the proxy in __init__
 
         page.on("request", request)
-        page.on(
-            "console",
-            lambda m: run.console.append(m.text) if m.type == "error" else None,
-        )
+
+        def console(m):
+            if m.type == "error":  # with the address, so a failed request says which
+                url = (m.location or {}).get("url", "")
+                run.console.append(f"{m.text} ({url})" if url else m.text)
+
+        page.on("console", console)
         page.on("pageerror", lambda e: run.console.append(f"page error: {e}"))
         return page
 

@@ -56,7 +56,7 @@ pytestmark = pytest.mark.skipif(not _have, reason=f"needs playwright and {CHROMI
 def lab(tmp_path_factory):
     server = Lab(ROOT, tmp=tmp_path_factory.mktemp("jupyterlab"))
     yield server
-    server.close()
+    server.close(keep_log=ARTIFACTS / "jupyterlab.log")  # a CI artefact too
 
 
 @pytest.fixture(scope="module")
