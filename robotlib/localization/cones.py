@@ -105,12 +105,9 @@ class ConeTable:
             float(sonar.min_range),
             sonar.cos_specular,
         )
-        if ray_step == 0 and len(world.obstacles) >= INDEX_MIN_SEGMENTS:
-            # cones cast whole on a large map: rays through the walls' bucket
-            # index, jumping over clear space by the distance field (the same
-            # table, much sooner). With shared rays (``ray_step > 0``) the
-            # sweep of `build_cone_table` is sooner still: 4.6 s against 9.5 s
-            # of processor time on a 50 m building of 532 walls.
+        if not _sweep_builds(world, sonar, ray_step):
+            # a large map: rays through the walls' bucket index, jumping over
+            # clear space by the distance field (the same table, much sooner)
             index = world.segment_index()
             field = world.distance_field(self.resolution)
             _kernels.build_cone_table_indexed(
@@ -160,6 +157,45 @@ class ConeTable:
             out,
         )
         return out
+
+
+SWEEP_MAX_NEAR = 128
+"""Walls within reach of a cell (on average) up to which shared rays are swept.
+
+The sweep of `_kernels.build_cone_table` tries every wall near a block of
+cells on every cell; the indexed builder casts each ray through the walls'
+buckets. Measured on one thread (processor time per cell, middle rows, the
+default sonar at 5 cm): a 50 m building of 532 walls (about 21 near a cell)
+sweep 6.3 us, indexed 11.9 us; ``sauljabin_columbia2.map`` (495 walls, 44
+near) 7.4 and 11.2 us; ``amrisim_AMROffice.map`` (46,625 segments, 8,800
+near) 425 and 35 us; ``columbia.map`` (127,092, 9,950 near) 962 and 48 us.
+The sweep grows by about 0.05 us a near wall: the two meet near 130.
+"""
+
+
+def _near_walls(world: World, max_range: float) -> float:
+    """Mean number of walls within ``max_range`` (+ 0.6 m) of a cell, estimated.
+
+    The walls' density over the bounds times the area of the reach's disc
+    (the sweep's reach grows ``max_range`` by 0.6 m, its blocks' half
+    diagonal).
+    """
+    w, h = world.size
+    return len(world.obstacles) / max(w * h, 1e-9) * math.pi * (max_range + 0.6) ** 2
+
+
+def _sweep_builds(world: World, sonar: SonarModel, ray_step: int) -> bool:
+    """Whether `ConeTable` takes the sweep (else the indexed builder): same table.
+
+    The sweep for small maps, and for shared rays (``ray_step > 0``) on maps
+    of at most `SWEEP_MAX_NEAR` walls near a cell; the indexed builder for
+    the rest (whole cones on a map of `INDEX_MIN_SEGMENTS` or more, dense
+    maps such as MobileSim's ``columbia.map``: about 24 s against 480 s of
+    processor time, from the per-cell times above).
+    """
+    if len(world.obstacles) < INDEX_MIN_SEGMENTS:
+        return True
+    return ray_step > 0 and _near_walls(world, sonar.max_range) <= SWEEP_MAX_NEAR
 
 
 MAX_TABLE_BYTES = 1 << 30

@@ -267,6 +267,48 @@ def build_cone_table_indexed(
                 table[i, j, b] = np.uint16(round(z * 1000.0))
 
 
+@nb.njit(**JIT)
+def cone_table_cells(
+    segments, x0, y0, resolution, rows, cols, n_bins, ray_step, n_rays, cone,
+    max_range, min_range, cos_specular, out,
+):  # fmt: skip
+    """Compute `build_cone_table`'s entries for chosen cells by their plain definition.
+
+    ``out[k, b]`` (uint16, mm) is the entry of cell ``(rows[k], cols[k])``:
+    the cell's centre ``(x0 + (col + 0.5) * resolution, y0 + (row + 0.5) *
+    resolution)`` (the builders' own arithmetic), a cone along
+    ``b * 2 pi / n_bins`` cast against every wall by
+    `robotlib.sensing._kernels.cone_echo`; with ``ray_step > 0`` each ray
+    along its own direction bin and the cone the nearest echo of its
+    ``n_rays`` rays. No culling, no index, no sharing between cells: the
+    reference the fast builders must equal bit for bit.
+    """
+    half = (n_rays - 1) // 2 if n_rays > 1 else 0
+    rays = np.empty(n_bins)
+    for k in range(rows.shape[0]):
+        cx = x0 + (cols[k] + 0.5) * resolution
+        cy = y0 + (rows[k] + 0.5) * resolution
+        if ray_step > 0:
+            for b in range(n_bins):
+                rays[b] = cone_echo(
+                    cx, cy, b * _TWO_PI / n_bins, segments, 1, 0.0, max_range,
+                    cos_specular,
+                )  # fmt: skip
+        for b in range(n_bins):
+            if ray_step > 0:
+                echo = np.inf
+                for q in range(-half, half + 1):
+                    echo = min(echo, rays[(b + q * ray_step) % n_bins])
+            else:
+                echo = cone_echo(
+                    cx, cy, b * _TWO_PI / n_bins, segments, n_rays, cone,
+                    max_range, cos_specular,
+                )  # fmt: skip
+            z = max_range if echo >= max_range else echo
+            z = min(max(z, min_range), max_range)
+            out[k, b] = np.uint16(round(z * 1000.0))
+
+
 @nb.njit(**JIT, inline="always")
 def table_bin(x, y, th, c, s, sensors, i, ny, nx, n_bins, x0, y0, inv_res):
     """Cone table ``(row, col, bin)`` of sensor ``i`` on a robot at ``(x, y, th)``.
