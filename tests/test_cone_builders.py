@@ -147,3 +147,27 @@ def test_exact_path_heading_sectors_equal_every_wall(grid_map, which):
         sonar.cone, sonar.max_range, sonar.min_range, sonar.cos_specular, ref,
     )  # fmt: skip
     np.testing.assert_array_equal(got, ref)
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_sweep_equals_the_every_wall_kernel_on_random_walls(seed):
+    """Random walls: short, long, zero-length, through cell centres, repeated."""
+    rng = np.random.default_rng(seed)
+    a = rng.uniform(0.0, 4.0, (60, 2))
+    walls = np.column_stack([a, a + rng.normal(0.0, 0.8, (60, 2))])
+    walls[:5, 2:] = walls[:5, :2]  # zero length
+    walls[5:10] = np.round(walls[5:10] / 0.05) * 0.05 + 0.025  # ends on cell centres
+    walls[10:13] = walls[20:23]  # the same wall twice: the lower index wins
+    walls[13, :] = [0.025, 0.025, 3.975, 3.975]  # a diagonal through centres
+    sonar = SonarModel(max_range=3.0)
+    shape, origin = (40, 40), (0.0, 0.0)
+    ref = every_wall(_World(walls), sonar, 0.1, 1, shape, origin)
+    for block in (1, 5, 16):
+        out = np.empty(shape + (72,), dtype=np.uint16)
+        lk.build_cone_table(walls, *origin, *model(sonar, 0.1, 1), block, out)
+        np.testing.assert_array_equal(out, ref)
+
+
+class _World:
+    def __init__(self, walls):
+        self.obstacles = np.ascontiguousarray(walls)

@@ -16,16 +16,44 @@ from .common import _TWO_PI
 
 
 @nb.njit(**JIT)
-def _ray_echoes(cx, cy, segments, max_range, cos_specular, dirs, best, best_m, rays):
+def _pseudo_atan2(y, x):
+    """``math.atan2(y, x)`` within 1e-5 rad (a polynomial; for bin ranges only)."""
+    ax = abs(x)
+    ay = abs(y)
+    hi = max(ax, ay)
+    if hi == 0.0:
+        return 0.0
+    a = min(ax, ay) / hi
+    s = a * a
+    r = ((-0.0464964749 * s + 0.15931422) * s - 0.327622764) * s * a + a
+    if ay > ax:
+        r = 0.5 * math.pi - r
+    if x < 0.0:
+        r = math.pi - r
+    return -r if y < 0.0 else r
+
+
+@nb.njit(**JIT)
+def _ray_echoes(
+    cx, cy, segments, normals, max_range, cos_specular, dirs, best, best_m, rays,
+    pad, dist, order,
+):  # fmt: skip
     """Single-ray echoes from ``(cx, cy)`` along every direction bin, into ``rays``.
 
     ``rays[b]`` is `robotlib.sensing._kernels.cone_echo` of one ray along
-    ``dirs[b]`` (the cosine and sine of ``b * 2 pi / n_bins``), but each wall
-    is tried only on the bins within one bin of the directions it subtends
-    (all bins when it nearly faces the point), and walls further than
-    ``max_range`` are left out: a pair left out cannot be a hit the ray
-    keeps, and the walls are taken in order (the first of equal hits wins),
-    so the echoes are the same numbers. ``best`` and ``best_m`` are scratch.
+    ``dirs[b]`` (the cosine and sine of ``b * 2 pi / n_bins``): each ray's
+    nearest hit, the lowest wall index among equal hits. Walls further than
+    ``max_range`` are left out; the others are taken nearest first, each
+    tried only on the bins within two bins of the directions it subtends
+    (all bins when it nearly faces the point), and on a bin only while the
+    ray's hit so far is not nearer than the wall itself; once every ray has
+    a hit nearer than the next wall, the rest are left out. No pair left out
+    can be a hit the ray keeps, and equal hits go to the lower index, so the
+    echoes are the same numbers as the cast against every wall. ``normals``
+    are the walls' `_unit_normals`. The echoes go to ``rays[pad:pad +
+    n_bins]``, and the ``pad`` bins before and after the turn to both ends
+    (a cone's rays read without wrapping). ``best``, ``best_m`` (n_bins,)
+    and ``dist``, ``order`` (M,) are scratch.
     """
     n_bins = dirs.shape[0]
     w = _TWO_PI / n_bins
@@ -33,13 +61,36 @@ def _ray_echoes(cx, cy, segments, max_range, cos_specular, dirs, best, best_m, r
         best[b] = np.inf
         best_m[b] = -1
     far = max_range * (1.0 + 1e-9) + 1e-9
-    for m in range(segments.shape[0]):
+    k = 0
+    for m in range(segments.shape[0]):  # the walls in reach, nearest first
+        d = point_segment_distance(
+            cx, cy, segments[m, 0], segments[m, 1], segments[m, 2], segments[m, 3]
+        )
+        if d > far:
+            continue
+        j = k
+        while j > 0 and dist[j - 1] > d:
+            dist[j] = dist[j - 1]
+            order[j] = order[j - 1]
+            j -= 1
+        dist[j] = d
+        order[j] = m
+        k += 1
+    open_rays = n_bins  # rays with no hit yet
+    worst = 0.0  # once every ray has a hit: at least the farthest (or stale, 0)
+    for q in range(k):
+        m = order[q]
+        near = dist[q] * (1.0 - 1e-9) - 1e-12  # below any hit on wall m
+        if open_rays == 0 and near > worst:
+            worst = 0.0
+            for b in range(n_bins):
+                worst = max(worst, best[b])
+            if near > worst:
+                break  # every ray has a hit nearer than the walls left
         px = segments[m, 0]
         py = segments[m, 1]
         qx = segments[m, 2]
         qy = segments[m, 3]
-        if point_segment_distance(cx, cy, px, py, qx, qy) > far:
-            continue
         ex = qx - px
         ey = qy - py
         wx = px - cx
@@ -49,42 +100,62 @@ def _ray_echoes(cx, cy, segments, max_range, cos_specular, dirs, best, best_m, r
         first = 0
         count = n_bins
         if wx * wx + wy * wy > 1e-18 and vx * vx + vy * vy > 1e-18:
-            a0 = math.atan2(wy, wx)
-            span = math.atan2(vy, vx) - a0
+            a0 = _pseudo_atan2(wy, wx)
+            span = _pseudo_atan2(vy, vx) - a0
             if span > math.pi:
                 span -= _TWO_PI
             elif span <= -math.pi:
                 span += _TWO_PI
-            if abs(span) < math.pi - 3.0 * w:
+            if abs(span) < math.pi - 5.0 * w:
                 lo = a0 if span >= 0.0 else a0 + span
-                first = int(math.floor(lo / w)) - 1
-                count = min(int(math.ceil((lo + abs(span)) / w)) + 2 - first, n_bins)
-        for q in range(count):
-            b = (first + q) % n_bins
+                first = int(math.floor(lo / w)) - 2
+                count = min(int(math.ceil((lo + abs(span)) / w)) + 3 - first, n_bins)
+        b = first % n_bins - 1
+        for _ in range(count):
+            b += 1
+            if b == n_bins:
+                b = 0
+            if best[b] < near:
+                continue
             dx = dirs[b, 0]
             dy = dirs[b, 1]
             denom = dx * ey - dy * ex  # `ray_segments`, step for step
             if abs(denom) < _EPS:
                 continue
             t = (wx * ey - wy * ex) / denom
-            if t < 0.0 or t >= best[b]:
+            if t < 0.0 or t > best[b] or (t == best[b] and m > best_m[b]):
                 continue
             s = (wx * dy - wy * dx) / denom
             if 0.0 <= s <= 1.0:
+                if best_m[b] < 0:
+                    open_rays -= 1
                 best[b] = t
                 best_m[b] = m
     for b in range(n_bins):  # `_cone`'s echo test on each ray's first hit
         t = best[b]
         m = best_m[b]
-        rays[b] = np.inf
+        rays[pad + b] = np.inf
         if m < 0 or t >= max_range:
             continue
+        cos_inc = abs(dirs[b, 0] * normals[m, 0] + dirs[b, 1] * normals[m, 1])
+        if cos_inc >= cos_specular:
+            rays[pad + b] = t
+    for b in range(pad):  # the turn continued on both sides
+        rays[b] = rays[n_bins + b]
+        rays[pad + n_bins + b] = rays[pad + b]
+
+
+@nb.njit(**JIT)
+def _unit_normals(segments):
+    """Each wall's unit normal ``(-ey, ex) / length`` as `_cone` computes it, (M, 2)."""
+    out = np.empty((segments.shape[0], 2))
+    for m in range(segments.shape[0]):
         ex = segments[m, 2] - segments[m, 0]
         ey = segments[m, 3] - segments[m, 1]
         length = math.sqrt(ex * ex + ey * ey)
-        cos_inc = abs(dirs[b, 0] * (-ey / length) + dirs[b, 1] * (ex / length))
-        if cos_inc >= cos_specular:
-            rays[b] = t
+        out[m, 0] = -ey / length
+        out[m, 1] = ex / length
+    return out
 
 
 @nb.njit(**JIT)
@@ -134,9 +205,13 @@ def _sweep_table(
             segments, x0 + (bj + 0.5) * block * resolution,
             y0 + (bi + 0.5) * block * resolution, reach,
         )  # fmt: skip
-        rays = np.empty(n_bins)
+        normals = _unit_normals(near)
+        pad = half * ray_step
+        rays = np.empty(n_bins + 2 * pad)
         best = np.empty(n_bins)
         best_m = np.empty(n_bins, dtype=np.int64)
+        dist = np.empty(near.shape[0])
+        order = np.empty(near.shape[0], dtype=np.int64)
         dirs = np.empty((n_bins, 2))
         for b in range(n_bins):  # as `cone_echo` computes each ray's direction
             dirs[b, 0] = math.cos(b * _TWO_PI / n_bins)
@@ -146,12 +221,13 @@ def _sweep_table(
             for j in range(bj * block, min((bj + 1) * block, nx)):
                 cx = x0 + (j + 0.5) * resolution
                 _ray_echoes(
-                    cx, cy, near, max_range, cos_specular, dirs, best, best_m, rays
-                )
+                    cx, cy, near, normals, max_range, cos_specular, dirs, best,
+                    best_m, rays, pad, dist, order,
+                )  # fmt: skip
                 for b in range(n_bins):
                     echo = np.inf
-                    for k in range(-half, half + 1):
-                        r = rays[(b + k * ray_step) % n_bins]
+                    for k in range(b, b + 2 * pad + 1, ray_step):
+                        r = rays[k]
                         if r < echo:
                             echo = r
                     table[i, j, b] = _table_entry(echo, max_range, min_range)
