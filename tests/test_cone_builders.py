@@ -171,3 +171,44 @@ def test_sweep_equals_the_every_wall_kernel_on_random_walls(seed):
 class _World:
     def __init__(self, walls):
         self.obstacles = np.ascontiguousarray(walls)
+
+
+def test_disk_cache_gives_the_same_table_and_rebuilds_when_unsure(
+    tmp_path, monkeypatch
+):
+    from robotlib.localization import cones
+
+    monkeypatch.setattr(cones, "DISK_MIN_SECONDS", 0.0)
+    monkeypatch.setenv("ROBOTLIB_TABLE_CACHE", str(tmp_path))
+    world = square_world(8.0)
+    built = ConeTable(world, resolution=0.1)
+    assert not built.from_disk and len(list(tmp_path.glob("*.npy"))) == 1
+    read = ConeTable(world, resolution=0.1)
+    assert read.from_disk and not read.table.flags.writeable
+    np.testing.assert_array_equal(read.table, built.table)
+    # another grid, sonar or wall: another key
+    assert not ConeTable(world, resolution=0.2).from_disk
+    assert not ConeTable(world, SonarModel(max_range=3.0), resolution=0.1).from_disk
+    moved = type(world)(world.segments + [0.0, 0.0, 0.0, 1e-9], bounds=world.bounds)
+    assert not ConeTable(moved, resolution=0.1).from_disk
+    # a truncated or foreign file is not trusted
+    for f in tmp_path.glob("*.npy"):
+        f.write_bytes(f.read_bytes()[:-2])
+    again = ConeTable(world, resolution=0.1)
+    assert not again.from_disk
+    np.testing.assert_array_equal(again.table, built.table)
+    # off: never read
+    monkeypatch.setenv("ROBOTLIB_TABLE_CACHE", "off")
+    assert cones.table_cache_dir() is None
+    assert not ConeTable(world, resolution=0.1).from_disk
+
+
+def test_disk_cache_that_cannot_be_written_is_left_alone(tmp_path, monkeypatch):
+    from robotlib.localization import cones
+
+    monkeypatch.setattr(cones, "DISK_MIN_SECONDS", 0.0)
+    blocker = tmp_path / "file"
+    blocker.write_text("not a directory")
+    monkeypatch.setenv("ROBOTLIB_TABLE_CACHE", str(blocker / "tables"))
+    table = ConeTable(square_world(8.0), resolution=0.1)
+    assert not table.from_disk and table.table.any()
