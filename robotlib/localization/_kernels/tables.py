@@ -10,7 +10,7 @@ import numba as nb
 import numpy as np
 
 from ..._config import JIT, JIT_PARALLEL, serial_and_parallel
-from ...sensing._kernels import _EPS, cone_echo, indexed_cone_echo
+from ...sensing._kernels import _EPS, cone_echo, indexed_cone_echo, indexed_ray
 from ...world._kernels import point_segment_distance
 from .common import _TWO_PI
 
@@ -33,6 +33,10 @@ def _pseudo_atan2(y, x):
     return -r if y < 0.0 else r
 
 
+_SORT_MAX = 256
+"""Walls near a block up to which `_ray_echoes` sorts them (beyond: in order)."""
+
+
 @nb.njit(**JIT)
 def _ray_echoes(
     cx, cy, segments, normals, max_range, cos_specular, dirs, best, best_m, rays,
@@ -47,7 +51,8 @@ def _ray_echoes(
     tried only on the bins within two bins of the directions it subtends
     (all bins when it nearly faces the point), and on a bin only while the
     ray's hit so far is not nearer than the wall itself; once every ray has
-    a hit nearer than the next wall, the rest are left out. No pair left out
+    a hit nearer than the next wall, the rest are left out (more than
+    `_SORT_MAX` walls are taken in order, none left out). No pair left out
     can be a hit the ray keeps, and equal hits go to the lower index, so the
     echoes are the same numbers as the cast against every wall. ``normals``
     are the walls' `_unit_normals`. The echoes go to ``rays[pad:pad +
@@ -62,6 +67,7 @@ def _ray_echoes(
         best_m[b] = -1
     far = max_range * (1.0 + 1e-9) + 1e-9
     k = 0
+    ordered = segments.shape[0] <= _SORT_MAX
     for m in range(segments.shape[0]):  # the walls in reach, nearest first
         d = point_segment_distance(
             cx, cy, segments[m, 0], segments[m, 1], segments[m, 2], segments[m, 3]
@@ -69,7 +75,7 @@ def _ray_echoes(
         if d > far:
             continue
         j = k
-        while j > 0 and dist[j - 1] > d:
+        while ordered and j > 0 and dist[j - 1] > d:
             dist[j] = dist[j - 1]
             order[j] = order[j - 1]
             j -= 1
@@ -81,7 +87,7 @@ def _ray_echoes(
     for q in range(k):
         m = order[q]
         near = dist[q] * (1.0 - 1e-9) - 1e-12  # below any hit on wall m
-        if open_rays == 0 and near > worst:
+        if ordered and open_rays == 0 and near > worst:
             worst = 0.0
             for b in range(n_bins):
                 worst = max(worst, best[b])
@@ -265,13 +271,14 @@ def cone_cast_table(
                     table[i, j, b] = _table_entry(echo, max_range, min_range)
 
 
-SERIAL_MAX_WORK = 1_000_000
+SERIAL_MAX_WORK = 20_000_000
 """Cells times walls up to which `build_cone_table` sweeps on one thread.
 
-Such a table takes well under 0.1 s on one thread, and the serial kernel
-compiles in 2.2 s of processor time against 3.7 s for the parallel one (an
-empty cache). Larger tables (the corridor's 92,800 cells and 44 walls, 0.33
-s on one thread) take the parallel kernel: a warm start matters more.
+The serial kernel compiles in about 1.5 s less processor time than the
+parallel one on an empty numba cache, and a table is built once per map
+and model (then read from the disk cache, see
+`robotlib.localization.cones.table_cache_dir`): the corridor (92,800 cells,
+44 walls) takes 0.24 s on one thread, the office (134,400, 113) 0.44 s.
 """
 
 
@@ -309,6 +316,74 @@ def build_cone_table(
 
 
 @nb.njit(**JIT_PARALLEL)
+def indexed_sweep_table(
+    segments, x0, y0, resolution, n_bins, ray_step, n_rays, max_range, min_range,
+    cos_specular, bx0, by0, bsize, nbx, nby, start, items, field, table,
+):  # fmt: skip
+    """`build_cone_table_indexed` for shared rays (``ray_step > 0``).
+
+    Each cell's ray along each bin is cast once through the index
+    (`robotlib.sensing._kernels.indexed_ray`, the nearest hit), kept when
+    the wall echoes (the specular test of `cone_echo`, with the walls'
+    `_unit_normals`), and each cone is the nearest echo of its rays, read
+    from a padded ring. Rows in parallel.
+    """
+    ny, nx, _ = table.shape
+    half = (n_rays - 1) // 2 if n_rays > 1 else 0
+    pad = half * ray_step
+    normals = _unit_normals(segments)
+    dirs = np.empty((n_bins, 2))
+    for b in range(n_bins):  # as `cone_echo` computes each ray's direction
+        dirs[b, 0] = math.cos(b * _TWO_PI / n_bins)
+        dirs[b, 1] = math.sin(b * _TWO_PI / n_bins)
+    for i in nb.prange(ny):
+        rays = np.empty(n_bins + 2 * pad)
+        cy = y0 + (i + 0.5) * resolution
+        for j in range(nx):
+            cx = x0 + (j + 0.5) * resolution
+            for b in range(n_bins):
+                dx = dirs[b, 0]
+                dy = dirs[b, 1]
+                t, m = indexed_ray(
+                    cx, cy, dx, dy, segments, bx0, by0, bsize, nbx, nby, start,
+                    items, max_range, field, x0, y0, resolution,
+                )  # fmt: skip
+                r = np.inf
+                if m >= 0 and t < max_range:
+                    if abs(dx * normals[m, 0] + dy * normals[m, 1]) >= cos_specular:
+                        r = t
+                rays[pad + b] = r
+            for b in range(pad):
+                rays[b] = rays[n_bins + b]
+                rays[pad + n_bins + b] = rays[pad + b]
+            for b in range(n_bins):
+                echo = np.inf
+                for k in range(b, b + 2 * pad + 1, ray_step):
+                    if rays[k] < echo:
+                        echo = rays[k]
+                table[i, j, b] = _table_entry(echo, max_range, min_range)
+
+
+@nb.njit(**JIT_PARALLEL)
+def indexed_cone_table(
+    segments, x0, y0, resolution, n_bins, n_rays, cone, max_range, min_range,
+    cos_specular, bx0, by0, bsize, nbx, nby, start, items, field, table,
+):  # fmt: skip
+    """`build_cone_table_indexed` for whole cones (``ray_step == 0``)."""
+    ny, nx, _ = table.shape
+    for i in nb.prange(ny):
+        cy = y0 + (i + 0.5) * resolution
+        for j in range(nx):
+            cx = x0 + (j + 0.5) * resolution
+            for b in range(n_bins):
+                echo = indexed_cone_echo(
+                    cx, cy, b * _TWO_PI / n_bins, segments, n_rays, cone,
+                    max_range, cos_specular, bx0, by0, bsize, nbx, nby, start,
+                    items, field, x0, y0, resolution,
+                )  # fmt: skip
+                table[i, j, b] = _table_entry(echo, max_range, min_range)
+
+
 def build_cone_table_indexed(
     segments, x0, y0, resolution, n_bins, ray_step, n_rays, cone, max_range,
     min_range, cos_specular, bx0, by0, bsize, nbx, nby, start, items, field,
@@ -320,38 +395,20 @@ def build_cone_table_indexed(
     `robotlib.sensing._kernels.indexed_ray`), in time that grows with the
     walls near each ray rather than with all of them: for maps of many
     walls or points. ``field`` is the distance field on the table's own
-    cells (rays jump over clear space with it). Rows are filled in parallel.
+    cells (rays jump over clear space with it). Rows are filled in parallel
+    (`indexed_sweep_table` for shared rays, `indexed_cone_table` otherwise).
     """
-    ny, nx, _ = table.shape
-    half = (n_rays - 1) // 2 if n_rays > 1 else 0
-    for i in nb.prange(ny):
-        rays = np.empty(n_bins)
-        cy = y0 + (i + 0.5) * resolution
-        for j in range(nx):
-            cx = x0 + (j + 0.5) * resolution
-            if ray_step > 0:
-                for b in range(n_bins):
-                    rays[b] = indexed_cone_echo(
-                        cx, cy, b * _TWO_PI / n_bins, segments, 1, 0.0, max_range,
-                        cos_specular, bx0, by0, bsize, nbx, nby, start, items,
-                        field, x0, y0, resolution,
-                    )  # fmt: skip
-            for b in range(n_bins):
-                if ray_step > 0:
-                    echo = np.inf
-                    for k in range(-half, half + 1):
-                        r = rays[(b + k * ray_step) % n_bins]
-                        if r < echo:
-                            echo = r
-                else:
-                    echo = indexed_cone_echo(
-                        cx, cy, b * _TWO_PI / n_bins, segments, n_rays, cone,
-                        max_range, cos_specular, bx0, by0, bsize, nbx, nby, start,
-                        items, field, x0, y0, resolution,
-                    )  # fmt: skip
-                z = max_range if echo >= max_range else echo
-                z = min(max(z, min_range), max_range)
-                table[i, j, b] = np.uint16(round(z * 1000.0))
+    index = (bx0, by0, bsize, nbx, nby, start, items, field, table)
+    if ray_step > 0:
+        indexed_sweep_table(
+            segments, x0, y0, resolution, n_bins, ray_step, n_rays, max_range,
+            min_range, cos_specular, *index,
+        )  # fmt: skip
+    else:
+        indexed_cone_table(
+            segments, x0, y0, resolution, n_bins, n_rays, cone, max_range,
+            min_range, cos_specular, *index,
+        )  # fmt: skip
 
 
 @nb.njit(**JIT)
