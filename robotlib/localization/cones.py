@@ -245,18 +245,24 @@ _SOURCES = ("_kernels/tables.py", "../sensing/_kernels.py", "../world/_kernels.p
 
 
 @functools.cache
-def _code_digest() -> bytes:
-    """Digest of the builders' source files: a change in them makes a new key."""
+def _code_digest() -> bytes | None:
+    """Digest of the builders' source files (None if one cannot be read: no cache)."""
     h = hashlib.sha256()
     here = Path(__file__).parent
-    for name in _SOURCES:
-        h.update((here / name).read_bytes())
+    try:
+        for name in _SOURCES:
+            h.update((here / name).read_bytes())
+    except OSError:
+        return None
     return h.digest()
 
 
-def _disk_key(world: World, origin, shape, model) -> str:
+def _disk_key(world: World, origin, shape, model) -> str | None:
     """Key of a table: the walls, the grid, the model and the builders' code."""
-    h = hashlib.sha256(_code_digest())
+    code = _code_digest()
+    if code is None or table_cache_dir() is None:
+        return None
+    h = hashlib.sha256(code)
     h.update(np.ascontiguousarray(world.obstacles, dtype=np.float64).tobytes())
     h.update(
         repr((tuple(float(v) for v in world.bounds), origin, shape, model)).encode()
@@ -264,10 +270,10 @@ def _disk_key(world: World, origin, shape, model) -> str:
     return h.hexdigest()[:32]
 
 
-def _disk_load(key: str, out: np.ndarray) -> bool:
+def _disk_load(key: str | None, out: np.ndarray) -> bool:
     """Fill ``out`` from the disk cache; return whether it held the table."""
     folder = table_cache_dir()
-    if folder is None:
+    if folder is None or key is None:
         return False
     try:
         with open(folder / f"{key}.npy", "rb") as f:
@@ -283,10 +289,10 @@ def _disk_load(key: str, out: np.ndarray) -> bool:
         return False
 
 
-def _disk_store(key: str, table: np.ndarray) -> None:
+def _disk_store(key: str | None, table: np.ndarray) -> None:
     """Keep ``table`` in the disk cache (atomically; silently not when it fails)."""
     folder = table_cache_dir()
-    if folder is None:
+    if folder is None or key is None:
         return
     tmp = None
     try:
