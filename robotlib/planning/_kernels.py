@@ -24,68 +24,130 @@ SQRT2 = math.sqrt(2.0)
 # Neighbour offsets: the four orthogonal ones first, then the diagonals.
 DI = np.array([0, 1, 0, -1, 1, 1, -1, -1], dtype=np.int64)
 DJ = np.array([1, 0, -1, 0, 1, -1, -1, 1], dtype=np.int64)
+# the orthogonal neighbours beside each diagonal (diagonal d: DA[d-4], DB[d-4])
+DA = np.array([0, 2, 2, 0], dtype=np.int64)
+DB = np.array([1, 1, 3, 3], dtype=np.int64)
 
 
-# -- binary heap on (key, tie) pairs, lexicographic, with node payloads ------
+# -- the padded grid ---------------------------------------------------------
+# The searches run on a copy of the grid with a one-cell blocked border, one
+# byte a cell, so a neighbour is one load at a fixed flat offset (no bounds
+# tests, no division). A node's padded index is ``p = (i + 1) * (nx + 2) +
+# j + 1``; its plain index ``k = i * nx + j`` moves by the matching plain
+# offset, so both are carried along without dividing.
+BLOCKED = np.uint8(1)
+CLOSED = np.uint8(2)  # expanded
+SEEN = np.uint8(4)  # A*: ``g`` holds a cost (``inf`` otherwise)
+
+
 @nb.njit(**JIT)
-def heap_grow(key, tie, val, size):
-    """Return copies of the heap arrays with room for twice as many items."""
-    cap = 2 * size + 16
-    nk = np.empty(cap)
-    nt = np.empty(cap)
-    nv = np.empty(cap, dtype=np.int64)
-    nk[:size] = key[:size]
-    nt[:size] = tie[:size]
-    nv[:size] = val[:size]
-    return nk, nt, nv
+def padded(blocked):
+    """Return the grid as flat uint8 with a blocked border, (ny + 2) * (nx + 2)."""
+    ny, nx = blocked.shape
+    w = nx + 2
+    state = np.empty((ny + 2) * w, dtype=np.uint8)
+    for j in range(w):
+        state[j] = BLOCKED
+        state[(ny + 1) * w + j] = BLOCKED
+    for i in range(ny):
+        row = (i + 1) * w
+        state[row] = BLOCKED
+        state[row + nx + 1] = BLOCKED
+        for j in range(nx):
+            state[row + 1 + j] = BLOCKED if blocked[i, j] else np.uint8(0)
+    return state
 
 
 @nb.njit(**JIT)
-def heap_push(key, tie, val, size, k, t, v):
-    """Push ``(k, t) -> v`` on a heap of ``size`` items (room for one more)."""
-    c = size
+def _offsets(nx):
+    """Flat offsets of the eight neighbours (`DI`, `DJ` order): padded, plain."""
+    offp = np.empty(8, dtype=np.int64)
+    offk = np.empty(8, dtype=np.int64)
+    for d in range(8):
+        offp[d] = DI[d] * (nx + 2) + DJ[d]
+        offk[d] = DI[d] * nx + DJ[d]
+    return offp, offk
+
+
+# -- indexed binary heap of (f, h, node) triples in one float64 array -------
+# Ordered by f, then h, then the node's index: a total order, so the search
+# expands the same nodes in the same order whatever the heap's shape (and as
+# a plain heapq search on the same keys). Each node is in the heap at most
+# once; ``pos[node]`` is its slot, and a cheaper path to an open node moves it
+# up (decrease-key) instead of pushing a second copy. A node index is exact
+# in float64 up to 2**53.
+@nb.njit(**JIT)
+def heap_grow(heap, size):
+    """Return a copy of ``heap`` (``size`` triples) with room for twice as many."""
+    out = np.empty(3 * (2 * size + 16))
+    out[: 3 * size] = heap[: 3 * size]
+    return out
+
+
+@nb.njit(inline="always", **JIT)
+def _before(f, h, v, heap, c):
+    """Test whether ``(f, h, v)`` comes before the triple in slot ``c``."""
+    cf = heap[3 * c]
+    if f != cf:
+        return f < cf
+    ch = heap[3 * c + 1]
+    if h != ch:
+        return h < ch
+    return v < heap[3 * c + 2]
+
+
+@nb.njit(**JIT)
+def heap_up(heap, pos, c, f, h, v):
+    """Put ``(f, h, v)`` in slot ``c`` (free, or ``v``'s own) and sift it up."""
     while c > 0:
         p = (c - 1) >> 1
-        if k < key[p] or (k == key[p] and t < tie[p]):
-            key[c] = key[p]
-            tie[c] = tie[p]
-            val[c] = val[p]
-            c = p
-        else:
+        if not _before(f, h, v, heap, p):
             break
-    key[c] = k
-    tie[c] = t
-    val[c] = v
+        heap[3 * c] = heap[3 * p]
+        heap[3 * c + 1] = heap[3 * p + 1]
+        w = heap[3 * p + 2]
+        heap[3 * c + 2] = w
+        pos[int(w)] = c
+        c = p
+    heap[3 * c] = f
+    heap[3 * c + 1] = h
+    heap[3 * c + 2] = v
+    pos[int(v)] = c
 
 
 @nb.njit(**JIT)
-def heap_pop(key, tie, val, size):
-    """Pop the smallest item of a heap of ``size`` items; return ``(k, v)``."""
-    k0 = key[0]
-    v0 = val[0]
+def heap_pop(heap, pos, size):
+    """Remove the first triple of a heap of ``size``; return its node."""
+    v0 = int(heap[2])
     last = size - 1
-    k = key[last]
-    t = tie[last]
-    v = val[last]
+    f = heap[3 * last]
+    h = heap[3 * last + 1]
+    v = heap[3 * last + 2]
     c = 0
     while True:
         m = 2 * c + 1
         if m >= last:
             break
         r = m + 1
-        if r < last and (key[r] < key[m] or (key[r] == key[m] and tie[r] < tie[m])):
+        if r < last and _before(heap[3 * r], heap[3 * r + 1], heap[3 * r + 2], heap, m):
             m = r
-        if key[m] < k or (key[m] == k and tie[m] < t):
-            key[c] = key[m]
-            tie[c] = tie[m]
-            val[c] = val[m]
+        mf = heap[3 * m]
+        mh = heap[3 * m + 1]
+        mv = heap[3 * m + 2]
+        if not _before(f, h, v, heap, m):
+            heap[3 * c] = mf
+            heap[3 * c + 1] = mh
+            heap[3 * c + 2] = mv
+            pos[int(mv)] = c
             c = m
         else:
             break
-    key[c] = k
-    tie[c] = t
-    val[c] = v
-    return k0, v0
+    if last > 0:
+        heap[3 * c] = f
+        heap[3 * c + 1] = h
+        heap[3 * c + 2] = v
+        pos[int(v)] = c
+    return v0
 
 
 # -- heuristics ------------------------------------------------------------
@@ -109,12 +171,18 @@ def _heuristic(i, j, gi, gj, res, connect8):
 def astar(blocked, cost, start, goal, weight, connect8, res, g, parent, order):
     """Search with A* (weight > 0), weighted A* (weight > 1) or Dijkstra (0).
 
+    Expands nodes in the order of ``(f, h, node)`` with ``f = g + h`` (an
+    indexed binary heap with decrease-key; see above). Neighbours are
+    relaxed orthogonal first, then diagonal (the `DI`, `DJ` order); a
+    diagonal move needs both cells beside it free.
+
     Parameters
     ----------
     blocked : (ny, nx) bool
         Cells the robot may not enter.
-    cost : (ny, nx) float64
-        Extra cost factor of entering each cell (0: none).
+    cost : (ny, nx) float64, or any array of size 0
+        Extra cost factor of entering each cell (0: none; size 0: none
+        anywhere, and the array is not read).
     start, goal : int
         Flat node indices; ``goal < 0`` expands every reachable node
         (Dijkstra's full cost field).
@@ -127,7 +195,8 @@ def astar(blocked, cost, start, goal, weight, connect8, res, g, parent, order):
     g : (ny * nx,) float64
         Out: cost from the start (``inf`` where never reached).
     parent : (ny * nx,) int64
-        Out: each reached node's predecessor (-1 for the start).
+        Out: each reached node's predecessor (-1 for the start and where
+        never reached).
     order : (L,) int64
         Out: the first ``min(L, expanded)`` nodes in the order they were
         expanded (pass a zero-length array to record nothing).
@@ -138,69 +207,107 @@ def astar(blocked, cost, start, goal, weight, connect8, res, g, parent, order):
         Whether the goal was reached, and how many nodes were expanded.
     """
     ny, nx = blocked.shape
-    n = ny * nx
-    flat_b = blocked.ravel()
+    w = nx + 2
+    use_cost = cost.size > 0
     flat_c = cost.ravel()
-    closed = np.zeros(n, dtype=np.uint8)
-    for k in range(n):
-        g[k] = np.inf
-        parent[k] = -1
-    gi = goal // nx if goal >= 0 else 0
-    gj = goal % nx if goal >= 0 else 0
+    state = padded(blocked)
+    pos = np.empty(state.shape[0], dtype=np.int32)
+    offp, offk = _offsets(nx)
+    gi = goal // nx + 1 if goal >= 0 else 0
+    gj = goal % nx + 1 if goal >= 0 else 0
     nnb = 8 if connect8 else 4
-    cap = 1024
-    key = np.empty(cap)
-    tie = np.empty(cap)
-    val = np.empty(cap, dtype=np.int64)
-    size = 0
+    heur = goal >= 0 and weight > 0.0
+    step_d = res * SQRT2
+    heap = np.empty(3 * 1024)
+    si = start // nx + 1
+    sj = start % nx + 1
+    ps = si * w + sj
     g[start] = 0.0
-    si = start // nx
-    sj = start % nx
-    h0 = weight * _heuristic(si, sj, gi, gj, res, connect8) if goal >= 0 else 0.0
-    heap_push(key, tie, val, size, h0, h0, start)
-    size += 1
+    parent[start] = -1
+    state[ps] |= SEEN
+    h0 = weight * _heuristic(si, sj, gi, gj, res, connect8) if heur else 0.0
+    heap_up(heap, pos, 0, h0, h0, ps)
+    size = 1
     expanded = 0
     nrec = order.shape[0]
+    found = goal < 0
     while size > 0:
-        _, u = heap_pop(key, tie, val, size)
+        p = heap_pop(heap, pos, size)
         size -= 1
-        if closed[u]:
-            continue
-        closed[u] = 1
+        state[p] |= CLOSED
+        ui = p // w
+        uj = p - ui * w
+        u = (ui - 1) * nx + (uj - 1)
         if expanded < nrec:
             order[expanded] = u
         expanded += 1
         if u == goal:
-            return True, expanded
-        ui = u // nx
-        uj = u % nx
+            found = True
+            break
         gu = g[u]
         for d in range(nnb):
-            vi = ui + DI[d]
-            vj = uj + DJ[d]
-            if vi < 0 or vi >= ny or vj < 0 or vj >= nx:
+            q = p + offp[d]
+            sv = state[q]
+            if sv & (BLOCKED | CLOSED):
                 continue
-            v = vi * nx + vj
-            if flat_b[v] or closed[v]:
-                continue
-            if d >= 4:
-                if flat_b[ui * nx + vj] or flat_b[vi * nx + uj]:
-                    continue
-                step = res * SQRT2
-            else:
+            if d < 4:
                 step = res
-            gv = gu + step * (1.0 + flat_c[v])
-            if gv < g[v]:
+            else:
+                if (state[p + offp[DA[d - 4]]] | state[p + offp[DB[d - 4]]]) & BLOCKED:
+                    continue
+                step = step_d
+            v = u + offk[d]
+            gv = gu + step * (1.0 + flat_c[v]) if use_cost else gu + step * 1.0
+            if sv & SEEN:
+                if not gv < g[v]:
+                    continue
                 g[v] = gv
                 parent[v] = u
-                h = 0.0
-                if goal >= 0 and weight > 0.0:
-                    h = weight * _heuristic(vi, vj, gi, gj, res, connect8)
-                if size == key.shape[0]:
-                    key, tie, val = heap_grow(key, tie, val, size)
-                heap_push(key, tie, val, size, gv + h, h, v)
-                size += 1
-    return goal < 0, expanded
+                c = pos[q]
+                h = heap[3 * c + 1]
+                heap_up(heap, pos, c, gv + h, h, q)
+                continue
+            if not gv < np.inf:
+                continue
+            state[q] = sv | SEEN
+            g[v] = gv
+            parent[v] = u
+            h = 0.0
+            if heur:
+                h = weight * _heuristic(ui + DI[d], uj + DJ[d], gi, gj, res, connect8)
+            if 3 * size == heap.shape[0]:
+                heap = heap_grow(heap, size)
+            heap_up(heap, pos, size, gv + h, h, q)
+            size += 1
+    # unreached nodes: no cost, no parent
+    for i in range(ny):
+        row = (i + 1) * w + 1
+        for j in range(nx):
+            if not state[row + j] & SEEN:
+                g[i * nx + j] = np.inf
+                parent[i * nx + j] = -1
+    return found, expanded
+
+
+@nb.njit(**JIT)
+def level_grid(blocked):
+    """Return the wavefront's padded int32 grid: -2 blocked (and the border), -1 free.
+
+    Flat, (ny + 2) * (nx + 2); see the padded layout above.
+    """
+    ny, nx = blocked.shape
+    w = nx + 2
+    lev = np.empty((ny + 2) * w, dtype=np.int32)
+    for j in range(w):
+        lev[j] = -2
+        lev[(ny + 1) * w + j] = -2
+    for i in range(ny):
+        row = (i + 1) * w
+        lev[row] = -2
+        lev[row + nx + 1] = -2
+        for j in range(nx):
+            lev[row + 1 + j] = -2 if blocked[i, j] else -1
+    return lev
 
 
 @nb.njit(**JIT)
@@ -211,43 +318,91 @@ def wavefront(blocked, goal, start, connect8, dist, order):
     the goal (-1 where not reached) and the flood order into ``order`` (as
     in `astar`). Stops once ``start`` is dequeued (``start < 0``: floods
     everything reachable). Returns the number of cells dequeued.
+
+    The flood runs on `level_grid` (each cell's move count written when it
+    is enqueued, so the grid is also the visited mark) with one flat int32
+    FIFO of padded indices, allocated once; the neighbours are unrolled,
+    orthogonal first. ``dist`` is copied out of the grid at the end.
     """
     ny, nx = blocked.shape
     n = ny * nx
-    flat_b = blocked.ravel()
-    for k in range(n):
-        dist[k] = -1
-    queue = np.empty(n, dtype=np.int64)
+    w = nx + 2
+    lev = level_grid(blocked)
+    offp, _ = _offsets(nx)
+    o0, o1, o2, o3 = offp[0], offp[1], offp[2], offp[3]
+    o4, o5, o6, o7 = offp[4], offp[5], offp[6], offp[7]
+    queue = np.empty(n, dtype=np.int32)
+    ps = (start // nx + 1) * w + start % nx + 1 if start >= 0 else -1
+    pg = (goal // nx + 1) * w + goal % nx + 1
+    lev[pg] = 0
+    queue[0] = pg
     head = 0
-    tail = 0
-    nnb = 8 if connect8 else 4
-    dist[goal] = 0
-    queue[tail] = goal
-    tail += 1
+    tail = 1
     nrec = order.shape[0]
     while head < tail:
-        u = queue[head]
+        p = np.int64(queue[head])
         if head < nrec:
-            order[head] = u
+            i = p // w
+            order[head] = (i - 1) * nx + (p - i * w - 1)
         head += 1
-        if u == start:
+        if p == ps:
             break
-        ui = u // nx
-        uj = u % nx
-        du = dist[u] + 1
-        for d in range(nnb):
-            vi = ui + DI[d]
-            vj = uj + DJ[d]
-            if vi < 0 or vi >= ny or vj < 0 or vj >= nx:
-                continue
-            v = vi * nx + vj
-            if flat_b[v] or dist[v] >= 0:
-                continue
-            if d >= 4 and (flat_b[ui * nx + vj] or flat_b[vi * nx + uj]):
-                continue
-            dist[v] = du
-            queue[tail] = v
+        du = lev[p] + 1
+        q = p + o0
+        s0 = lev[q]
+        if s0 == -1:
+            lev[q] = du
+            queue[tail] = q
             tail += 1
+        q = p + o1
+        s1 = lev[q]
+        if s1 == -1:
+            lev[q] = du
+            queue[tail] = q
+            tail += 1
+        q = p + o2
+        s2 = lev[q]
+        if s2 == -1:
+            lev[q] = du
+            queue[tail] = q
+            tail += 1
+        q = p + o3
+        s3 = lev[q]
+        if s3 == -1:
+            lev[q] = du
+            queue[tail] = q
+            tail += 1
+        if connect8:
+            # a diagonal only when both cells beside it are free
+            if s0 != -2 and s1 != -2:
+                q = p + o4
+                if lev[q] == -1:
+                    lev[q] = du
+                    queue[tail] = q
+                    tail += 1
+            if s2 != -2 and s1 != -2:
+                q = p + o5
+                if lev[q] == -1:
+                    lev[q] = du
+                    queue[tail] = q
+                    tail += 1
+            if s2 != -2 and s3 != -2:
+                q = p + o6
+                if lev[q] == -1:
+                    lev[q] = du
+                    queue[tail] = q
+                    tail += 1
+            if s0 != -2 and s3 != -2:
+                q = p + o7
+                if lev[q] == -1:
+                    lev[q] = du
+                    queue[tail] = q
+                    tail += 1
+    for i in range(ny):
+        row = (i + 1) * w + 1
+        for j in range(nx):
+            x = lev[row + j]
+            dist[i * nx + j] = x if x >= 0 else -1
     return head
 
 
