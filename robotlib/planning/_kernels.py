@@ -69,85 +69,56 @@ def _offsets(nx):
     return offp, offk
 
 
-# -- indexed binary heap of (f, h, node) triples in one float64 array -------
-# Ordered by f, then h, then the node's index: a total order, so the search
-# expands the same nodes in the same order whatever the heap's shape (and as
-# a plain heapq search on the same keys). Each node is in the heap at most
-# once; ``pos[node]`` is its slot, and a cheaper path to an open node moves it
-# up (decrease-key) instead of pushing a second copy. A node index is exact
-# in float64 up to 2**53.
+# -- indexed 4-ary heap of 128-bit integer keys ------------------------------
+# A search node's key is ``(f, h, node)``: ``f = g + h``, then the heuristic
+# rounded to float32, then the node's padded index. The key is two int64s:
+# the bits of ``f`` (a float64 >= 0 orders as its bit pattern), and the
+# float32 bits of ``h`` above the 32-bit node. The order is total, so the
+# search expands the same nodes in the same order whatever the heap's shape
+# (and as a plain heapq search on the same keys). Each node is in the heap at
+# most once; ``pos[node]`` is its slot, and a cheaper path to an open node
+# moves it up (decrease-key) instead of pushing a second copy. Four children
+# a slot: 64 bytes, one cache line. The pop is written out in `astar`.
 @nb.njit(**JIT)
-def heap_grow(heap, size):
-    """Return a copy of ``heap`` (``size`` triples) with room for twice as many."""
-    out = np.empty(3 * (2 * size + 16))
-    out[: 3 * size] = heap[: 3 * size]
-    return out
+def key_scratch():
+    """Return the buffers `search_key` reinterprets bits in.
+
+    ``(fa, fi, ha, hi)``: one float64 and its int64 view, one float32 and
+    its int32 view (made once per search: a view made per key would cost an
+    allocation and reference counting in the inner loop).
+    """
+    fa = np.empty(1)
+    ha = np.empty(1, dtype=np.float32)
+    return fa, fa.view(np.int64), ha, ha.view(np.int32)
 
 
 @nb.njit(inline="always", **JIT)
-def _before(f, h, v, heap, c):
-    """Test whether ``(f, h, v)`` comes before the triple in slot ``c``."""
-    cf = heap[3 * c]
-    if f != cf:
-        return f < cf
-    ch = heap[3 * c + 1]
-    if h != ch:
-        return h < ch
-    return v < heap[3 * c + 2]
+def search_key(fa, fi, ha, hi, f, h, node):
+    """Return the heap key ``(f bits, h float32 bits << 32 | node)`` of a node.
+
+    ``fa, fi, ha, hi`` are the buffers of `key_scratch`.
+    """
+    fa[0] = f
+    ha[0] = h
+    return fi[0], (np.int64(hi[0]) << 32) | node
 
 
-@nb.njit(**JIT)
-def heap_up(heap, pos, c, f, h, v):
-    """Put ``(f, h, v)`` in slot ``c`` (free, or ``v``'s own) and sift it up."""
+@nb.njit(inline="always", **JIT)
+def heap_up(heap, pos, c, k0, k1):
+    """Put key ``(k0, k1)`` in slot ``c`` (free, or its node's) and sift it up."""
     while c > 0:
-        p = (c - 1) >> 1
-        if not _before(f, h, v, heap, p):
+        p = (c - 1) >> 2
+        p0 = heap[2 * p]
+        p1 = heap[2 * p + 1]
+        if p0 < k0 or (p0 == k0 and p1 < k1):
             break
-        heap[3 * c] = heap[3 * p]
-        heap[3 * c + 1] = heap[3 * p + 1]
-        w = heap[3 * p + 2]
-        heap[3 * c + 2] = w
-        pos[int(w)] = c
+        heap[2 * c] = p0
+        heap[2 * c + 1] = p1
+        pos[p1 & 0xFFFFFFFF] = c
         c = p
-    heap[3 * c] = f
-    heap[3 * c + 1] = h
-    heap[3 * c + 2] = v
-    pos[int(v)] = c
-
-
-@nb.njit(**JIT)
-def heap_pop(heap, pos, size):
-    """Remove the first triple of a heap of ``size``; return its node."""
-    v0 = int(heap[2])
-    last = size - 1
-    f = heap[3 * last]
-    h = heap[3 * last + 1]
-    v = heap[3 * last + 2]
-    c = 0
-    while True:
-        m = 2 * c + 1
-        if m >= last:
-            break
-        r = m + 1
-        if r < last and _before(heap[3 * r], heap[3 * r + 1], heap[3 * r + 2], heap, m):
-            m = r
-        mf = heap[3 * m]
-        mh = heap[3 * m + 1]
-        mv = heap[3 * m + 2]
-        if not _before(f, h, v, heap, m):
-            heap[3 * c] = mf
-            heap[3 * c + 1] = mh
-            heap[3 * c + 2] = mv
-            pos[int(mv)] = c
-            c = m
-        else:
-            break
-    if last > 0:
-        heap[3 * c] = f
-        heap[3 * c + 1] = h
-        heap[3 * c + 2] = v
-        pos[int(v)] = c
-    return v0
+    heap[2 * c] = k0
+    heap[2 * c + 1] = k1
+    pos[k1 & 0xFFFFFFFF] = c
 
 
 # -- heuristics ------------------------------------------------------------
@@ -171,15 +142,15 @@ def _heuristic(i, j, gi, gj, res, connect8):
 def astar(blocked, cost, start, goal, weight, connect8, res, g, parent, order):
     """Search with A* (weight > 0), weighted A* (weight > 1) or Dijkstra (0).
 
-    Expands nodes in the order of ``(f, h, node)`` with ``f = g + h`` (an
-    indexed binary heap with decrease-key; see above). Neighbours are
-    relaxed orthogonal first, then diagonal (the `DI`, `DJ` order); a
-    diagonal move needs both cells beside it free.
+    Expands nodes in the order of their `search_key` ``(f, h, node)`` with
+    ``f = g + h`` (an indexed heap with decrease-key; see above).
+    Neighbours are relaxed orthogonal first, then diagonal (the `DI`, `DJ`
+    order); a diagonal move needs both cells beside it free.
 
     Parameters
     ----------
     blocked : (ny, nx) bool
-        Cells the robot may not enter.
+        Cells the robot may not enter; (ny + 2) * (nx + 2) < 2**31.
     cost : (ny, nx) float64, or any array of size 0
         Extra cost factor of entering each cell (0: none; size 0: none
         anywhere, and the array is not read).
@@ -187,16 +158,18 @@ def astar(blocked, cost, start, goal, weight, connect8, res, g, parent, order):
         Flat node indices; ``goal < 0`` expands every reachable node
         (Dijkstra's full cost field).
     weight : float
-        Heuristic weight (octile for 8-connected, Manhattan for 4).
+        Heuristic weight (octile for 8-connected, Manhattan for 4), >= 0.
     connect8 : bool
         Eight neighbours instead of four.
     res : float
         Cell side, m.
     g : (ny * nx,) float64
-        Out: cost from the start (``inf`` where never reached).
+        Out: cost from the start of every node reached. With ``goal < 0``
+        also ``inf`` at every other node; with a goal, other nodes are not
+        written (a search toward a goal touches a small part of the grid).
     parent : (ny * nx,) int64
-        Out: each reached node's predecessor (-1 for the start and where
-        never reached).
+        Out: each reached node's predecessor (-1 for the start; with
+        ``goal < 0`` also -1 at the nodes never reached).
     order : (L,) int64
         Out: the first ``min(L, expanded)`` nodes in the order they were
         expanded (pass a zero-length array to record nothing).
@@ -218,7 +191,9 @@ def astar(blocked, cost, start, goal, weight, connect8, res, g, parent, order):
     nnb = 8 if connect8 else 4
     heur = goal >= 0 and weight > 0.0
     step_d = res * SQRT2
-    heap = np.empty(3 * 1024)
+    # room for every node (pages are touched only as the heap grows; a heap
+    # rebound in the loop would cost reference counting on every use)
+    heap = np.empty(2 * (ny * nx + 1), dtype=np.int64)
     si = start // nx + 1
     sj = start % nx + 1
     ps = si * w + sj
@@ -226,14 +201,44 @@ def astar(blocked, cost, start, goal, weight, connect8, res, g, parent, order):
     parent[start] = -1
     state[ps] |= SEEN
     h0 = weight * _heuristic(si, sj, gi, gj, res, connect8) if heur else 0.0
-    heap_up(heap, pos, 0, h0, h0, ps)
+    fa, fi, ha, hi = key_scratch()
+    k0, k1 = search_key(fa, fi, ha, hi, h0, h0, ps)
+    heap_up(heap, pos, 0, k0, k1)
     size = 1
     expanded = 0
     nrec = order.shape[0]
     found = goal < 0
     while size > 0:
-        p = heap_pop(heap, pos, size)
+        # pop the first key (written out: a heap function inlined by numba
+        # still costs two reference counts a call)
+        p = heap[1] & 0xFFFFFFFF
         size -= 1
+        k0 = heap[2 * size]
+        k1 = heap[2 * size + 1]
+        c = 0
+        while True:
+            m = 4 * c + 1
+            if m >= size:
+                break
+            m0 = heap[2 * m]
+            m1 = heap[2 * m + 1]
+            for r in range(m + 1, min(m + 4, size)):
+                r0 = heap[2 * r]
+                r1 = heap[2 * r + 1]
+                if r0 < m0 or (r0 == m0 and r1 < m1):
+                    m = r
+                    m0 = r0
+                    m1 = r1
+            if k0 < m0 or (k0 == m0 and k1 < m1):
+                break
+            heap[2 * c] = m0
+            heap[2 * c + 1] = m1
+            pos[m1 & 0xFFFFFFFF] = c
+            c = m
+        if size > 0:
+            heap[2 * c] = k0
+            heap[2 * c + 1] = k1
+            pos[k1 & 0xFFFFFFFF] = c
         state[p] |= CLOSED
         ui = p // w
         uj = p - ui * w
@@ -258,34 +263,34 @@ def astar(blocked, cost, start, goal, weight, connect8, res, g, parent, order):
                 step = step_d
             v = u + offk[d]
             gv = gu + step * (1.0 + flat_c[v]) if use_cost else gu + step * 1.0
-            if sv & SEEN:
+            seen = (sv & SEEN) != 0
+            if seen:
                 if not gv < g[v]:
                     continue
-                g[v] = gv
-                parent[v] = u
-                c = pos[q]
-                h = heap[3 * c + 1]
-                heap_up(heap, pos, c, gv + h, h, q)
+            elif not gv < np.inf:
                 continue
-            if not gv < np.inf:
-                continue
-            state[q] = sv | SEEN
             g[v] = gv
             parent[v] = u
             h = 0.0
             if heur:
                 h = weight * _heuristic(ui + DI[d], uj + DJ[d], gi, gj, res, connect8)
-            if 3 * size == heap.shape[0]:
-                heap = heap_grow(heap, size)
-            heap_up(heap, pos, size, gv + h, h, q)
-            size += 1
-    # unreached nodes: no cost, no parent
-    for i in range(ny):
-        row = (i + 1) * w + 1
-        for j in range(nx):
-            if not state[row + j] & SEEN:
-                g[i * nx + j] = np.inf
-                parent[i * nx + j] = -1
+            fa[0] = gv + h  # search_key, written out (no array passing)
+            ha[0] = h
+            k0 = fi[0]
+            k1 = (np.int64(hi[0]) << 32) | q
+            if seen:
+                heap_up(heap, pos, np.int64(pos[q]), k0, k1)
+            else:
+                state[q] = sv | SEEN
+                heap_up(heap, pos, size, k0, k1)
+                size += 1
+    if goal < 0:
+        for i in range(ny):
+            row = (i + 1) * w + 1
+            for j in range(nx):
+                if not state[row + j] & SEEN:
+                    g[i * nx + j] = np.inf
+                    parent[i * nx + j] = -1
     return found, expanded
 
 
