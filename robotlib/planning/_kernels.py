@@ -38,6 +38,7 @@ DB = np.array([1, 1, 3, 3], dtype=np.int64)
 BLOCKED = np.uint8(1)
 CLOSED = np.uint8(2)  # expanded
 SEEN = np.uint8(4)  # A*: ``g`` holds a cost (``inf`` otherwise)
+MOVE_SHIFT = 3  # A*: bits 3-5 hold the move (index into DI, DJ) that reached a node
 
 
 @nb.njit(**JIT)
@@ -168,8 +169,10 @@ def astar(blocked, cost, start, goal, weight, connect8, res, g, parent, order):
         also ``inf`` at every other node; with a goal, other nodes are not
         written (a search toward a goal touches a small part of the grid).
     parent : (ny * nx,) int64
-        Out: each reached node's predecessor (-1 for the start; with
-        ``goal < 0`` also -1 at the nodes never reached).
+        Out: the predecessor of each node on the path found (-1 for the
+        start); with ``goal < 0``, of every node reached, and -1 at the
+        others. (The search keeps each node's last move in its byte of the
+        padded grid and writes predecessors only at the end.)
     order : (L,) int64
         Out: the first ``min(L, expanded)`` nodes in the order they were
         expanded (pass a zero-length array to record nothing).
@@ -270,7 +273,6 @@ def astar(blocked, cost, start, goal, weight, connect8, res, g, parent, order):
             elif not gv < np.inf:
                 continue
             g[v] = gv
-            parent[v] = u
             h = 0.0
             if heur:
                 h = weight * _heuristic(ui + DI[d], uj + DJ[d], gi, gj, res, connect8)
@@ -278,19 +280,31 @@ def astar(blocked, cost, start, goal, weight, connect8, res, g, parent, order):
             ha[0] = h
             k0 = fi[0]
             k1 = (np.int64(hi[0]) << 32) | q
+            state[q] = SEEN | np.uint8(d << MOVE_SHIFT)
             if seen:
                 heap_up(heap, pos, np.int64(pos[q]), k0, k1)
             else:
-                state[q] = sv | SEEN
                 heap_up(heap, pos, size, k0, k1)
                 size += 1
     if goal < 0:
         for i in range(ny):
             row = (i + 1) * w + 1
             for j in range(nx):
-                if not state[row + j] & SEEN:
-                    g[i * nx + j] = np.inf
-                    parent[i * nx + j] = -1
+                k = i * nx + j
+                sv = state[row + j]
+                if not sv & SEEN:
+                    g[k] = np.inf
+                    parent[k] = -1
+                elif k != start:
+                    parent[k] = k - offk[sv >> MOVE_SHIFT]
+    elif found:
+        k = goal
+        p = (gi * w) + gj
+        while p != ps:
+            d = state[p] >> MOVE_SHIFT
+            parent[k] = k - offk[d]
+            k -= offk[d]
+            p -= offp[d]
     return found, expanded
 
 
