@@ -1,4 +1,4 @@
-"""Numba kernels for the planners: a binary heap, A*/Dijkstra, the wavefront.
+"""Numba kernels for the planners: an indexed heap, A*/Dijkstra, the wavefront.
 
 Also the disc inflation of a grid and the segment clearance the sampling
 planners use. Kernels take only contiguous arrays and scalars; the public
@@ -9,7 +9,9 @@ Grids are ``(ny, nx)``, row ``i`` is ``y`` and column ``j`` is ``x``; a
 node is the flat index ``k = i * nx + j``. A move to a neighbour costs its
 length (``res`` or ``res * sqrt(2)``) times ``1 + cost[target]``. A
 diagonal move is allowed only when both cells beside it are free (no corner
-cutting).
+cutting). The searches run on a padded copy of the grid (below); nothing in
+their inner loops allocates, calls a function that takes an array, or
+rebinds an array (numba counts references on each of those).
 """
 
 import math
