@@ -332,18 +332,22 @@ def level_grid(blocked):
 
 
 @nb.njit(**JIT)
-def wavefront(blocked, goal, start, connect8, dist, order):
+def flood(blocked, goal, start, connect8, order):
     """Breadth-first flood from ``goal`` (the wavefront / distance transform).
 
-    Writes into ``dist`` (flat, int64) the number of moves from each cell to
-    the goal (-1 where not reached) and the flood order into ``order`` (as
-    in `astar`). Stops once ``start`` is dequeued (``start < 0``: floods
-    everything reachable). Returns the number of cells dequeued.
+    Stops once ``start`` is dequeued (``start < 0``: floods everything
+    reachable); writes the flood order into ``order`` (as in `astar`).
+
+    Returns
+    -------
+    (int, numpy.ndarray)
+        The number of cells dequeued, and the `level_grid` with each reached
+        cell's number of moves to the goal (padded layout).
 
     The flood runs on `level_grid` (each cell's move count written when it
     is enqueued, so the grid is also the visited mark) with one flat int32
     FIFO of padded indices, allocated once; the neighbours are unrolled,
-    orthogonal first. ``dist`` is copied out of the grid at the end.
+    orthogonal first.
     """
     ny, nx = blocked.shape
     n = ny * nx
@@ -419,6 +423,19 @@ def wavefront(blocked, goal, start, connect8, dist, order):
                     lev[q] = du
                     queue[tail] = q
                     tail += 1
+    return head, lev
+
+
+@nb.njit(**JIT)
+def wavefront(blocked, goal, start, connect8, dist, order):
+    """Flood from ``goal`` (see `flood`) and write the field into ``dist``.
+
+    ``dist`` (flat, int64): the number of moves from each cell to the goal,
+    -1 where not reached. Returns the number of cells dequeued.
+    """
+    ny, nx = blocked.shape
+    w = nx + 2
+    head, lev = flood(blocked, goal, start, connect8, order)
     for i in range(ny):
         row = (i + 1) * w + 1
         for j in range(nx):
@@ -428,39 +445,38 @@ def wavefront(blocked, goal, start, connect8, dist, order):
 
 
 @nb.njit(**JIT)
-def descend(blocked, dist, start, connect8, out):
-    """Follow the wavefront ``dist`` downhill from ``start`` to the goal.
+def descend(lev, nx, start, connect8, out):
+    """Follow the flood's level grid (`flood`) downhill from ``start`` to the goal.
 
-    At each cell take the first neighbour (orthogonal before diagonal) one
-    move nearer. Writes the nodes into ``out`` and returns their count
-    (0 when ``start`` was not reached).
+    ``lev`` is padded (``nx`` cells a row inside the border); ``start`` is a
+    plain node index. At each cell take the first neighbour (orthogonal
+    before diagonal, a diagonal only with both cells beside it free) one
+    move nearer. Writes the plain node indices into ``out`` and returns
+    their count (0 when ``start`` was not reached).
     """
-    ny, nx = blocked.shape
-    if dist[start] < 0:
+    w = nx + 2
+    offp, offk = _offsets(nx)
+    p = (start // nx + 1) * w + start % nx + 1
+    if lev[p] < 0:
         return 0
     nnb = 8 if connect8 else 4
     u = start
     m = 0
     out[m] = u
     m += 1
-    while dist[u] > 0:
-        ui = u // nx
-        uj = u % nx
-        want = dist[u] - 1
-        nxt = -1
+    while lev[p] > 0:
+        want = lev[p] - 1
         for d in range(nnb):
-            vi = ui + DI[d]
-            vj = uj + DJ[d]
-            if vi < 0 or vi >= ny or vj < 0 or vj >= nx:
+            q = p + offp[d]
+            if lev[q] != want:
                 continue
-            v = vi * nx + vj
-            if dist[v] != want:
+            if d >= 4 and (
+                lev[p + offp[DA[d - 4]]] == -2 or lev[p + offp[DB[d - 4]]] == -2
+            ):
                 continue
-            if d >= 4 and (blocked[ui, vj] or blocked[vi, uj]):
-                continue
-            nxt = v
+            p = q
+            u += offk[d]
             break
-        u = nxt
         out[m] = u
         m += 1
     return m
