@@ -405,13 +405,24 @@ def cone_walls(sx, sy, ux, uy, cos_half, sin_half, segments, max_range, out):
     differ). With ``cos_half <= 0`` (half-width of ``pi / 2`` or more) walls
     are culled by range only.
     """
+    return _cone_walls_range(
+        sx, sy, ux, uy, cos_half, sin_half, segments, 0, segments.shape[0], max_range,
+        out,
+    )  # fmt: skip
+
+
+@nb.njit(**JIT, inline="always")
+def _cone_walls_range(
+    sx, sy, ux, uy, cos_half, sin_half, segments, lo, hi, max_range, out
+):  # fmt: skip
+    """`cone_walls` over the walls ``segments[lo:hi]`` (no slice made)."""
     by_angle = cos_half > 0.0
     lx = ux * cos_half - uy * sin_half  # left edge
     ly = uy * cos_half + ux * sin_half
     rx = ux * cos_half + uy * sin_half  # right edge
     ry = uy * cos_half - ux * sin_half
     k = 0
-    for m in range(segments.shape[0]):
+    for m in range(lo, hi):
         ax = segments[m, 0] - sx
         ay = segments[m, 1] - sy
         bx = segments[m, 2] - sx
@@ -435,6 +446,70 @@ def cone_walls(sx, sy, ux, uy, cos_half, sin_half, segments, max_range, out):
 def cone_echo(sx, sy, sth, segments, n_rays, cone, max_range, cos_specular):
     """`sonar_cone`'s first echo alone (no multipath bounce): the same number."""
     echo, _ = _cone(sx, sy, sth, segments, n_rays, cone, max_range, cos_specular, False)
+    return echo
+
+
+@nb.njit(**JIT, inline="always")
+def cone_echo_rays(
+    sx, sy, sth, segments, count, n_rays, cone, max_range, cos_specular, ray
+):  # fmt: skip
+    """`cone_echo` with the walls in the outer loop and the rays in the inner one.
+
+    The same number: each ray keeps its first nearest hit (the lowest index
+    among equal distances) by `ray_segments`' tests, step for step, written
+    as selects so the compiler tests several rays per instruction; then the
+    rays are taken in order as `cone_echo` does. The walls are the first
+    ``count`` rows of ``segments``; ``ray`` (4, ``n_rays``) float64 is
+    scratch (directions, nearest distance, wall index).
+    """
+    for r in range(n_rays):
+        if n_rays == 1:
+            a = sth
+        else:
+            a = sth - 0.5 * cone + cone * r / (n_rays - 1)
+        ray[0, r] = math.cos(a)
+        ray[1, r] = math.sin(a)
+        ray[2, r] = np.inf
+        ray[3, r] = -1.0
+    for m in range(count):
+        px = segments[m, 0]
+        py = segments[m, 1]
+        ex = segments[m, 2] - px
+        ey = segments[m, 3] - py
+        wx = px - sx
+        wy = py - sy
+        num = wx * ey - wy * ex
+        fm = float(m)
+        for r in range(n_rays):
+            dx = ray[0, r]
+            dy = ray[1, r]
+            denom = dx * ey - dy * ex
+            ok = not abs(denom) < _EPS
+            d = denom if ok else 1.0  # no division by zero (nor its error)
+            t = num / d
+            s = (wx * dy - wy * dx) / d
+            hit = (
+                ok
+                & (not (t < 0.0 or t >= ray[2, r]))
+                & (0.0 <= s)
+                & (s <= 1.0)
+            )
+            ray[2, r] = t if hit else ray[2, r]
+            ray[3, r] = fm if hit else ray[3, r]
+    echo = np.inf
+    for r in range(n_rays):  # `_cone`'s echo test, without the bounce
+        t = ray[2, r]
+        m = int(ray[3, r])
+        if m < 0 or t >= max_range or t >= echo:
+            continue
+        ex = segments[m, 2] - segments[m, 0]
+        ey = segments[m, 3] - segments[m, 1]
+        length = math.sqrt(ex * ex + ey * ey)
+        nxn = -ey / length
+        nyn = ex / length
+        cos_inc = abs(ray[0, r] * nxn + ray[1, r] * nyn)
+        if cos_inc >= cos_specular:
+            echo = t
     return echo
 
 
