@@ -488,12 +488,7 @@ def cone_echo_rays(
             d = denom if ok else 1.0  # no division by zero (nor its error)
             t = num / d
             s = (wx * dy - wy * dx) / d
-            hit = (
-                ok
-                & (not (t < 0.0 or t >= ray[2, r]))
-                & (0.0 <= s)
-                & (s <= 1.0)
-            )
+            hit = ok & (not (t < 0.0 or t >= ray[2, r])) & (0.0 <= s) & (s <= 1.0)
             ray[2, r] = t if hit else ray[2, r]
             ray[3, r] = fm if hit else ray[3, r]
     echo = np.inf
