@@ -184,26 +184,31 @@ def _cast_grid_pose(
         oy[r] = 1.0 if dy[r] >= 0 else 0.0
         t[r] = 0.0
         active[r] = r
+    stride = field.shape[1]
+    flat = field.reshape(field.size)
     n = n_rays
     while n > 0:
         still = 0
         for q in range(n):
             r = active[q]
-            px = gx + t[r] * dx[r]
-            py = gy + t[r] * dy[r]
-            # px, py >= 1 (the ring of the field is occupied): int() floors
-            fj = float(int(px))
-            fi = float(int(py))
-            c = field[int(fi), int(fj)]
+            tr = t[r]
+            px = gx + tr * dx[r]
+            py = gy + tr * dy[r]
+            # px, py >= 1 (the ring of the field is occupied): int() floors,
+            # and the flat index is never negative (read unsigned: no wrap test)
+            j = int(px)
+            i = int(py)
+            c = flat[np.uint64(i * stride + j)]
             if c < 0.0:
-                out[k, r] = t[r] * resolution
+                out[k, r] = tr * resolution
                 continue
             if c < 1.0:
-                bx = (fj + ox[r] - px) * inv_dx[r]
-                by = (fi + oy[r] - py) * inv_dy[r]
+                bx = (float(j) + ox[r] - px) * inv_dx[r]
+                by = (float(i) + oy[r] - py) * inv_dy[r]
                 c = min(bx, by) + 1e-9
-            t[r] += c
-            if t[r] >= limit:
+            tr += c
+            t[r] = tr
+            if tr >= limit:
                 out[k, r] = max_range
                 continue
             active[still] = r
@@ -492,16 +497,20 @@ def cone_echo_rays(
             ray[2, r] = t if hit else ray[2, r]
             ray[3, r] = fm if hit else ray[3, r]
     echo = np.inf
+    last = -1  # the wall whose normal is (nxn, nyn): rays often share it
+    nxn = nyn = 0.0
     for r in range(n_rays):  # `_cone`'s echo test, without the bounce
         t = ray[2, r]
         m = int(ray[3, r])
         if m < 0 or t >= max_range or t >= echo:
             continue
-        ex = segments[m, 2] - segments[m, 0]
-        ey = segments[m, 3] - segments[m, 1]
-        length = math.sqrt(ex * ex + ey * ey)
-        nxn = -ey / length
-        nyn = ex / length
+        if m != last:
+            ex = segments[m, 2] - segments[m, 0]
+            ey = segments[m, 3] - segments[m, 1]
+            length = math.sqrt(ex * ex + ey * ey)
+            nxn = -ey / length
+            nyn = ex / length
+            last = m
         cos_inc = abs(ray[0, r] * nxn + ray[1, r] * nyn)
         if cos_inc >= cos_specular:
             echo = t
