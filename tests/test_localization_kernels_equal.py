@@ -6,10 +6,11 @@ import numba as nb
 import numpy as np
 import pytest
 
+from robotlib.localization._kernels.exact import cone_echo_rays
 from robotlib.localization._kernels.fused import _flat_index
 from robotlib.localization._kernels.tables import table_bin
 from robotlib.sensing import SonarModel
-from robotlib.sensing._kernels import cone_echo, cone_echo_rays
+from robotlib.sensing._kernels import cone_echo
 
 
 @nb.njit

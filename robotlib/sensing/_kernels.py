@@ -454,69 +454,6 @@ def cone_echo(sx, sy, sth, segments, n_rays, cone, max_range, cos_specular):
     return echo
 
 
-@nb.njit(**JIT, inline="always")
-def cone_echo_rays(
-    sx, sy, sth, segments, count, n_rays, cone, max_range, cos_specular, ray
-):  # fmt: skip
-    """`cone_echo` with the walls in the outer loop and the rays in the inner one.
-
-    The same number: each ray keeps its first nearest hit (the lowest index
-    among equal distances) by `ray_segments`' tests, step for step, written
-    as selects so the compiler tests several rays per instruction; then the
-    rays are taken in order as `cone_echo` does. The walls are the first
-    ``count`` rows of ``segments``; ``ray`` (4, ``n_rays``) float64 is
-    scratch (directions, nearest distance, wall index).
-    """
-    for r in range(n_rays):
-        if n_rays == 1:
-            a = sth
-        else:
-            a = sth - 0.5 * cone + cone * r / (n_rays - 1)
-        ray[0, r] = math.cos(a)
-        ray[1, r] = math.sin(a)
-        ray[2, r] = np.inf
-        ray[3, r] = -1.0
-    for m in range(count):
-        px = segments[m, 0]
-        py = segments[m, 1]
-        ex = segments[m, 2] - px
-        ey = segments[m, 3] - py
-        wx = px - sx
-        wy = py - sy
-        num = wx * ey - wy * ex
-        fm = float(m)
-        for r in range(n_rays):
-            dx = ray[0, r]
-            dy = ray[1, r]
-            denom = dx * ey - dy * ex
-            ok = not abs(denom) < _EPS
-            d = denom if ok else 1.0  # no division by zero (nor its error)
-            t = num / d
-            s = (wx * dy - wy * dx) / d
-            hit = ok & (not (t < 0.0 or t >= ray[2, r])) & (0.0 <= s) & (s <= 1.0)
-            ray[2, r] = t if hit else ray[2, r]
-            ray[3, r] = fm if hit else ray[3, r]
-    echo = np.inf
-    last = -1  # the wall whose normal is (nxn, nyn): rays often share it
-    nxn = nyn = 0.0
-    for r in range(n_rays):  # `_cone`'s echo test, without the bounce
-        t = ray[2, r]
-        m = int(ray[3, r])
-        if m < 0 or t >= max_range or t >= echo:
-            continue
-        if m != last:
-            ex = segments[m, 2] - segments[m, 0]
-            ey = segments[m, 3] - segments[m, 1]
-            length = math.sqrt(ex * ex + ey * ey)
-            nxn = -ey / length
-            nyn = ex / length
-            last = m
-        cos_inc = abs(ray[0, r] * nxn + ray[1, r] * nyn)
-        if cos_inc >= cos_specular:
-            echo = t
-    return echo
-
-
 # -- ray casting through a bucket index of segments (large maps) ------------------
 @nb.njit(**JIT)
 def _bucket_hits(ox, oy, dx, dy, segments, items, lo, hi, best, best_m):
