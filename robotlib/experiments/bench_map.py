@@ -109,18 +109,34 @@ def speed(out: dict) -> None:
     for i in range(t):
         f.step(log.odometry[i], log.laser[i])
     state = (f.maps.copy(), f.particles.copy(), f.logw.copy(), f._odo.copy())
+    diff0 = f._diff.copy()
+    state_resample = f.resample_below
+    resampled = []
 
-    def one_step():
+    def one_step(whole=False):
         f.maps[:], f.particles, f.logw, f._odo = (
             state[0],
             state[1].copy(),
             state[2].copy(),
             state[3].copy(),
         )
+        # whole: forget where the maps differ, so resampling copies whole maps
+        f._diff, f._diff_maps = diff0.copy(), (None if whole else f.maps)
+        r = f.resampled
         f.step(log.odometry[t], log.laser[t])
+        resampled.append(f.resampled - r)
 
     copy = _time(lambda: f.maps.__setitem__(slice(None), state[0]))
     step = _time(one_step) - copy
+    whole = _time(lambda: one_step(True)) - copy
+    out["fastslam_step_whole_copies_ms"] = whole * 1e3
+    out["fastslam_step_resamples"] = bool(resampled[-1])
+    f.resample_below = 2.0  # the same step, made to resample
+    rs = _time(one_step) - copy
+    rs_whole = _time(lambda: one_step(True)) - copy
+    f.resample_below = state_resample
+    out["fastslam_resampling_step_ms"] = rs * 1e3
+    out["fastslam_resampling_step_whole_copies_ms"] = rs_whole * 1e3
     out["fastslam_step_ms"] = step * 1e3
     out["fastslam_grid"] = list(f.maps.shape)
     lp = np.ascontiguousarray(laser_poses(f.particles, f.laser))
@@ -132,7 +148,11 @@ def speed(out: dict) -> None:
     out["fastslam_weigh_us"] = w * 1e6
     out["fastslam_weigh_numpy_us"] = wn * 1e6
     _out(f"FastSLAM step, 30 particles, laser, {f.maps.shape[1]} x "
-          f"{f.maps.shape[2]}: {step * 1e3:6.2f} ms")  # fmt: skip
+          f"{f.maps.shape[2]}: {step * 1e3:6.2f} ms (copying where maps differ); "
+          f"{whole * 1e3:6.2f} ms copying whole maps (resamples: "
+          f"{'yes' if resampled[-1] else 'no'})")  # fmt: skip
+    _out(f"  the same step made to resample:        {rs * 1e3:6.2f} ms (copying where "
+          f"maps differ); {rs_whole * 1e3:6.2f} ms copying whole maps")  # fmt: skip
     _out(f"  of which weighing:                     {w * 1e6:8.1f} us   "
           f"NumPy {wn * 1e6:9.1f} us   x{wn / w:6.1f}")  # fmt: skip
 
