@@ -271,15 +271,6 @@ def match_laser(L, origin, res, pose, mount, angles, ranges, max_range, steps, l
     return np.array([p[0], p[1], math.atan2(math.sin(p[2]), math.cos(p[2]))])
 
 
-def copy_boxes(Ls, src, dst, boxes):
-    """Copy each box (i0, i1, j0, j1), inclusive, by slicing."""
-    out = Ls.copy()
-    for s, d, (i0, i1, j0, j1) in zip(src, dst, boxes, strict=True):
-        if i0 <= i1 and j0 <= j1:
-            out[d, i0 : i1 + 1, j0 : j1 + 1] = Ls[s, i0 : i1 + 1, j0 : j1 + 1]
-    return out
-
-
 def points_box(xs, ys, origin, res, shape):
     """Cells of the points' bounding box, one more all round, clipped."""
     ny, nx = shape

@@ -16,18 +16,6 @@ from . import naive_mapping as naive
 ORIGIN, RES, SHAPE = (-0.5, -0.3), 0.05, (60, 80)
 
 
-def test_copy_boxes_matches_slicing():
-    rng = np.random.default_rng(0)
-    Ls = rng.normal(size=(6, *SHAPE)).astype(np.float32)
-    src, dst = np.array([0, 0, 2, 5]), np.array([1, 3, 4, 3])
-    boxes = np.array([[3, 10, 0, 79], [0, 59, 5, 5], EMPTY_BOX, [50, 59, 70, 79]])
-    want = naive.copy_boxes(Ls, src, dst, boxes)
-    for kernel in (_copy.copy_boxes, _copy.copy_boxes_parallel):
-        got = Ls.copy()
-        kernel(got, src, dst, boxes)
-        np.testing.assert_array_equal(got, want)
-
-
 def test_laser_box_matches_numpy_and_holds_every_cell_a_scan_writes():
     rng = np.random.default_rng(1)
     angles = np.linspace(-math.pi / 2, math.pi / 2, 37)

@@ -137,6 +137,7 @@ def _cone_update(
     i1 = min(ny - 1, int(math.floor((yhi - y0) / res)))
     reach2 = reach * reach
     inner = z - half
+    inner2 = inner * inner if inner > 0.0 else -1.0
     weighted = sigma > 0.0
     # each row's cells between the cone's edges and inside the circle; the
     # interval is widened by a cell, the exact tests below decide
@@ -151,6 +152,7 @@ def _cone_update(
             continue
         lo = -math.sqrt(rr)
         hi = -lo
+        exact = True
         if half_cone < 0.5 * math.pi:
             # left of edge 1: -e1y cx >= -e1x cy; right of edge 2: e2y cx >= e2x cy
             for e in range(2):
@@ -160,25 +162,32 @@ def _cone_update(
                     lo = max(lo, b / a)
                 elif a < -1e-9:
                     hi = min(hi, b / a)
+                else:
+                    exact = False
+        else:
+            exact = False
         if lo > hi + res:
             continue
         ja = max(j0, int(math.floor((lo + sx - x0) / res - 0.5)) - 1)
         jb = min(j1, int(math.ceil((hi + sx - x0) / res - 0.5)) + 1)
+        # centres more than 1e-6 cells inside [lo, hi] pass every test below
+        ia = jb + 1
+        ib = jb
+        if exact:
+            ia = int(math.ceil((lo + sx - x0) / res - 0.5 + 1e-6))
+            ib = int(math.floor((hi + sx - x0) / res - 0.5 - 1e-6))
         for j in range(ja, jb + 1):
             cx = x0 + (j + 0.5) * res - sx
             along = cx * ux + cy * uy
-            if along <= 0.0:
-                continue
             perp = cy * ux - cx * uy
-            if abs(perp) > along * tan_half:
-                continue
             d2 = cx * cx + cy * cy
-            if d2 > reach2:
-                continue
+            if j < ia or j > ib:
+                if along <= 0.0 or abs(perp) > along * tan_half or d2 > reach2:
+                    continue
             w = w0
             if weighted:
                 w *= _table_weight(table, tan_half, perp / along)
-            if echo and math.sqrt(d2) >= inner:
+            if echo and d2 >= inner2:
                 L[i, j] = _clamp(L[i, j] + w * l_occ, l_min, l_max)
             else:
                 L[i, j] = _clamp(L[i, j] + w * l_free, l_min, l_max)

@@ -2,7 +2,8 @@
 
 Two particles' maps differ only in cells written since they last held the
 same map, so resampling need copy only a box around those cells
-(`robotlib.mapping.sharing` keeps the boxes). Boxes are ``(i0, i1, j0, j1)``
+(`robotlib.mapping.sharing` keeps the boxes); these kernels give the box of
+the cells a reading writes. Boxes are ``(i0, i1, j0, j1)``
 cell rows and columns, inclusive, empty when ``i0 > i1``. Imports nothing of
 robotlib's but the JIT config.
 """
@@ -12,24 +13,7 @@ import math
 import numba as nb
 import numpy as np
 
-from .._config import JIT, serial_and_parallel
-
-
-def _copy_boxes(Ls, src, dst, boxes):
-    """Copy box ``boxes[q]`` of map ``Ls[src[q]]`` over map ``Ls[dst[q]]``.
-
-    No ``dst`` may also be a ``src``.
-    """
-    for q in nb.prange(src.shape[0]):
-        i0, i1, j0, j1 = boxes[q, 0], boxes[q, 1], boxes[q, 2], boxes[q, 3]
-        if i0 > i1 or j0 > j1:
-            continue
-        for i in range(i0, i1 + 1):
-            for j in range(j0, j1 + 1):
-                Ls[dst[q], i, j] = Ls[src[q], i, j]
-
-
-copy_boxes, copy_boxes_parallel = serial_and_parallel(_copy_boxes)
+from .._config import JIT
 
 
 @nb.njit(**JIT)

@@ -439,9 +439,7 @@ class GridFastSLAM:
             if effective_sample_size(self.weights) < self.resample_below * self.n:
                 idx = systematic_resample(self.weights, rng=self.rng)
                 parents = resample_parents(idx, self.n)
-                self.copied += self._tracked_diff().resample(
-                    self.maps, parents, self.n >= PARALLEL_MIN
-                )
+                self.copied += self._tracked_diff().resample(self.maps, parents)
                 self.particles = self.particles[parents]
                 self._win = self._win[parents]
                 self.logw = np.zeros(self.n)
