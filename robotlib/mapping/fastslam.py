@@ -340,7 +340,8 @@ class GridFastSLAM:
         z = np.ascontiguousarray(np.asarray(scan, dtype=float))
         poses = self.particles if poses is None else np.ascontiguousarray(poses)
         maps = self.maps if maps is None else maps
-        if maps is self.maps:
+        if maps is self.maps and self._diff_maps is self.maps:
+            # (maps replaced from outside: resampling will copy whole maps)
             self._track_writes(poses, z)
         if self.sensor == "laser":
             m = self.laser_model
@@ -367,7 +368,7 @@ class GridFastSLAM:
 
     def _track_writes(self, poses, z) -> None:
         """Widen the `MapDiff` boxes by the cells a reading at ``poses`` writes."""
-        diff = self._tracked_diff()
+        diff = self._diff
         ny, nx = self.maps.shape[1:]
         boxes = np.empty((len(poses), 4), dtype=np.int64)
         if self.sensor == "laser":
