@@ -155,7 +155,7 @@ def speed(out: dict) -> None:
     _out(f"FastSLAM step, 30 particles, laser, {f.maps.shape[1]} x "
           f"{f.maps.shape[2]}: {step * 1e3:6.2f} ms (copying where maps differ); "
           f"{whole * 1e3:6.2f} ms copying whole maps (resamples: "
-          f"{'yes' if resampled[-1] else 'no'})")  # fmt: skip
+          f"{'yes' if out['fastslam_step_resamples'] else 'no'})")  # fmt: skip
     _out(f"  the same step made to resample:        {rs * 1e3:6.2f} ms (copying where "
           f"maps differ); {rs_whole * 1e3:6.2f} ms copying whole maps")  # fmt: skip
     _out(f"  of which weighing:                     {w * 1e6:8.1f} us   "
