@@ -378,3 +378,49 @@ def test_scan_code_routes():
         assert any(f.listed for f in scan_code(src, names)), src
     honest = "from robotlib.localization import paper\nzhat = paper.expected(w, p)\n"
     assert scan_code(honest, names) == []
+
+
+def test_notes_name_the_function_the_exercise_lists_and_the_alias():
+    """Lab 5 lists one function under two names, one per exercise.
+
+    ``sonar_map`` lists ``robotlib.mapping.inverse_sonar_model``,
+    ``inverse_sonar`` lists ``robotlib.mapping.occupancy.inverse_sonar_model``
+    (the same object). A note names the exercise's own listing and the alias
+    the answer came through, statically and at run time.
+    """
+    from robotlib.course.plan import lab_plan, scan_submission
+
+    root = Path(__file__).resolve().parents[1]
+    plan = lab_plan(read_notebook(root / "solutions" / "lab5_slam.ipynb"), "lab5_slam")
+    pkg, occ = "robotlib.mapping.inverse_sonar_model", "robotlib.mapping.occupancy.inverse_sonar_model"  # fmt: skip
+    cells = [
+        {"id": "a", "exercise": "sonar_map", "source": "from robotlib.mapping.occupancy import inverse_sonar_model as f"},
+        {"id": "b", "exercise": "inverse_sonar", "source": "import robotlib.mapping as m\ng = m.inverse_sonar_model"},
+        {"id": "c", "exercise": "sonar_map", "source": f"from {pkg.rsplit('.', 1)[0]} import inverse_sonar_model"},
+    ]  # fmt: skip
+    zero, flags = scan_submission(plan, cells)
+    assert zero["sonar_map"] == [
+        f"reaches {pkg} (imported as f, through {occ}), the exercise's own work",
+        f"reaches {pkg} (imported), the exercise's own work",
+    ]
+    assert zero["inverse_sonar"] == [
+        f"reaches {occ} (attribute, through {pkg}), the exercise's own work"
+    ]
+    assert plan.listed_as(occ, "sonar_map") == pkg
+    assert plan.listed_as(pkg, "inverse_sonar") == occ
+    assert plan.listed_as(pkg, None) == pkg
+    # the run-time tripwire reports the listed name and the place it was reached
+    code = (
+        "import robotlib.mapping, robotlib.mapping.occupancy as o\n"
+        "from robotlib.course import answers\n"
+        "hits = []\n"
+        f"answers.arm({[occ, pkg]!r}, lambda f, via: hits.append((f, via)))\n"
+        "for fn in (robotlib.mapping.inverse_sonar_model, o.inverse_sonar_model):\n"
+        "    try:\n        fn()\n    except answers.Tripwire:\n        pass\n"
+        "print(hits)\n"
+    )
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)  # fmt: skip
+    assert proc.returncode == 0, proc.stderr
+    hits = eval(proc.stdout.strip().splitlines()[-1])  # noqa: S307 - our own output
+    assert hits == [(occ, pkg), (occ, occ)]
+    assert {plan.listed_as(f, "sonar_map") for f, _ in hits} == {pkg}

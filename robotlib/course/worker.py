@@ -155,9 +155,10 @@ def _student(fin: int, fout: int) -> None:
     active = {"exercise": None}
     owner = spec["owner"]  # listed function -> its exercise
 
-    def report(listed: str) -> None:
+    def report(listed: str, via: str = "") -> None:
         ex = active["exercise"] or owner.get(listed)
-        send(fout, {"op": "tripwire", "function": listed, "exercise": ex})
+        msg = {"op": "tripwire", "function": listed, "exercise": ex, "via": via}
+        send(fout, msg)
 
     def run(cid: str, source: str) -> None:
         # named like IPython's cells: numba can cache @njit(cache=True) in them
