@@ -508,3 +508,33 @@ def test_notes_name_the_function_the_exercise_lists_and_the_alias():
     hits = eval(proc.stdout.strip().splitlines()[-1])  # noqa: S307 - our own output
     assert hits == [(occ, pkg), (occ, occ)]
     assert {plan.listed_as(f, "sonar_map") for f, _ in hits} == {pkg}
+
+
+def test_slow_setup_on_a_cold_cache_does_not_zero_correct_work(tmp_path):
+    """A set-up cell slower than the cell limit, compiling numba cold, costs no points.
+
+    The set-up cell compiles an ``@njit(cache=True)`` function defined in the
+    notebook (cold in every sandbox: each process has its own cache folder)
+    and then takes longer than ``--cell-timeout``; the set-up is not a
+    student cell, so the solution still scores full marks and the released
+    lab zero.
+    """
+    need_sandbox()
+    sol = solution()
+    by_id(sol, "tiny-01").source = (
+        "import time\n\nimport numpy as np\nfrom numba import njit\n\n\n"
+        "@njit(cache=True)\ndef warm(x):\n    return x + 1\n\n\n"
+        f"warm(1)\ntime.sleep({CELL_TIMEOUT + 2})\n"
+    )
+    write_notebook(sol, tmp_path / "tiny.ipynb")
+    for name, nb in (("sol", sol), ("rel", release_notebook(sol, "tiny"))):
+        (tmp_path / "subs" / name).mkdir(parents=True)
+        write_notebook(nb, tmp_path / "subs" / name / "tiny.ipynb")
+    opts = g.Options(cell_timeout=CELL_TIMEOUT, timeout=120)
+    results, _ = g.grade(tmp_path / "subs", "tiny", tmp_path / "tiny.ipynb", jobs=2, opts=opts, progress=False)  # fmt: skip
+    rows = {r.student: r for r in results}
+    assert rows["sol"].points == {k: float(v) for k, v in FULL.items()}, rows[
+        "sol"
+    ].reasons
+    assert rows["sol"].status == "ok", rows["sol"].status
+    assert all(v == 0 for v in rows["rel"].points.values()), rows["rel"].points
