@@ -533,8 +533,7 @@ def test_slow_setup_on_a_cold_cache_does_not_zero_correct_work(tmp_path):
     opts = g.Options(cell_timeout=CELL_TIMEOUT, timeout=120)
     results, _ = g.grade(tmp_path / "subs", "tiny", tmp_path / "tiny.ipynb", jobs=2, opts=opts, progress=False)  # fmt: skip
     rows = {r.student: r for r in results}
-    assert rows["sol"].points == {k: float(v) for k, v in FULL.items()}, rows[
-        "sol"
-    ].reasons
+    got = {k: rows["sol"].points[k] for k in FULL}  # "why" is graded by hand
+    assert got == {k: float(v) for k, v in FULL.items()}, rows["sol"].reasons
     assert rows["sol"].status == "ok", rows["sol"].status
     assert all(v == 0 for v in rows["rel"].points.values()), rows["rel"].points
