@@ -426,7 +426,15 @@ def test_find_submissions_layouts(tmp_path):
     (tmp_path / "f" / "y.ipynb").write_text("{}")
     (tmp_path / os.fsdecode(b"g\xff")).mkdir()
     (tmp_path / os.fsdecode(b"g\xff") / "tiny.ipynb").write_text("{}")
+    # answers through symlinks: a folder linked to the solutions, a linked notebook
+    (tmp_path / "h").symlink_to(DATA, target_is_directory=True)
+    (tmp_path / "i").mkdir()
+    (tmp_path / "i" / "tiny.ipynb").symlink_to(TINY)
+    (tmp_path / "j.ipynb").symlink_to(TINY)
     found = {s: (p, st) for s, p, st in g.find_submissions(tmp_path, "tiny")}
+    assert found["h"] == (None, "a symbolic link, not graded")
+    assert found["j.ipynb"] == (None, "a symbolic link, not graded")
+    assert found["i"] == (None, "no notebook")
     assert found["a"][0].name == "tiny.ipynb" and found["b"][0].parent.name == "tiny"
     assert found["c"][0].name == "tiny (1).ipynb" and found["d"][0].name == "d.ipynb"
     assert found["e"] == (None, "no notebook")
