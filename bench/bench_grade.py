@@ -13,6 +13,7 @@ import argparse
 import os
 import shutil
 import tempfile
+import threading
 import time
 from pathlib import Path
 
@@ -34,13 +35,22 @@ def main() -> None:
         for i in range(args.copies):
             (subs / f"student{i:02d}").mkdir(parents=True)
             shutil.copy(solution, subs / f"student{i:02d}" / f"{args.lab}.ipynb")
+        loads, stop = [], threading.Event()
+
+        def sample() -> None:  # the machine's 1-minute load average, every 10 s
+            while not stop.wait(10.0):
+                loads.append(os.getloadavg()[0])
+
+        threading.Thread(target=sample, daemon=True).start()
         t0 = time.monotonic()
         results, checks = g.grade(
             subs, args.lab, solution, jobs=args.jobs, progress=False
         )
         wall = time.monotonic() - t0
+        stop.set()
         g.write_gradebook(Path(tmp) / "gradebook.csv", results, checks)
-    full = sum(r.total == r.max_points for r in results)
+    auto = [c for c in checks if not c.manual]  # written answers: graded by hand
+    full = sum(all(r.points.get(c.grade_id) == c.points for c in auto) for r in results)
     secs = sorted(r.seconds for r in results)
     print(
         f"lab {args.lab} ({solution.name}): {args.copies} copies, "
@@ -48,13 +58,18 @@ def main() -> None:
     )
     print(
         f"wall time {wall:.1f} s (reference run included), "
-        f"{full}/{len(results)} full marks"
+        f"{full}/{len(results)} full marks on the automatic checks"
     )
     print(
         f"per submission: median {secs[len(secs) // 2]:.1f} s, "
         f"min {secs[0]:.1f} s, max {secs[-1]:.1f} s"
     )
     print(f"throughput {args.copies / wall * 60:.1f} submissions per minute")
+    if loads:
+        print(
+            f"load average (1 min, every 10 s): min {min(loads):.1f}, "
+            f"median {sorted(loads)[len(loads) // 2]:.1f}, max {max(loads):.1f}"
+        )
 
 
 if __name__ == "__main__":

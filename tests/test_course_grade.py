@@ -30,6 +30,7 @@ from robotlib.course.notebooks import read_notebook, release_notebook, write_not
 
 from .sandboxing import need_sandbox
 
+ROOT = Path(__file__).resolve().parents[1]
 DATA = Path(__file__).parent / "data" / "course"
 TINY = DATA / "tiny.ipynb"
 CELL_TIMEOUT = 4.0
@@ -115,26 +116,85 @@ def make_submissions(folder: Path, outside: Path) -> dict[str, dict]:
         "    def __sub__(self, o):\n        return 0.0\n    __rsub__ = __sub__\n"
         "def mean(xs):\n    return Always(0)")), {"mean": 0})  # fmt: skip
 
+    # reading what the grader keeps from students: the solution (by path and
+    # through a symlink), another submission, the grader's records, the
+    # check process or the grader in /proc, the grader's paths in the
+    # environment. `mean` is right only if one of them was readable (so an
+    # escape earns its points and fails test_points); the attack runs in a
+    # cell the student added (flagged, never zeroed by the scan)
+    root = folder.parent
+    secrets = with_cell(sol, MEAN, "def mean(xs):\n    return sum(xs) / len(xs) if STOLEN or not DONE else 0.0")  # fmt: skip
+    secrets.cells.insert(2, nbformat.v4.new_code_cell(
+        "import os\nSTOLEN, TRIED, DONE = [], 0, False\n"
+        f"for p in ({str(TINY)!r}, {str(folder / 'solution' / 'tiny.ipynb')!r}, {str(root / 'gradebook-records')!r}):\n"
+        "    TRIED += 1\n    try:\n        STOLEN.append(os.listdir(p) if os.path.isdir(p) else open(p).read(9))\n"
+        "    except OSError:\n        pass\n"
+        "try:\n"
+        f"    os.symlink({str(TINY)!r}, 'sol.ipynb')\n    STOLEN.append(open('sol.ipynb').read(9))\n"
+        "except OSError:\n    pass\n"
+        "for pid in (d for d in os.listdir('/proc') if d.isdigit()):\n"
+        "    try:\n        cmd = open(f'/proc/{pid}/cmdline', 'rb').read()\n    except OSError:\n        continue\n"
+        "    if b'worker\\x00check' in cmd or b'robotlib.cli' in cmd or b'pytest' in cmd:\n        STOLEN.append(cmd)\n"
+        f"if {str(root)!r} in str(os.environ):\n    STOLEN.append('environment')\n"
+        "DONE = TRIED == 3  # the attack ran to its end\n"
+    ))  # fmt: skip
+    put("secrets", secrets, {"mean": 0})
+
+    # hooks that would change what a check sees, if checks ran beside them:
+    # an import hook, numpy patched, IPython start-up and usercustomize files
+    # in HOME and in the check process's scratch (not mounted here)
+    hooked = with_cell(sol, SCALE, "def scale(xs, k):\n    return [0.0] * len(xs) if HOOKED else np.asarray(xs, float) * k")  # fmt: skip
+    evil = "import numpy\nnumpy.allclose = lambda *a, **k: True\n"
+    hooked.cells.insert(2, nbformat.v4.new_code_cell(
+        "import os, sys, numpy\n"
+        "class Hook:\n    def find_spec(self, name, path, target=None):\n        return None\n"
+        "sys.meta_path.insert(0, Hook())\nnumpy.allclose = lambda *a, **k: True\n"
+        "home = os.path.expanduser('~')\n"
+        "for d in (home, os.path.join(os.getcwd(), '..', 'check1', 'home'), '/scratch/../check1/home'):\n"
+        "    for sub, name in (('.ipython/profile_default/startup', '00-evil.py'), ('.local/lib/python%d.%d/site-packages' % sys.version_info[:2], 'usercustomize.py')):\n"
+        "        try:\n            os.makedirs(os.path.join(d, sub), exist_ok=True)\n"
+        f"            open(os.path.join(d, sub, name), 'w').write({evil!r})\n"
+        "        except OSError:\n            pass\n"
+        "HOOKED = True\n"
+    ))  # fmt: skip
+    put("hooked", hooked, {"scale": 0})
+
     # harming others: files, processes, signals, resources
     target = outside / "pwned"
+    harmed = (target, TINY, Path(sys.prefix) / "pwned", ROOT / "robotlib" / "pwned",
+              ROOT / "robotlib" / "localization" / "__pycache__" / "pwned",
+              folder / "solution" / "tiny.ipynb", root / "gradebook-records" / "pwned.json")  # fmt: skip
     escape = copy.deepcopy(sol)  # in a cell the student added: flagged, not zeroed
     escape.cells.insert(2, nbformat.v4.new_code_cell(
         f"import os, signal, subprocess, time\n"
-        f"for p in ({str(target)!r}, {str(TINY)!r}, {sys.prefix!r} + '/pwned'):\n"
+        f"for p in {tuple(str(h) for h in harmed)!r}:\n"
         "    try:\n        open(p, 'a').write('x')\n    except OSError:\n        pass\n"
         "subprocess.Popen(['setsid', 'sh', '-c', 'sleep 987'])\n"
         "subprocess.Popen(['env', '-i', 'sleep', '988'])\n"
         "if os.fork() == 0:\n    os.setsid()\n    if os.fork() == 0:\n"
         "        time.sleep(989)\n    os._exit(0)\n"
+        "if os.fork() == 0:  # a process that keeps changing its pid\n"
+        "    for _ in range(3000):\n        if os.fork():\n            os._exit(0)\n"
+        "        time.sleep(0.05)\n    os._exit(0)\n"
         "for pid in range(1, 50):\n    try:\n        os.kill(pid, signal.SIGTERM)"
         " if pid != os.getpid() else None\n    except OSError:\n        pass\n"
     ))  # fmt: skip
     put("escape", escape, {})
-    put("exhaust", with_cell(sol, ADD, by_id(sol, ADD).source + (
+    exhaust = with_cell(sol, ADD, by_id(sol, ADD).source + (
         "\ntry:\n    big = bytearray(40 << 30)\nexcept MemoryError:\n    pass\n"
         "try:\n    with open('big', 'wb') as f:\n        for _ in range(300):\n"
         "            f.write(bytes(1 << 20))\nexcept OSError:\n    pass\n"
-    )), {})  # fmt: skip
+    ))  # fmt: skip
+    at = next(i for i, c in enumerate(exhaust.cells) if c.id == ADD) + 1
+    exhaust.cells.insert(at, nbformat.v4.new_code_cell(  # an added cell: flagged only
+        "import subprocess\nkids = []\n"
+        "for _ in range(400):  # more processes than the limit allows\n"
+        "    try:\n        kids.append(subprocess.Popen(['sleep', '991']))\n"
+        "    except OSError:\n        break\n"
+        "if not 50 < len(kids) < 400:  # the process limit did not hold: add fails\n"
+        "    def add(a, b):\n        return 0\n"
+    ))  # fmt: skip
+    put("exhaust", exhaust, {})
     put("infinite_loop", with_cell(sol, MEAN, "def mean(xs):\n    while True:\n        pass"), {"mean": 0})  # fmt: skip
     put("njit_hang", with_cell(sol, MEAN, by_id(sol, MEAN).source + (
         "\nfrom numba import njit\n@njit\ndef spin(n):\n    i = 0\n"
@@ -154,6 +214,8 @@ def make_submissions(folder: Path, outside: Path) -> dict[str, dict]:
     subs["nested"] = FULL
     put("Émile Zoë", sol, {})
     put("émile zoë", released, {k: 0 for k in FULL})
+    put("Émile  Zoë", released, {k: 0 for k in FULL})  # differs by a space
+    put("Émile Zoë ", copy.deepcopy(released), {k: 0 for k in FULL})
     (folder / "garbage.ipynb").write_text("{ this is not json")
     subs["garbage"] = {k: 0 for k in FULL}
     (folder / "nothing").mkdir()
@@ -246,12 +308,30 @@ def test_statuses_and_reasons(graded):
 
 
 def test_nobody_was_harmed(graded):
-    root = graded[4]
-    assert not (root / "outside" / "pwned").exists()
-    assert not Path(sys.prefix, "pwned").exists()
+    root, folder = graded[4], graded[5]
+    for p in (root / "outside" / "pwned", Path(sys.prefix, "pwned"),
+              ROOT / "robotlib" / "pwned", ROOT / "robotlib" / "localization" / "__pycache__" / "pwned",
+              root / "gradebook-records" / "pwned.json"):  # fmt: skip
+        assert not p.exists(), p
     assert "x" not in TINY.read_text()[-5:]
-    for needle in (b"sleep\x00987", b"sleep\x00988", b"989", b"robotlib.course.worker"):
+    assert "x" not in (folder / "solution" / "tiny.ipynb").read_text()[-5:]
+    needles = (b"sleep\x00987", b"sleep\x00988", b"989", b"sleep\x00991", b"robotlib.course.worker")  # fmt: skip
+    for needle in needles:
         assert _procs(needle) == [], needle
+
+
+def test_secrets_and_hooks_stay_out(graded):
+    rows = graded[0]
+    # the attack ran to its end and found nothing: `mean` returned 0.0 (had it
+    # stopped half-way or found anything, `mean` would be right)
+    assert "mean: an assertion failed" in rows["secrets"]["notes"], rows["secrets"][
+        "notes"
+    ]
+    assert "reads notebooks" in rows["secrets"]["flags"]
+    assert rows["secrets"]["add"] == "1" and rows["secrets"]["scale"] == "1"
+    # numpy patched, an import hook and start-up files: the check still fails
+    assert "scale: " in rows["hooked"]["notes"], rows["hooked"]["notes"]
+    assert rows["hooked"]["add"] == "1" and rows["hooked"]["mean"] == "2"
 
 
 def test_feedback_teaches_and_never_collides(graded):
@@ -300,7 +380,11 @@ def test_report_time(graded, capsys):
         print(f"\n[grading {len(graded[1])} tiny submissions took {graded[3]:.1f} s]")
 
 
-def test_interrupt_leaves_no_process(tmp_path):
+@pytest.mark.parametrize("sig", ["SIGINT", "SIGTERM"])
+def test_interrupt_leaves_no_process(tmp_path, sig):
+    """Ctrl-C (SIGINT) or SIGTERM in the middle of a class: no process is left."""
+    import signal
+
     need_sandbox()
     folder = tmp_path / "subs"
     for i in range(3):
@@ -318,7 +402,7 @@ def test_interrupt_leaves_no_process(tmp_path):
     while time.monotonic() < deadline and len(_procs(b"robotlib.course.worker")) < 3:
         time.sleep(0.2)
     time.sleep(1.0)
-    proc.terminate()  # SIGTERM in the middle of the class
+    proc.send_signal(getattr(signal, sig))  # in the middle of the class
     proc.wait(timeout=60)
     assert proc.returncode == 130, proc.stderr.read()
     time.sleep(0.5)
@@ -342,7 +426,15 @@ def test_find_submissions_layouts(tmp_path):
     (tmp_path / "f" / "y.ipynb").write_text("{}")
     (tmp_path / os.fsdecode(b"g\xff")).mkdir()
     (tmp_path / os.fsdecode(b"g\xff") / "tiny.ipynb").write_text("{}")
+    # answers through symlinks: a folder linked to the solutions, a linked notebook
+    (tmp_path / "h").symlink_to(DATA, target_is_directory=True)
+    (tmp_path / "i").mkdir()
+    (tmp_path / "i" / "tiny.ipynb").symlink_to(TINY)
+    (tmp_path / "j.ipynb").symlink_to(TINY)
     found = {s: (p, st) for s, p, st in g.find_submissions(tmp_path, "tiny")}
+    assert found["h"] == (None, "a symbolic link, not graded")
+    assert found["j.ipynb"] == (None, "a symbolic link, not graded")
+    assert found["i"] == (None, "no notebook")
     assert found["a"][0].name == "tiny.ipynb" and found["b"][0].parent.name == "tiny"
     assert found["c"][0].name == "tiny (1).ipynb" and found["d"][0].name == "d.ipynb"
     assert found["e"] == (None, "no notebook")
@@ -378,3 +470,78 @@ def test_scan_code_routes():
         assert any(f.listed for f in scan_code(src, names)), src
     honest = "from robotlib.localization import paper\nzhat = paper.expected(w, p)\n"
     assert scan_code(honest, names) == []
+
+
+def test_notes_name_the_function_the_exercise_lists_and_the_alias():
+    """Lab 5 lists one function under two names, one per exercise.
+
+    ``sonar_map`` lists ``robotlib.mapping.inverse_sonar_model``,
+    ``inverse_sonar`` lists ``robotlib.mapping.occupancy.inverse_sonar_model``
+    (the same object). A note names the exercise's own listing and the alias
+    the answer came through, statically and at run time.
+    """
+    from robotlib.course.plan import lab_plan, scan_submission
+
+    root = Path(__file__).resolve().parents[1]
+    plan = lab_plan(read_notebook(root / "solutions" / "lab5_slam.ipynb"), "lab5_slam")
+    pkg, occ = "robotlib.mapping.inverse_sonar_model", "robotlib.mapping.occupancy.inverse_sonar_model"  # fmt: skip
+    cells = [
+        {"id": "a", "exercise": "sonar_map", "source": "from robotlib.mapping.occupancy import inverse_sonar_model as f"},
+        {"id": "b", "exercise": "inverse_sonar", "source": "import robotlib.mapping as m\ng = m.inverse_sonar_model"},
+        {"id": "c", "exercise": "sonar_map", "source": f"from {pkg.rsplit('.', 1)[0]} import inverse_sonar_model"},
+    ]  # fmt: skip
+    zero, flags = scan_submission(plan, cells)
+    assert zero["sonar_map"] == [
+        f"reaches {pkg} (imported as f, through {occ}), the exercise's own work",
+        f"reaches {pkg} (imported), the exercise's own work",
+    ]
+    assert zero["inverse_sonar"] == [
+        f"reaches {occ} (attribute, through {pkg}), the exercise's own work"
+    ]
+    assert plan.listed_as(occ, "sonar_map") == pkg
+    assert plan.listed_as(pkg, "inverse_sonar") == occ
+    assert plan.listed_as(pkg, None) == pkg
+    # the run-time tripwire reports the listed name and the place it was reached
+    code = (
+        "import robotlib.mapping, robotlib.mapping.occupancy as o\n"
+        "from robotlib.course import answers\n"
+        "hits = []\n"
+        f"answers.arm({[occ, pkg]!r}, lambda f, via: hits.append((f, via)))\n"
+        "for fn in (robotlib.mapping.inverse_sonar_model, o.inverse_sonar_model):\n"
+        "    try:\n        fn()\n    except answers.Tripwire:\n        pass\n"
+        "print(hits)\n"
+    )
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)  # fmt: skip
+    assert proc.returncode == 0, proc.stderr
+    hits = eval(proc.stdout.strip().splitlines()[-1])  # noqa: S307 - our own output
+    assert hits == [(occ, pkg), (occ, occ)]
+    assert {plan.listed_as(f, "sonar_map") for f, _ in hits} == {pkg}
+
+
+def test_slow_setup_on_a_cold_cache_does_not_zero_correct_work(tmp_path):
+    """A set-up cell slower than the cell limit, compiling numba cold, costs no points.
+
+    The set-up cell compiles an ``@njit(cache=True)`` function defined in the
+    notebook (cold in every sandbox: each process has its own cache folder)
+    and then takes longer than ``--cell-timeout``; the set-up is not a
+    student cell, so the solution still scores full marks and the released
+    lab zero.
+    """
+    need_sandbox()
+    sol = solution()
+    by_id(sol, "tiny-01").source = (
+        "import time\n\nimport numpy as np\nfrom numba import njit\n\n\n"
+        "@njit(cache=True)\ndef warm(x):\n    return x + 1\n\n\n"
+        f"warm(1)\ntime.sleep({CELL_TIMEOUT + 2})\n"
+    )
+    write_notebook(sol, tmp_path / "tiny.ipynb")
+    for name, nb in (("sol", sol), ("rel", release_notebook(sol, "tiny"))):
+        (tmp_path / "subs" / name).mkdir(parents=True)
+        write_notebook(nb, tmp_path / "subs" / name / "tiny.ipynb")
+    opts = g.Options(cell_timeout=CELL_TIMEOUT, timeout=120)
+    results, _ = g.grade(tmp_path / "subs", "tiny", tmp_path / "tiny.ipynb", jobs=2, opts=opts, progress=False)  # fmt: skip
+    rows = {r.student: r for r in results}
+    got = {k: rows["sol"].points[k] for k in FULL}  # "why" is graded by hand
+    assert got == {k: float(v) for k, v in FULL.items()}, rows["sol"].reasons
+    assert rows["sol"].status == "ok", rows["sol"].status
+    assert all(v == 0 for v in rows["rel"].points.values()), rows["rel"].points

@@ -55,29 +55,50 @@ def low_variance_resample(weights, rng):
     idx = np.searchsorted(cum, pointers, side="right")
     return rng.permutation(idx)
 """
+LAB3_TABLE_ZEROS = """
+def tempering_table(errors, by=25, tolerance=0.5):
+    return np.zeros(np.shape(errors)[:2], dtype=int)
+"""
+LAB3_TABLE_FIRST_BELOW = """
+def tempering_table(errors, by=25, tolerance=0.5):
+    e = np.asarray(errors, dtype=float)
+    return (e[..., :by] <= tolerance).any(axis=-1).sum(axis=-1)
+"""
 LAB5_CONSTANTS = (
     "L_OCC, L_FREE, THICKNESS, HALF_CONE, MAX_RANGE = "
     "0.9, -0.35, 0.1, math.radians(15), 5.0\n\n\n"
 )
 WRONG = {
     "lab3_mcl": {
-        # ignores the sonar (dead reckoning) and never resamples (identity);
-        # on the check's route dead reckoning drifts past 0.3 m, so the first
-        # bound rejects it (within it, "the sonar must help" would)
+        # ignores the sonar (dead reckoning), never resamples (identity) and
+        # does nothing for the 2 x 2 table (zeros); on the check's route dead
+        # reckoning drifts past 0.3 m, so the first bound rejects it (within
+        # it, "the sonar must help" would)
         "wrong_dr_identity": (
             "solution",
-            {"l3-19": LAB3_DEAD_RECKONING, "l3-37": LAB3_IDENTITY},
+            {
+                "l3-19": LAB3_DEAD_RECKONING,
+                "l3-37": LAB3_IDENTITY,
+                "l3-52": LAB3_TABLE_ZEROS,
+            },
             {
                 "tracking": "the filter loses the robot",
                 "low_variance": "indexes in order",
                 "global": "the resampler loses the robot",
+                "table": "routes localized by step 4",
             },
         ),
-        # low-variance counts right but in shuffled order: only its check fails
+        # low-variance counts right but in shuffled order: only its check
+        # fails; the table counts a run from its first step within the
+        # tolerance, not from the step it stays within it
         "wrong_unsorted": (
             "released",
-            {"l3-37": LAB3_UNSORTED},
-            {"low_variance": "indexes in order", "global": None},
+            {"l3-37": LAB3_UNSORTED, "l3-52": LAB3_TABLE_FIRST_BELOW},
+            {
+                "low_variance": "indexes in order",
+                "global": None,
+                "table": "routes localized by step 4",
+            },
         ),
     },
     "lab5_slam": {
@@ -229,7 +250,8 @@ def test_cheats_score_zero_for_their_exercise_only(lab_graded):
 
 
 def test_wrong_answers_fail_their_strict_checks(lab_graded):
-    """Lab 3: dead reckoning fails tracking; identity and unsorted fail low-variance.
+    """Lab 3: dead reckoning fails tracking; identity and unsorted fail low-variance;
+    a do-nothing table and one counting a run from its first good step fail table.
 
     A wrong answer built on the solution keeps every other check; one built
     on the released lab passes only the checks named with no reason.

@@ -32,7 +32,15 @@ import sys
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 
-__all__ = ["Finding", "aliases", "resolve", "scan_code", "arm", "Tripwire"]
+__all__ = [
+    "Finding",
+    "aliases",
+    "equivalents",
+    "resolve",
+    "scan_code",
+    "arm",
+    "Tripwire",
+]
 
 DYNAMIC = {
     "exec": "exec",
@@ -70,6 +78,7 @@ class Finding:
     how: str  # e.g. "imported as f", "getattr with a string"
     line: int = 0
     listed: bool = True  # False: dynamic machinery or reading the solutions
+    via: str = ""  # the dotted name the code used (an alias of ``function``)
 
 
 def resolve(dotted: str):
@@ -116,13 +125,32 @@ def _places(targets: dict[int, str], roots=("robotlib",)):
 
 
 def _targets(writes: Iterable[str]) -> dict[int, str]:
-    out = {}
+    """Map each listed object's id to the first name listing it (in order)."""
+    out: dict[int, str] = {}
     for w in writes:
         try:
-            out[id(_raw(resolve(w)))] = w
+            out.setdefault(id(_raw(resolve(w))), w)
         except (ImportError, AttributeError):
             continue
     return out
+
+
+def equivalents(writes: Iterable[str]) -> dict[str, list[str]]:
+    """Map each listed name to every listed name of the same object, in order.
+
+    Two exercises may list one function under two of its names (Lab 5 lists
+    ``robotlib.mapping.inverse_sonar_model`` and
+    ``robotlib.mapping.occupancy.inverse_sonar_model``); a note about an
+    exercise names the one that exercise lists.
+    """
+    by_id: dict[int, list[str]] = {}
+    names = list(dict.fromkeys(writes))
+    for w in names:
+        try:
+            by_id.setdefault(id(_raw(resolve(w))), []).append(w)
+        except (ImportError, AttributeError):
+            by_id.setdefault(id(w), []).append(w)
+    return {w: group for group in by_id.values() for w in group}
 
 
 def aliases(writes: Iterable[str]) -> dict[str, str]:
@@ -135,13 +163,14 @@ def aliases(writes: Iterable[str]) -> dict[str, str]:
     ImportError
         If a listed name does not exist (a lab's metadata is wrong).
     """
-    writes = list(writes)
+    writes = list(dict.fromkeys(writes))
     for w in writes:
         resolve(w)
     _import_all()
-    out = {w: w for w in writes}
+    out = {}
     for _, _, listed, dotted in _places(_targets(writes)):
         out[dotted] = listed
+    out.update({w: w for w in writes})  # a listed name names itself
     return out
 
 
@@ -180,7 +209,8 @@ class _Scanner(ast.NodeVisitor):
     def hit(self, dotted: str, how: str, node) -> bool:
         for path, listed in self.names.items():
             if dotted == path or path.startswith(dotted + ".") and how == "star":
-                self.found.append(Finding(listed, how, getattr(node, "lineno", 0)))
+                line = getattr(node, "lineno", 0)
+                self.found.append(Finding(listed, how, line, via=path))
                 return True
         return False
 
@@ -273,7 +303,8 @@ class _Scanner(ast.NodeVisitor):
             s = _const_str(node.args[0]) if node.args else None
             if s is not None:
                 for fd in scan_code(s, self.names):
-                    self.found.append(Finding(fd.function, f"in {f.id}()", node.lineno))
+                    how, line = f"in {f.id}()", node.lineno
+                    self.found.append(Finding(fd.function, how, line, via=fd.via))
         self.generic_visit(node)
 
     def visit_Constant(self, node):
@@ -293,7 +324,8 @@ class _Scanner(ast.NodeVisitor):
             self.found.append(Finding(listed, "named in a string", node.lineno))
         for path, listed in self.names.items():
             if path in s:
-                self.found.append(Finding(listed, "named in a string", node.lineno))
+                f = Finding(listed, "named in a string", node.lineno, via=path)
+                self.found.append(f)
         low = s.lower()
         if "solutions" in low and ("/" in low or "ipynb" in low) or ".ipynb" in low:
             self.found.append(
@@ -326,8 +358,8 @@ def scan_code(source: str, names: dict[str, str]) -> list[Finding]:
     sc.visit(tree)
     seen, out = set(), []
     for f in sc.found:
-        if (f.function, f.how) not in seen:
-            seen.add((f.function, f.how))
+        if (f.function, f.how, f.via) not in seen:
+            seen.add((f.function, f.how, f.via))
             out.append(f)
     return out
 
@@ -339,9 +371,9 @@ class Tripwire(RuntimeError):
     """Raised when graded code calls a library function an exercise asks for."""
 
 
-def _tripwire(listed: str, report: Callable[[str], None]):
+def _tripwire(listed: str, report: Callable[[str, str], None], via: str = ""):
     def tripwire(*args, **kwargs):
-        report(listed)
+        report(listed, via)
         raise Tripwire(f"{listed} is the exercise's own work: write it yourself")
 
     tripwire.__name__ = listed.rsplit(".", 1)[-1]
@@ -349,7 +381,16 @@ def _tripwire(listed: str, report: Callable[[str], None]):
     return tripwire
 
 
-def arm(writes: Iterable[str], report: Callable[[str], None], namespaces=()) -> int:
+def _where(container, attr: str) -> str:
+    """Return the dotted name of ``container.attr`` (a class by its own module)."""
+    if isinstance(container, type):
+        return f"{container.__module__}.{container.__qualname__}.{attr}"
+    return f"{getattr(container, '__name__', '?')}.{attr}"
+
+
+def arm(
+    writes: Iterable[str], report: Callable[[str, str], None], namespaces=()
+) -> int:
     """Replace every listed function, wherever it is named, by a tripwire.
 
     Parameters
@@ -357,7 +398,9 @@ def arm(writes: Iterable[str], report: Callable[[str], None], namespaces=()) -> 
     writes : iterable of str
         The listed functions.
     report : callable
-        Called with the listed name when a tripwire fires (before it raises).
+        ``report(listed, via)`` when a tripwire fires (before it raises):
+        the listed name and the name the call came through (``""`` when it
+        is the listed name itself).
     namespaces : iterable of dict
         More namespaces to clean (e.g. the notebook's globals).
 
@@ -366,22 +409,28 @@ def arm(writes: Iterable[str], report: Callable[[str], None], namespaces=()) -> 
     int
         How many places were armed.
     """
-    writes = list(writes)
+    writes = list(dict.fromkeys(writes))
     if not writes:
         return 0
     targets = _targets(writes)  # imports the listed functions' modules only
-    wires = {w: _tripwire(w, report) for w in writes}
+    made: dict[tuple[str, str], Callable] = {}
+
+    def wire(listed: str, via: str):
+        if (listed, via) not in made:
+            made[listed, via] = _tripwire(listed, report, via)
+        return made[listed, via]
+
     n = 0
 
     def put(container, attr, listed):
         nonlocal n
         old = vars(container)[attr] if isinstance(container, type) else None
-        wire = wires[listed]
+        w = wire(listed, _where(container, attr))
         if isinstance(old, staticmethod):
-            wire = staticmethod(wire)
+            w = staticmethod(w)
         elif isinstance(old, classmethod):
-            wire = classmethod(wire)
-        setattr(container, attr, wire)
+            w = classmethod(w)
+        setattr(container, attr, w)
         n += 1
 
     for container, attr, listed, _ in list(_places(targets)):
@@ -393,32 +442,32 @@ def arm(writes: Iterable[str], report: Callable[[str], None], namespaces=()) -> 
         except (ImportError, AttributeError):
             continue
         if id(_raw(getattr(container, attr, None))) in targets:
-            put(container, attr, w)
+            put(container, attr, targets[id(_raw(getattr(container, attr)))])
     for ns in namespaces:
         for k, v in list(ns.items()):
             if id(_raw(v)) in targets:
-                ns[k] = wires[targets[id(_raw(v))]]
+                ns[k] = wire(targets[id(_raw(v))], k)
                 n += 1
-    _hook(wires, targets)
+    _hook(wire, targets, writes)
     return n
 
 
-def _hook(wires: dict, targets: dict) -> None:
+def _hook(wire: Callable, targets: dict, writes: list[str]) -> None:
     """Re-arm robotlib modules executed (imported or reloaded) from now on."""
     import importlib.abc
 
     def rearm(module):
         for attr, val in list(vars(module).items()):
             if id(_raw(val)) in targets:
-                setattr(module, attr, wires[targets[id(_raw(val))]])
-        for w, wire in wires.items():
+                listed = targets[id(_raw(val))]
+                setattr(module, attr, wire(listed, _where(module, attr)))
+        for w in writes:
             mod, _, attr = w.rpartition(".")
             if module.__name__ == mod and hasattr(module, attr):
-                setattr(module, attr, wire)
+                setattr(module, attr, wire(w, w))
             owner, _, cls = mod.rpartition(".")
             if module.__name__ == owner and isinstance(getattr(module, cls, 0), type):
-                setattr(getattr(module, cls), attr, wire)
-
+                setattr(getattr(module, cls), attr, wire(w, w))
     class Loader(importlib.abc.Loader):
         def __init__(self, inner):
             self.inner = inner

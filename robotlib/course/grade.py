@@ -170,9 +170,11 @@ def grade_notebook(
     result.flags += flags
     out = run_submission(plan, cells, opts, slot)
     result.passes = 1 + out.restarts
-    for function, ex in out.tripwires:
+    for function, ex, *via in out.tripwires:
         ex = ex or plan.owner.get(function)
-        note = f"called {function} (the exercise's own work) while graded"
+        name = plan.listed_as(function, ex)
+        how = f" (through {via[0]})" if via and via[0] and via[0] != name else ""
+        note = f"called {name}{how} (the exercise's own work) while graded"
         if ex is not None:
             zero.setdefault(ex, []).append(note)
         if note not in result.flags:

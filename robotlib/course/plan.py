@@ -58,6 +58,19 @@ class LabPlan:
     owner: dict[str, str]  # listed function -> exercise
     aliases: dict[str, str] = field(default_factory=dict)
     solution_ids: set[str] = field(default_factory=set)
+    same: dict[str, list[str]] = field(default_factory=dict)  # listed -> equals
+
+    def listed_as(self, function: str, exercise: str | None) -> str:
+        """Return the name ``exercise``'s ``writes`` gives ``function``'s object.
+
+        A note names the function as the exercise lists it, even when another
+        exercise lists the same object under another name.
+        """
+        ex = next((e for e in self.exercises if e.exercise_id == exercise), None)
+        if ex is None:
+            return function
+        same = self.same.get(function, [function])
+        return next((w for w in ex.writes if w in same), function)
 
     @property
     def max_points(self) -> float:
@@ -180,8 +193,11 @@ def lab_plan(solution: NotebookNode, name: str) -> LabPlan:
             needed.append(hit)
             todo += list(_free_names(hit[2]))
     needed.sort(key=lambda s: (s[0], s[1].lineno))
-    writes = sorted({w for e in exs for w in e.writes})
-    owner = {w: e.exercise_id for e in exs for w in e.writes}
+    writes = list(dict.fromkeys(w for e in exs for w in e.writes))  # listed order
+    owner: dict[str, str] = {}
+    for e in exs:
+        for w in e.writes:
+            owner.setdefault(w, e.exercise_id)
     plan = LabPlan(
         name,
         setup,
@@ -195,6 +211,7 @@ def lab_plan(solution: NotebookNode, name: str) -> LabPlan:
         owner,
     )
     plan.aliases = answers.aliases(writes) if writes else {}
+    plan.same = answers.equivalents(writes) if writes else {}
     plan.solution_ids = {c.get("id") for c in solution.cells}
     return plan
 
@@ -250,7 +267,9 @@ def scan_submission(plan: LabPlan, cells: list[dict]) -> tuple[dict, list[str]]:
             ex = cell["exercise"] if not f.listed else cell["exercise"]
             if f.listed:
                 ex = ex or plan.owner.get(f.function)
-                note = f"reaches {f.function} ({f.how}), the exercise's own work"
+                name = plan.listed_as(f.function, ex)
+                how = f.how + (f", through {f.via}" if f.via and f.via != name else "")
+                note = f"reaches {name} ({how}), the exercise's own work"
             else:
                 note = f"uses {f.function} ({f.how})"
                 if f.function == "solutions/":

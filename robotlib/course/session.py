@@ -67,7 +67,7 @@ class Outcome:
 
     checks: dict[str, dict] = field(default_factory=dict)
     cells: dict[str, dict] = field(default_factory=dict)
-    tripwires: list[tuple[str, str | None]] = field(default_factory=list)
+    tripwires: list[tuple[str, str | None, str]] = field(default_factory=list)
     status: str = "ok"
     restarts: int = 0
     log: str = ""
@@ -391,7 +391,11 @@ def run_submission(
                         forward(item)
                         ck["t0"] = time.monotonic()
                 elif op == "tripwire":
-                    hit = (str(header.get("function")), header.get("exercise"))
+                    hit = (
+                        str(header.get("function")),
+                        header.get("exercise"),
+                        str(header.get("via") or ""),
+                    )
                     if hit not in out.tripwires:
                         out.tripwires.append(hit)
                 elif op == "result" and st["pending"] is not None:

@@ -137,6 +137,19 @@ def _trim(exc: BaseException, sources: dict[str, str]) -> str:
     return "\n".join(lines[-12:])
 
 
+def _register(name: str, source: str) -> str:
+    """Put a cell's source in linecache under its name, as IPython does.
+
+    numba's cache for a function defined in a cell reads the function's
+    source (``inspect.getsource``); without this an ``@njit(cache=True)``
+    in a set-up or student cell raises ``OSError: could not get source``.
+    """
+    import linecache
+
+    linecache.cache[name] = (len(source), None, source.splitlines(True), name)
+    return source
+
+
 def _no_warm_up(spec: dict) -> None:
     """Make the set-up cell's warm-ups a no-op when the cache holds the kernels."""
     if spec.get("skip_warm_up"):
@@ -155,14 +168,15 @@ def _student(fin: int, fout: int) -> None:
     active = {"exercise": None}
     owner = spec["owner"]  # listed function -> its exercise
 
-    def report(listed: str) -> None:
+    def report(listed: str, via: str = "") -> None:
         ex = active["exercise"] or owner.get(listed)
-        send(fout, {"op": "tripwire", "function": listed, "exercise": ex})
+        msg = {"op": "tripwire", "function": listed, "exercise": ex, "via": via}
+        send(fout, msg)
 
     def run(cid: str, source: str) -> None:
         # named like IPython's cells: numba can cache @njit(cache=True) in them
         name = f"<ipython-input-{len(sources)}-{cid}>"
-        code = compile(shell.transform_cell(source), name, "exec")
+        code = compile(_register(name, shell.transform_cell(source)), name, "exec")
         exec(code, ns)  # noqa: S102 - the student's cell, in its sandbox
 
     sources = {c["id"]: c["source"] for c in spec["cells"]}
@@ -288,18 +302,26 @@ def _check(fin: int, fout: int) -> None:
     ns = shell.user_ns
     ns["__name__"] = "__main__"
 
-    def run(name, source):
-        exec(compile(shell.transform_cell(source), name, "exec"), ns)  # noqa: S102
+    count = [0]
+
+    def run(label, source):
+        # named like IPython's cells, so that numba can cache an
+        # @njit(cache=True) function the set-up cell or a check defines (a
+        # plain "<setup>" has no cache locator: numba raises)
+        count[0] += 1
+        name = f"<ipython-input-{count[0]}-{label}>"
+        code = compile(_register(name, shell.transform_cell(source)), name, "exec")
+        exec(code, ns)  # noqa: S102 - the instructor's code
 
     _no_warm_up(spec)
-    run("<setup>", spec["setup"])
+    run("setup", spec["setup"])
     proxies = {}
     for name, info in spec["names"].items():
         proxies[name] = _Proxy(name, info["exercise"], fin, fout)
         if info["kind"] == "function":
             ns[name] = proxies[name]
     for i, src in enumerate(spec["defs"]):
-        run(f"<definition {i}>", src)
+        run(f"definition-{i}", src)
     for name, info in spec["names"].items():  # definitions never replace proxies
         if info["kind"] == "function":
             ns[name] = proxies[name]
@@ -312,7 +334,7 @@ def _check(fin: int, fout: int) -> None:
             for name in chk.get("values", []):
                 ns[name] = proxies[name]._ask("get")[0]
             with contextlib.redirect_stdout(buf):
-                run(f"<check {chk['gid']}>", chk["source"])
+                run(f"check-{chk['gid']}", chk["source"])
         except StudentError as exc:
             last = exc.error.strip().splitlines()[-1] if exc.error.strip() else ""
             status, student = "failed", exc.error
