@@ -202,7 +202,7 @@ def summarize(
 
 
 def recovery_steps(errors, kidnap: int, tolerance: float = RECOVERED, hold: int = HOLD):
-    """Steps from a kidnapping until the error stays under ``tolerance``.
+    """Count the steps from a kidnapping until the error stays under ``tolerance``.
 
     Parameters
     ----------

@@ -27,6 +27,8 @@ Imports the simulator, the world and the planners; never an estimator.
 
 from __future__ import annotations
 
+import weakref
+
 import numpy as np
 
 from ..p3dx import ROBOT_RADIUS
@@ -79,16 +81,15 @@ class TourSpace:
         if len(goals) < 2:
             goals = np.argwhere(self.reachable)
         self.goals = goals
-        self.world = world
 
     def random_pose(self, rng: np.random.Generator) -> np.ndarray:
-        """A random pose ``(x, y, theta)`` at a goal cell's centre, m and rad."""
+        """Draw a random pose ``(x, y, theta)`` at a goal cell's centre, m and rad."""
         c = self.goals[rng.integers(len(self.goals))]
         x, y = self.cspace.to_metres(c)
         return np.array([x, y, np.pi - 2 * np.pi * rng.random()])
 
     def pick_goal(self, xy, rng: np.random.Generator, min_leg: float) -> np.ndarray:
-        """A random goal (m) at least ``min_leg`` (or half the farthest) away."""
+        """Draw a goal (m) at least ``min_leg`` (or half the farthest) away."""
         cs = self.cspace
         here = cs.nearest_free(xy, 1.0)
         if here is None:
@@ -102,15 +103,17 @@ class TourSpace:
         return cs.to_metres(pool[rng.integers(len(pool))])
 
 
-_SPACES: dict[int, TourSpace] = {}
+_SPACES: dict[int, tuple] = {}
 
 
 def tour_space(world: World) -> TourSpace:
-    """The `TourSpace` of ``world`` with default settings, built once per world."""
+    """Return the `TourSpace` of ``world`` (default settings), kept while it lives."""
     key = id(world)
-    space = _SPACES.get(key)
-    if space is None or space.world is not world:
-        space = _SPACES[key] = TourSpace(world)
+    entry = _SPACES.get(key)
+    if entry is not None and entry[0]() is world:
+        return entry[1]
+    space = TourSpace(world)
+    _SPACES[key] = (weakref.ref(world, lambda _: _SPACES.pop(key, None)), space)
     return space
 
 
