@@ -158,3 +158,26 @@ def test_reproduce_kidnap_on_a_world_file(tmp_path, monkeypatch):
     assert result["best"]["kidnap"]["recovery_steps"] == [rep.recovery_steps(errors, 8)]
     with pytest.raises(SystemExit):
         main([*args, "--kidnap", "19"])
+
+
+def test_mcl_panel_kidnap_button(office):
+    from robotlib.experiments import drive_route
+    from robotlib.widgets import mcl as widgets
+
+    route = drive_route(office, seed=0, n_steps=14)
+    panel = widgets.MCLPanel(route, n_steps=14, n=300, lam=0.5)
+    assert panel.kidnap.value == 0 and "kidnapped" not in panel.status.value
+    first = panel.history.true_pose
+    panel.kidnap_button.click()
+    assert panel.kidnap.value == 7  # halfway through the run
+    taken = panel._route_of(panel.world.value, 7)
+    assert taken.kidnapped_at == 7
+    np.testing.assert_array_equal(np.array(panel.history.true_pose), taken.truth)
+    assert not np.array_equal(np.array(first), taken.truth)
+    assert "kidnapped before step 7" in panel.status.value
+    assert panel.recovered_after == rep.recovery_steps(panel.history.error, 7)
+    panel.kidnap.value = 4  # a step typed in the box
+    assert panel._route_of(panel.world.value, 4).kidnapped_at == 4
+    assert "kidnapped before step 4" in panel.status.value
+    panel.kidnap.value = 0  # off again: the plain route
+    np.testing.assert_array_equal(np.array(panel.history.true_pose), route.truth)
