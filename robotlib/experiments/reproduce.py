@@ -40,6 +40,8 @@ __all__ = [
     "FilterConfig",
     "PAPER",
     "BEST_CONFIG",
+    "RECOVERY",
+    "RECOVERY_CONFIG",
     "run_filter",
     "summarize",
     "summarize_kidnap",
@@ -97,6 +99,8 @@ class FilterConfig:
             out = {**BEST, **out}
             out.setdefault("sensor", "beam (tempered), cone table")
             out.setdefault("resampling", "KLD-sampling when ESS < N/2")
+            if out.get("augmented"):
+                out.setdefault("recovery", "augmented MCL, random particles added")
         return out
 
 
@@ -104,6 +108,17 @@ PAPER = FilterConfig("paper", "paper", {"n": 300, "lam": 0.5, "floor": RESIZE_FL
 """The paper's filter as written (300 particles)."""
 BEST_CONFIG = FilterConfig("best", "best", {})
 """The strongest configuration (`robotlib.localization.BEST`)."""
+RECOVERY = {
+    "alpha_slow": 0.05,
+    "alpha_fast": 0.5,
+    "grow": 20_000,
+    "min_probability": 0.3,
+}
+"""`MCL.best`'s recovery from a kidnapping: augmented MCL adding up to 20,000
+random particles (`AugmentedInjection` with ``grow``) when the short-term
+scan likelihood falls 30 % or more below the long-term one."""
+RECOVERY_CONFIG = FilterConfig("best+rec", "best", {"augmented": RECOVERY})
+"""`MCL.best` with `RECOVERY` on."""
 
 
 def run_filter(
@@ -400,6 +415,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="also run with the robot moved to a random free pose before STEP",
     )
     parser.add_argument(
+        "--recovery",
+        action="store_true",
+        help="also run MCL.best with its kidnapping recovery on (best+rec)",
+    )
+    parser.add_argument(
         "--route",
         choices=("auto", "corridor", "tour"),
         default="auto",
@@ -417,10 +437,13 @@ def run(args: argparse.Namespace) -> int:
     t0 = time.perf_counter()
     if args.kidnap is not None and not 1 <= args.kidnap <= args.steps - HOLD:
         raise SystemExit(f"--kidnap must be in [1, {args.steps - HOLD}]")
+    configs = {"paper": paper, "best": BEST_CONFIG}
+    if args.recovery:
+        configs["best+rec"] = RECOVERY_CONFIG
     result = reproduce(
         world,
         seeds,
-        {"paper": paper, "best": BEST_CONFIG},
+        configs,
         args.steps,
         kidnap=args.kidnap,
         route=args.route,
