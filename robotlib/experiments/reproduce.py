@@ -113,6 +113,7 @@ RECOVERY = {
     "alpha_fast": 0.5,
     "grow": 20_000,
     "min_probability": 0.3,
+    "share": 0.05,
 }
 """`MCL.best`'s recovery from a kidnapping: augmented MCL adding up to 20,000
 random particles (`AugmentedInjection` with ``grow``) when the short-term

@@ -339,13 +339,21 @@ class MCL:
             self.weights = np.full(n, 1.0 / n)
             inj = self.injection
             if inj is not None and inj.probability > 0 and inj.grow is not None:
-                injected = int(inj.probability * inj.grow)
-                if injected:
+                prob = inj.probability
+                injected = int(prob * inj.grow)
+                if inj.share is not None:
+                    prob = min(prob, inj.share)
+                if injected:  # the random ones carry the probability's share
                     extra = self.world.sample_free_poses(
                         injected, self.rng, self.resolution, self.admissible_radius
                     )
                     self.particles = np.concatenate([new, extra])
-                    self.weights = np.full(n + injected, 1.0 / (n + injected))
+                    self.weights = np.concatenate(
+                        [
+                            np.full(n, (1.0 - prob) / n),
+                            np.full(injected, prob / injected),
+                        ]
+                    )
             elif inj is not None and inj.probability > 0:
                 mask = self.rng.random(n) < inj.probability
                 injected = int(mask.sum())

@@ -180,7 +180,9 @@ class AugmentedInjection:
 
     With ``grow`` set (for a filter whose population adapts, KLD-sampling),
     the random particles are added instead: ``int(probability * grow)`` of
-    them on top of the resampled set, so a filter tracking with a few hundred
+    them on top of the resampled set, weighted to carry that probability's
+    share of the total (so they dilute the next scan's mean likelihood, the
+    signal, no more than replacing would), so a filter tracking with a few hundred
     particles gets back a global filter's numbers once its scans stop
     agreeing with its pose (a kidnapping); KLD-sampling then shrinks the set
     again. ``min_probability`` ignores smaller drops (sonar noise).
@@ -194,6 +196,13 @@ class AugmentedInjection:
         replace, Thrun's table 8.3).
     min_probability : float
         Inject nothing while the probability is below this.
+    share : float or None
+        With ``grow``: the added particles' share of the total weight, at
+        most (None: the probability). A small share keeps a false alarm (a
+        stretch where the sonar disagrees with the map at the right pose)
+        from pulling the estimate away, and keeps the random particles from
+        diluting the signal; a kidnapped filter's particles all score so
+        badly that the random ones near the true pose still win.
     """
 
     alpha_slow: float = 0.05
@@ -202,6 +211,7 @@ class AugmentedInjection:
     w_fast: float = float("nan")
     grow: int | None = None
     min_probability: float = 0.0
+    share: float | None = None
 
     def __post_init__(self):
         if not 0 < self.alpha_slow < self.alpha_fast <= 1:
