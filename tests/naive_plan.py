@@ -77,3 +77,59 @@ def segment_distance(a, b, c, d, samples=400):
     ts = np.linspace(0, 1, samples)
     a, b = np.asarray(a, float), np.asarray(b, float)
     return min(ps(a + t * (b - a), c, d) for t in ts)
+
+
+def astar_order(blocked, cost, start, goal, connectivity, res=1.0, weight=1.0):
+    """A* with heapq and a dict, keyed as the kernel documents its heap.
+
+    Nodes are expanded in the order of ``(f, float32(h), i * nx + j)`` with
+    ``f = g + h`` and ``h`` the weighted octile (8) or Manhattan (4)
+    heuristic; a cheaper path to an open node pushes a second entry (the
+    stale one is skipped when popped), which expands the same nodes in the
+    same order as a heap with decrease-key. Returns ``(order, path, cost)``:
+    the expanded cells, the path's cells (start to goal) and its cost
+    (``None, inf`` when unreachable).
+    """
+    ny, nx = blocked.shape
+    gi, gj = goal
+    r2 = math.sqrt(2.0)
+
+    def h(cell):
+        if weight == 0:
+            return 0.0
+        a, b = abs(cell[0] - gi), abs(cell[1] - gj)
+        if connectivity == 8:
+            lo = min(a, b)
+            return weight * (res * ((a + b - 2 * lo) + r2 * lo))
+        return weight * (res * (a + b))
+
+    def key(g, cell):
+        hv = h(cell)
+        return (g + hv, float(np.float32(hv)), cell[0] * nx + cell[1])
+
+    best = {start: 0.0}
+    parent = {start: None}
+    heap = [(key(0.0, start), start)]
+    done = set()
+    order = []
+    while heap:
+        _, u = heapq.heappop(heap)
+        if u in done:
+            continue
+        done.add(u)
+        order.append(u)
+        if u == goal:
+            path = [u]
+            while parent[path[-1]] is not None:
+                path.append(parent[path[-1]])
+            return order, path[::-1], best[u]
+        for v, length in neighbours(blocked, u, connectivity):
+            if v in done:
+                continue
+            step = res if length == 1.0 else res * r2
+            gv = best[u] + step * (1.0 + cost[v])
+            if gv < best.get(v, math.inf):
+                best[v] = gv
+                parent[v] = u
+                heapq.heappush(heap, (key(gv, v), v))
+    return order, None, math.inf

@@ -101,6 +101,50 @@ def test_astar_and_dijkstra_are_optimal(case, connectivity):
 
 
 @SETTINGS
+@given(grids(), st.sampled_from([4, 8]), st.sampled_from([0.0, 1.0, 2.5]))
+def test_astar_expands_as_the_heapq_reference(case, connectivity, weight):
+    # the kernel's heap (indexed, 4-ary, decrease-key) against heapq with lazy
+    # deletion on the same keys: the same nodes in the same order, the same
+    # path, the same cost to the bit
+    cs, s, g = case
+    order, path, cost = naive_plan.astar_order(
+        cs.blocked, cs.cost, s, g, connectivity, cs.resolution, weight
+    )
+    a = weighted_astar(
+        cs, centre(cs, s), centre(cs, g), weight, connectivity, record=True
+    )
+    assert [tuple(c) for c in a.order] == order
+    assert a.expanded == len(order)
+    if path is None:
+        assert not a.found
+        return
+    assert [tuple(c) for c in a.cells] == path
+    assert a.cost == cost
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_astar_expands_as_the_heapq_reference_on_a_larger_grid(seed):
+    # deep heaps (hundreds of open nodes) and many decrease-keys, with a cost map
+    rng = np.random.default_rng(seed)
+    blocked = rng.random((70, 90)) < 0.25
+    blocked[0, 0] = blocked[-1, -1] = False
+    cost = rng.random(blocked.shape) * (seed + 1)
+    cs = CSpace.from_array(blocked, resolution=0.05, cost=cost)
+    for connectivity in (4, 8):
+        order, path, c = naive_plan.astar_order(
+            blocked, cost, (0, 0), (69, 89), connectivity, 0.05
+        )
+        a = astar(
+            cs, centre(cs, (0, 0)), centre(cs, (69, 89)), connectivity, record=True
+        )
+        assert [tuple(x) for x in a.order] == order
+        if path is None:
+            assert not a.found
+        else:
+            assert [tuple(x) for x in a.cells] == path and a.cost == c
+
+
+@SETTINGS
 @given(grids(), st.sampled_from([4, 8]))
 def test_wavefront_has_fewest_moves(case, connectivity):
     cs, s, g = case

@@ -515,11 +515,10 @@ class VFH(Controller):
         self._spin = 0.0
         w = self.turn_gain * steer
         n = self.n_sectors
-        ahead = hist[(n // 2 - 1) : (n // 2 + 1)].max()
+        ahead = max(float(hist[n // 2 - 1]), float(hist[n // 2]))
         slow = 1.0 - min(ahead, self.threshold_high) / self.threshold_high
         turning = max(0.0, 1.0 - abs(steer) / (math.pi / 3))
         v = self.max_speed * max(slow, 0.2) * turning
         if self.goal is not None:
-            _, dist = self.goal_direction(pose)
-            v = min(v, 0.3 + 0.5 * dist)
+            v = min(v, 0.3 + 0.5 * dist)  # dist: the goal's, from above
         return v, w

@@ -123,6 +123,13 @@ def standard_normals(
     return out
 
 
+def _floats(pose) -> list:
+    """Return the items of ``pose`` as Python floats (an array: without a loop)."""
+    if type(pose) is np.ndarray and pose.dtype == np.float64 and pose.ndim == 1:
+        return pose.tolist()
+    return [float(v) for v in pose]
+
+
 def odometry_increment(odo_prev, odo_now, min_trans: float = 1e-4) -> tuple:
     """Decompose the move between two odometry poses into ``(rot1, trans, rot2)``.
 
@@ -140,8 +147,8 @@ def odometry_increment(odo_prev, odo_now, min_trans: float = 1e-4) -> tuple:
         ``rot1`` (rad), ``trans`` (m, negative when moving backwards),
         ``rot2`` (rad).
     """
-    x0, y0, t0 = (float(v) for v in odo_prev)
-    x1, y1, t1 = (float(v) for v in odo_now)
+    x0, y0, t0 = _floats(odo_prev)
+    x1, y1, t1 = _floats(odo_now)
     dx, dy = x1 - x0, y1 - y0
     trans = math.hypot(dx, dy)
     if trans < min_trans:

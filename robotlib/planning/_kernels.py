@@ -1,4 +1,4 @@
-"""Numba kernels for the planners: a binary heap, A*/Dijkstra, the wavefront.
+"""Numba kernels for the planners: an indexed heap, A*/Dijkstra, the wavefront.
 
 Also the disc inflation of a grid and the segment clearance the sampling
 planners use. Kernels take only contiguous arrays and scalars; the public
@@ -9,7 +9,9 @@ Grids are ``(ny, nx)``, row ``i`` is ``y`` and column ``j`` is ``x``; a
 node is the flat index ``k = i * nx + j``. A move to a neighbour costs its
 length (``res`` or ``res * sqrt(2)``) times ``1 + cost[target]``. A
 diagonal move is allowed only when both cells beside it are free (no corner
-cutting).
+cutting). The searches run on a padded copy of the grid (below); nothing in
+their inner loops allocates, calls a function that takes an array, or
+rebinds an array (numba counts references on each of those).
 """
 
 import math
@@ -24,68 +26,102 @@ SQRT2 = math.sqrt(2.0)
 # Neighbour offsets: the four orthogonal ones first, then the diagonals.
 DI = np.array([0, 1, 0, -1, 1, 1, -1, -1], dtype=np.int64)
 DJ = np.array([1, 0, -1, 0, 1, -1, -1, 1], dtype=np.int64)
+# the orthogonal neighbours beside each diagonal (diagonal d: DA[d-4], DB[d-4])
+DA = np.array([0, 2, 2, 0], dtype=np.int64)
+DB = np.array([1, 1, 3, 3], dtype=np.int64)
 
 
-# -- binary heap on (key, tie) pairs, lexicographic, with node payloads ------
+# -- the padded grid ---------------------------------------------------------
+# The searches run on a copy of the grid with a one-cell blocked border, one
+# byte a cell, so a neighbour is one load at a fixed flat offset (no bounds
+# tests, no division). A node's padded index is ``p = (i + 1) * (nx + 2) +
+# j + 1``; its plain index ``k = i * nx + j`` moves by the matching plain
+# offset, so both are carried along without dividing.
+BLOCKED = np.uint8(1)
+CLOSED = np.uint8(2)  # expanded
+SEEN = np.uint8(4)  # A*: ``g`` holds a cost (``inf`` otherwise)
+MOVE_SHIFT = 3  # A*: bits 3-5 hold the move (index into DI, DJ) that reached a node
+
+
 @nb.njit(**JIT)
-def heap_grow(key, tie, val, size):
-    """Return copies of the heap arrays with room for twice as many items."""
-    cap = 2 * size + 16
-    nk = np.empty(cap)
-    nt = np.empty(cap)
-    nv = np.empty(cap, dtype=np.int64)
-    nk[:size] = key[:size]
-    nt[:size] = tie[:size]
-    nv[:size] = val[:size]
-    return nk, nt, nv
+def padded(blocked):
+    """Return the grid as flat uint8 with a blocked border, (ny + 2) * (nx + 2)."""
+    ny, nx = blocked.shape
+    w = nx + 2
+    state = np.empty((ny + 2) * w, dtype=np.uint8)
+    for j in range(w):
+        state[j] = BLOCKED
+        state[(ny + 1) * w + j] = BLOCKED
+    for i in range(ny):
+        row = (i + 1) * w
+        state[row] = BLOCKED
+        state[row + nx + 1] = BLOCKED
+        for j in range(nx):
+            state[row + 1 + j] = BLOCKED if blocked[i, j] else np.uint8(0)
+    return state
 
 
 @nb.njit(**JIT)
-def heap_push(key, tie, val, size, k, t, v):
-    """Push ``(k, t) -> v`` on a heap of ``size`` items (room for one more)."""
-    c = size
+def _offsets(nx):
+    """Flat offsets of the eight neighbours (`DI`, `DJ` order): padded, plain."""
+    offp = np.empty(8, dtype=np.int64)
+    offk = np.empty(8, dtype=np.int64)
+    for d in range(8):
+        offp[d] = DI[d] * (nx + 2) + DJ[d]
+        offk[d] = DI[d] * nx + DJ[d]
+    return offp, offk
+
+
+# -- indexed 4-ary heap of 128-bit integer keys ------------------------------
+# A search node's key is ``(f, h, node)``: ``f = g + h``, then the heuristic
+# rounded to float32, then the node's padded index. The key is two int64s:
+# the bits of ``f`` (a float64 >= 0 orders as its bit pattern), and the
+# float32 bits of ``h`` above the 32-bit node. The order is total, so the
+# search expands the same nodes in the same order whatever the heap's shape
+# (and as a plain heapq search on the same keys). Each node is in the heap at
+# most once; ``pos[node]`` is its slot, and a cheaper path to an open node
+# moves it up (decrease-key) instead of pushing a second copy. Four children
+# a slot: 64 bytes, one cache line. The pop is written out in `astar`.
+@nb.njit(**JIT)
+def key_scratch():
+    """Return the buffers `search_key` reinterprets bits in.
+
+    ``(fa, fi, ha, hi)``: one float64 and its int64 view, one float32 and
+    its int32 view (made once per search: a view made per key would cost an
+    allocation and reference counting in the inner loop).
+    """
+    fa = np.empty(1)
+    ha = np.empty(1, dtype=np.float32)
+    return fa, fa.view(np.int64), ha, ha.view(np.int32)
+
+
+@nb.njit(inline="always", **JIT)
+def search_key(fa, fi, ha, hi, f, h, node):
+    """Return the heap key ``(f bits, h float32 bits << 32 | node)`` of a node.
+
+    ``fa, fi, ha, hi`` are the buffers of `key_scratch`.
+    """
+    fa[0] = f
+    ha[0] = h
+    return fi[0], (np.int64(hi[0]) << 32) | node
+
+
+@nb.njit(inline="always", **JIT)
+def heap_up(heap, pos, c, k0, k1):
+    """Put key ``(k0, k1)`` in slot ``c`` (free, or its node's) and sift it up."""
     while c > 0:
-        p = (c - 1) >> 1
-        if k < key[p] or (k == key[p] and t < tie[p]):
-            key[c] = key[p]
-            tie[c] = tie[p]
-            val[c] = val[p]
-            c = p
-        else:
+        p = (c - 1) >> 2
+        p0 = heap[2 * p]
+        p1 = heap[2 * p + 1]
+        if p0 < k0 or (p0 == k0 and p1 < k1):
             break
-    key[c] = k
-    tie[c] = t
-    val[c] = v
-
-
-@nb.njit(**JIT)
-def heap_pop(key, tie, val, size):
-    """Pop the smallest item of a heap of ``size`` items; return ``(k, v)``."""
-    k0 = key[0]
-    v0 = val[0]
-    last = size - 1
-    k = key[last]
-    t = tie[last]
-    v = val[last]
-    c = 0
-    while True:
-        m = 2 * c + 1
-        if m >= last:
-            break
-        r = m + 1
-        if r < last and (key[r] < key[m] or (key[r] == key[m] and tie[r] < tie[m])):
-            m = r
-        if key[m] < k or (key[m] == k and tie[m] < t):
-            key[c] = key[m]
-            tie[c] = tie[m]
-            val[c] = val[m]
-            c = m
-        else:
-            break
-    key[c] = k
-    tie[c] = t
-    val[c] = v
-    return k0, v0
+        heap[2 * c] = p0
+        heap[2 * c + 1] = p1
+        pos[p1 & 0xFFFFFFFF] = c
+        c = p
+    heap[2 * c] = k0
+    heap[2 * c + 1] = k1
+    pos[k1 & 0xFFFFFFFF] = c
 
 
 # -- heuristics ------------------------------------------------------------
@@ -109,25 +145,36 @@ def _heuristic(i, j, gi, gj, res, connect8):
 def astar(blocked, cost, start, goal, weight, connect8, res, g, parent, order):
     """Search with A* (weight > 0), weighted A* (weight > 1) or Dijkstra (0).
 
+    Expands nodes in the order of their `search_key` ``(f, h, node)`` with
+    ``f = g + h`` (an indexed heap with decrease-key; see above).
+    Neighbours are relaxed orthogonal first, then diagonal (the `DI`, `DJ`
+    order); a diagonal move needs both cells beside it free.
+
     Parameters
     ----------
     blocked : (ny, nx) bool
-        Cells the robot may not enter.
-    cost : (ny, nx) float64
-        Extra cost factor of entering each cell (0: none).
+        Cells the robot may not enter; (ny + 2) * (nx + 2) < 2**31.
+    cost : (ny, nx) float64, or any array of size 0
+        Extra cost factor of entering each cell (0: none; size 0: none
+        anywhere, and the array is not read).
     start, goal : int
         Flat node indices; ``goal < 0`` expands every reachable node
         (Dijkstra's full cost field).
     weight : float
-        Heuristic weight (octile for 8-connected, Manhattan for 4).
+        Heuristic weight (octile for 8-connected, Manhattan for 4), >= 0.
     connect8 : bool
         Eight neighbours instead of four.
     res : float
         Cell side, m.
     g : (ny * nx,) float64
-        Out: cost from the start (``inf`` where never reached).
+        Out: cost from the start of every node reached. With ``goal < 0``
+        also ``inf`` at every other node; with a goal, other nodes are not
+        written (a search toward a goal touches a small part of the grid).
     parent : (ny * nx,) int64
-        Out: each reached node's predecessor (-1 for the start).
+        Out: the predecessor of each node on the path found (-1 for the
+        start); with ``goal < 0``, of every node reached, and -1 at the
+        others. (The search keeps each node's last move in its byte of the
+        padded grid and writes predecessors only at the end.)
     order : (L,) int64
         Out: the first ``min(L, expanded)`` nodes in the order they were
         expanded (pass a zero-length array to record nothing).
@@ -138,153 +185,298 @@ def astar(blocked, cost, start, goal, weight, connect8, res, g, parent, order):
         Whether the goal was reached, and how many nodes were expanded.
     """
     ny, nx = blocked.shape
-    n = ny * nx
-    flat_b = blocked.ravel()
+    w = nx + 2
+    use_cost = cost.size > 0
     flat_c = cost.ravel()
-    closed = np.zeros(n, dtype=np.uint8)
-    for k in range(n):
-        g[k] = np.inf
-        parent[k] = -1
-    gi = goal // nx if goal >= 0 else 0
-    gj = goal % nx if goal >= 0 else 0
+    state = padded(blocked)
+    pos = np.empty(state.shape[0], dtype=np.int32)
+    offp, offk = _offsets(nx)
+    gi = goal // nx + 1 if goal >= 0 else 0
+    gj = goal % nx + 1 if goal >= 0 else 0
     nnb = 8 if connect8 else 4
-    cap = 1024
-    key = np.empty(cap)
-    tie = np.empty(cap)
-    val = np.empty(cap, dtype=np.int64)
-    size = 0
+    heur = goal >= 0 and weight > 0.0
+    step_d = res * SQRT2
+    # room for every node (pages are touched only as the heap grows; a heap
+    # rebound in the loop would cost reference counting on every use)
+    heap = np.empty(2 * (ny * nx + 1), dtype=np.int64)
+    si = start // nx + 1
+    sj = start % nx + 1
+    ps = si * w + sj
     g[start] = 0.0
-    si = start // nx
-    sj = start % nx
-    h0 = weight * _heuristic(si, sj, gi, gj, res, connect8) if goal >= 0 else 0.0
-    heap_push(key, tie, val, size, h0, h0, start)
-    size += 1
+    parent[start] = -1
+    state[ps] |= SEEN
+    h0 = weight * _heuristic(si, sj, gi, gj, res, connect8) if heur else 0.0
+    fa, fi, ha, hi = key_scratch()
+    k0, k1 = search_key(fa, fi, ha, hi, h0, h0, ps)
+    heap_up(heap, pos, 0, k0, k1)
+    size = 1
     expanded = 0
     nrec = order.shape[0]
+    found = goal < 0
     while size > 0:
-        _, u = heap_pop(key, tie, val, size)
+        # pop the first key (written out: a heap function inlined by numba
+        # still costs two reference counts a call)
+        p = heap[1] & 0xFFFFFFFF
         size -= 1
-        if closed[u]:
-            continue
-        closed[u] = 1
+        k0 = heap[2 * size]
+        k1 = heap[2 * size + 1]
+        c = 0
+        while True:
+            m = 4 * c + 1
+            if m >= size:
+                break
+            m0 = heap[2 * m]
+            m1 = heap[2 * m + 1]
+            for r in range(m + 1, min(m + 4, size)):
+                r0 = heap[2 * r]
+                r1 = heap[2 * r + 1]
+                if r0 < m0 or (r0 == m0 and r1 < m1):
+                    m = r
+                    m0 = r0
+                    m1 = r1
+            if k0 < m0 or (k0 == m0 and k1 < m1):
+                break
+            heap[2 * c] = m0
+            heap[2 * c + 1] = m1
+            pos[m1 & 0xFFFFFFFF] = c
+            c = m
+        if size > 0:
+            heap[2 * c] = k0
+            heap[2 * c + 1] = k1
+            pos[k1 & 0xFFFFFFFF] = c
+        state[p] |= CLOSED
+        ui = p // w
+        uj = p - ui * w
+        u = (ui - 1) * nx + (uj - 1)
         if expanded < nrec:
             order[expanded] = u
         expanded += 1
         if u == goal:
-            return True, expanded
-        ui = u // nx
-        uj = u % nx
+            found = True
+            break
         gu = g[u]
         for d in range(nnb):
-            vi = ui + DI[d]
-            vj = uj + DJ[d]
-            if vi < 0 or vi >= ny or vj < 0 or vj >= nx:
+            q = p + offp[d]
+            sv = state[q]
+            if sv & (BLOCKED | CLOSED):
                 continue
-            v = vi * nx + vj
-            if flat_b[v] or closed[v]:
-                continue
-            if d >= 4:
-                if flat_b[ui * nx + vj] or flat_b[vi * nx + uj]:
-                    continue
-                step = res * SQRT2
-            else:
+            if d < 4:
                 step = res
-            gv = gu + step * (1.0 + flat_c[v])
-            if gv < g[v]:
-                g[v] = gv
-                parent[v] = u
-                h = 0.0
-                if goal >= 0 and weight > 0.0:
-                    h = weight * _heuristic(vi, vj, gi, gj, res, connect8)
-                if size == key.shape[0]:
-                    key, tie, val = heap_grow(key, tie, val, size)
-                heap_push(key, tie, val, size, gv + h, h, v)
+            else:
+                if (state[p + offp[DA[d - 4]]] | state[p + offp[DB[d - 4]]]) & BLOCKED:
+                    continue
+                step = step_d
+            v = u + offk[d]
+            gv = gu + step * (1.0 + flat_c[v]) if use_cost else gu + step * 1.0
+            seen = (sv & SEEN) != 0
+            if seen:
+                if not gv < g[v]:
+                    continue
+            elif not gv < np.inf:
+                continue
+            g[v] = gv
+            h = 0.0
+            if heur:
+                h = weight * _heuristic(ui + DI[d], uj + DJ[d], gi, gj, res, connect8)
+            fa[0] = gv + h  # search_key, written out (no array passing)
+            ha[0] = h
+            k0 = fi[0]
+            k1 = (np.int64(hi[0]) << 32) | q
+            state[q] = SEEN | np.uint8(d << MOVE_SHIFT)
+            if seen:
+                heap_up(heap, pos, np.int64(pos[q]), k0, k1)
+            else:
+                heap_up(heap, pos, size, k0, k1)
                 size += 1
-    return goal < 0, expanded
+    if goal < 0:
+        for i in range(ny):
+            row = (i + 1) * w + 1
+            for j in range(nx):
+                k = i * nx + j
+                sv = state[row + j]
+                if not sv & SEEN:
+                    g[k] = np.inf
+                    parent[k] = -1
+                elif k != start:
+                    parent[k] = k - offk[sv >> MOVE_SHIFT]
+    elif found:
+        k = goal
+        p = (gi * w) + gj
+        while p != ps:
+            d = state[p] >> MOVE_SHIFT
+            parent[k] = k - offk[d]
+            k -= offk[d]
+            p -= offp[d]
+    return found, expanded
+
+
+@nb.njit(**JIT)
+def level_grid(blocked):
+    """Return the wavefront's padded int32 grid: -2 blocked (and the border), -1 free.
+
+    Flat, (ny + 2) * (nx + 2); see the padded layout above.
+    """
+    ny, nx = blocked.shape
+    w = nx + 2
+    lev = np.empty((ny + 2) * w, dtype=np.int32)
+    for j in range(w):
+        lev[j] = -2
+        lev[(ny + 1) * w + j] = -2
+    for i in range(ny):
+        row = (i + 1) * w
+        lev[row] = -2
+        lev[row + nx + 1] = -2
+        for j in range(nx):
+            lev[row + 1 + j] = -2 if blocked[i, j] else -1
+    return lev
+
+
+@nb.njit(**JIT)
+def flood(blocked, goal, start, connect8, order):
+    """Breadth-first flood from ``goal`` (the wavefront / distance transform).
+
+    Stops once ``start`` is dequeued (``start < 0``: floods everything
+    reachable); writes the flood order into ``order`` (as in `astar`).
+
+    Returns
+    -------
+    (int, numpy.ndarray)
+        The number of cells dequeued, and the `level_grid` with each reached
+        cell's number of moves to the goal (padded layout).
+
+    The flood runs on `level_grid` (each cell's move count written when it
+    is enqueued, so the grid is also the visited mark) with one flat int32
+    FIFO of padded indices, allocated once; the neighbours are unrolled,
+    orthogonal first.
+    """
+    ny, nx = blocked.shape
+    n = ny * nx
+    w = nx + 2
+    lev = level_grid(blocked)
+    offp, _ = _offsets(nx)
+    o0, o1, o2, o3 = offp[0], offp[1], offp[2], offp[3]
+    o4, o5, o6, o7 = offp[4], offp[5], offp[6], offp[7]
+    queue = np.empty(n, dtype=np.int32)
+    ps = (start // nx + 1) * w + start % nx + 1 if start >= 0 else -1
+    pg = (goal // nx + 1) * w + goal % nx + 1
+    lev[pg] = 0
+    queue[0] = pg
+    head = 0
+    tail = 1
+    nrec = order.shape[0]
+    while head < tail:
+        p = np.int64(queue[head])
+        if head < nrec:
+            i = p // w
+            order[head] = (i - 1) * nx + (p - i * w - 1)
+        head += 1
+        if p == ps:
+            break
+        du = lev[p] + 1
+        q = p + o0
+        s0 = lev[q]
+        if s0 == -1:
+            lev[q] = du
+            queue[tail] = q
+            tail += 1
+        q = p + o1
+        s1 = lev[q]
+        if s1 == -1:
+            lev[q] = du
+            queue[tail] = q
+            tail += 1
+        q = p + o2
+        s2 = lev[q]
+        if s2 == -1:
+            lev[q] = du
+            queue[tail] = q
+            tail += 1
+        q = p + o3
+        s3 = lev[q]
+        if s3 == -1:
+            lev[q] = du
+            queue[tail] = q
+            tail += 1
+        if connect8:
+            # a diagonal only when both cells beside it are free
+            if s0 != -2 and s1 != -2:
+                q = p + o4
+                if lev[q] == -1:
+                    lev[q] = du
+                    queue[tail] = q
+                    tail += 1
+            if s2 != -2 and s1 != -2:
+                q = p + o5
+                if lev[q] == -1:
+                    lev[q] = du
+                    queue[tail] = q
+                    tail += 1
+            if s2 != -2 and s3 != -2:
+                q = p + o6
+                if lev[q] == -1:
+                    lev[q] = du
+                    queue[tail] = q
+                    tail += 1
+            if s0 != -2 and s3 != -2:
+                q = p + o7
+                if lev[q] == -1:
+                    lev[q] = du
+                    queue[tail] = q
+                    tail += 1
+    return head, lev
 
 
 @nb.njit(**JIT)
 def wavefront(blocked, goal, start, connect8, dist, order):
-    """Breadth-first flood from ``goal`` (the wavefront / distance transform).
+    """Flood from ``goal`` (see `flood`) and write the field into ``dist``.
 
-    Writes into ``dist`` (flat, int64) the number of moves from each cell to
-    the goal (-1 where not reached) and the flood order into ``order`` (as
-    in `astar`). Stops once ``start`` is dequeued (``start < 0``: floods
-    everything reachable). Returns the number of cells dequeued.
+    ``dist`` (flat, int64): the number of moves from each cell to the goal,
+    -1 where not reached. Returns the number of cells dequeued.
     """
     ny, nx = blocked.shape
-    n = ny * nx
-    flat_b = blocked.ravel()
-    for k in range(n):
-        dist[k] = -1
-    queue = np.empty(n, dtype=np.int64)
-    head = 0
-    tail = 0
-    nnb = 8 if connect8 else 4
-    dist[goal] = 0
-    queue[tail] = goal
-    tail += 1
-    nrec = order.shape[0]
-    while head < tail:
-        u = queue[head]
-        if head < nrec:
-            order[head] = u
-        head += 1
-        if u == start:
-            break
-        ui = u // nx
-        uj = u % nx
-        du = dist[u] + 1
-        for d in range(nnb):
-            vi = ui + DI[d]
-            vj = uj + DJ[d]
-            if vi < 0 or vi >= ny or vj < 0 or vj >= nx:
-                continue
-            v = vi * nx + vj
-            if flat_b[v] or dist[v] >= 0:
-                continue
-            if d >= 4 and (flat_b[ui * nx + vj] or flat_b[vi * nx + uj]):
-                continue
-            dist[v] = du
-            queue[tail] = v
-            tail += 1
+    w = nx + 2
+    head, lev = flood(blocked, goal, start, connect8, order)
+    for i in range(ny):
+        row = (i + 1) * w + 1
+        for j in range(nx):
+            x = lev[row + j]
+            dist[i * nx + j] = x if x >= 0 else -1
     return head
 
 
 @nb.njit(**JIT)
-def descend(blocked, dist, start, connect8, out):
-    """Follow the wavefront ``dist`` downhill from ``start`` to the goal.
+def descend(lev, nx, start, connect8, out):
+    """Follow the flood's level grid (`flood`) downhill from ``start`` to the goal.
 
-    At each cell take the first neighbour (orthogonal before diagonal) one
-    move nearer. Writes the nodes into ``out`` and returns their count
-    (0 when ``start`` was not reached).
+    ``lev`` is padded (``nx`` cells a row inside the border); ``start`` is a
+    plain node index. At each cell take the first neighbour (orthogonal
+    before diagonal, a diagonal only with both cells beside it free) one
+    move nearer. Writes the plain node indices into ``out`` and returns
+    their count (0 when ``start`` was not reached).
     """
-    ny, nx = blocked.shape
-    if dist[start] < 0:
+    w = nx + 2
+    offp, offk = _offsets(nx)
+    p = (start // nx + 1) * w + start % nx + 1
+    if lev[p] < 0:
         return 0
     nnb = 8 if connect8 else 4
     u = start
     m = 0
     out[m] = u
     m += 1
-    while dist[u] > 0:
-        ui = u // nx
-        uj = u % nx
-        want = dist[u] - 1
-        nxt = -1
+    while lev[p] > 0:
+        want = lev[p] - 1
         for d in range(nnb):
-            vi = ui + DI[d]
-            vj = uj + DJ[d]
-            if vi < 0 or vi >= ny or vj < 0 or vj >= nx:
+            q = p + offp[d]
+            if lev[q] != want:
                 continue
-            v = vi * nx + vj
-            if dist[v] != want:
+            if d >= 4 and (
+                lev[p + offp[DA[d - 4]]] == -2 or lev[p + offp[DB[d - 4]]] == -2
+            ):
                 continue
-            if d >= 4 and (blocked[ui, vj] or blocked[vi, uj]):
-                continue
-            nxt = v
+            p = q
+            u += offk[d]
             break
-        u = nxt
         out[m] = u
         m += 1
     return m

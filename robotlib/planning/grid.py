@@ -101,7 +101,7 @@ def _search(cs, start, goal, connectivity, weight, use_cost, record) -> Plan:
     gcost = np.empty(n)
     parent = np.empty(n, dtype=np.int64)
     order = np.empty(n if record else 0, dtype=np.int64)
-    cost = cs.cost if use_cost else np.zeros(cs.shape)
+    cost = cs.cost if use_cost else np.empty(0)  # size 0: no cost map
     found, expanded = _kernels.astar(
         cs.blocked, cost, s, g, float(weight), c8, cs.resolution, gcost, parent, order
     )
@@ -196,7 +196,7 @@ def cost_field(cs: CSpace, goal, connectivity: int = 8, use_cost: bool = True):
     n = cs.blocked.size
     gcost = np.empty(n)
     parent = np.empty(n, dtype=np.int64)
-    cost = cs.cost if use_cost else np.zeros(cs.shape)
+    cost = cs.cost if use_cost else np.empty(0)  # size 0: no cost map
     _kernels.astar(
         cs.blocked, cost, g, -1, 0.0, c8, cs.resolution, gcost, parent,
         np.empty(0, np.int64),
@@ -230,14 +230,16 @@ def wavefront(
     s = cs.node(start, "start")
     g = cs.node(goal, "goal")
     n = cs.blocked.size
-    dist = np.empty(n, dtype=np.int64)
+    nx = cs.shape[1]
     order = np.empty(n if record else 0, dtype=np.int64)
-    expanded = _kernels.wavefront(cs.blocked, g, s, c8, dist, order)
+    # the flood's padded level grid, descended as it is (no field copied out)
+    expanded, lev = _kernels.flood(cs.blocked, g, s, c8, order)
     order_cells = _cells(cs, order[: min(expanded, len(order))])
-    if dist[s] < 0:
+    moves = int(lev[(s // nx + 1) * (nx + 2) + s % nx + 1])
+    if moves < 0:
         return _no_path(expanded, order_cells)
-    nodes = np.empty(int(dist[s]) + 1, dtype=np.int64)
-    m = _kernels.descend(cs.blocked, dist, s, c8, nodes)
+    nodes = np.empty(moves + 1, dtype=np.int64)
+    m = _kernels.descend(lev, nx, s, c8, nodes)
     cells = _cells(cs, nodes[:m])
     path = cs.to_metres(cells)
     return Plan(path, cells, path_length(path), int(expanded), True, order_cells)

@@ -184,26 +184,31 @@ def _cast_grid_pose(
         oy[r] = 1.0 if dy[r] >= 0 else 0.0
         t[r] = 0.0
         active[r] = r
+    stride = field.shape[1]
+    flat = field.reshape(field.size)
     n = n_rays
     while n > 0:
         still = 0
         for q in range(n):
             r = active[q]
-            px = gx + t[r] * dx[r]
-            py = gy + t[r] * dy[r]
-            # px, py >= 1 (the ring of the field is occupied): int() floors
-            fj = float(int(px))
-            fi = float(int(py))
-            c = field[int(fi), int(fj)]
+            tr = t[r]
+            px = gx + tr * dx[r]
+            py = gy + tr * dy[r]
+            # px, py >= 1 (the ring of the field is occupied): int() floors,
+            # and the flat index is never negative (read unsigned: no wrap test)
+            j = int(px)
+            i = int(py)
+            c = flat[np.uint64(i * stride + j)]
             if c < 0.0:
-                out[k, r] = t[r] * resolution
+                out[k, r] = tr * resolution
                 continue
             if c < 1.0:
-                bx = (fj + ox[r] - px) * inv_dx[r]
-                by = (fi + oy[r] - py) * inv_dy[r]
+                bx = (float(j) + ox[r] - px) * inv_dx[r]
+                by = (float(i) + oy[r] - py) * inv_dy[r]
                 c = min(bx, by) + 1e-9
-            t[r] += c
-            if t[r] >= limit:
+            tr += c
+            t[r] = tr
+            if tr >= limit:
                 out[k, r] = max_range
                 continue
             active[still] = r
@@ -405,13 +410,24 @@ def cone_walls(sx, sy, ux, uy, cos_half, sin_half, segments, max_range, out):
     differ). With ``cos_half <= 0`` (half-width of ``pi / 2`` or more) walls
     are culled by range only.
     """
+    return _cone_walls_range(
+        sx, sy, ux, uy, cos_half, sin_half, segments, 0, segments.shape[0], max_range,
+        out,
+    )  # fmt: skip
+
+
+@nb.njit(**JIT, inline="always")
+def _cone_walls_range(
+    sx, sy, ux, uy, cos_half, sin_half, segments, lo, hi, max_range, out
+):  # fmt: skip
+    """`cone_walls` over the walls ``segments[lo:hi]`` (no slice made)."""
     by_angle = cos_half > 0.0
     lx = ux * cos_half - uy * sin_half  # left edge
     ly = uy * cos_half + ux * sin_half
     rx = ux * cos_half + uy * sin_half  # right edge
     ry = uy * cos_half - ux * sin_half
     k = 0
-    for m in range(segments.shape[0]):
+    for m in range(lo, hi):
         ax = segments[m, 0] - sx
         ay = segments[m, 1] - sy
         bx = segments[m, 2] - sx

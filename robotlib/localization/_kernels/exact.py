@@ -10,17 +10,80 @@ import numba as nb
 import numpy as np
 
 from ..._config import JIT, JIT_PARALLEL
-from ...sensing._kernels import cone_echo, cone_walls
+from ...sensing._kernels import _EPS, _cone_walls_range
 from .common import _TWO_PI
 
 _CULL_MARGIN = 1e-6
 """Widening of each cone for `robotlib.sensing._kernels.cone_walls`, rad."""
 
 
+@nb.njit(**JIT, inline="always")
+def cone_echo_rays(
+    sx, sy, sth, segments, count, n_rays, cone, max_range, cos_specular, ray
+):  # fmt: skip
+    """`robotlib.sensing._kernels.cone_echo`, walls in the outer loop, rays inner.
+
+    The same number: each ray keeps its first nearest hit (the lowest index
+    among equal distances) by `robotlib.sensing._kernels.ray_segments`'
+    tests, step for step, written as selects so the compiler tests several
+    rays per instruction; then the rays are taken in order as it does. The
+    walls are the first ``count`` rows of ``segments``; ``ray`` (4,
+    ``n_rays``) float64 is scratch (directions, nearest distance, wall index).
+    """
+    for r in range(n_rays):
+        if n_rays == 1:
+            a = sth
+        else:
+            a = sth - 0.5 * cone + cone * r / (n_rays - 1)
+        ray[0, r] = math.cos(a)
+        ray[1, r] = math.sin(a)
+        ray[2, r] = np.inf
+        ray[3, r] = -1.0
+    for m in range(count):
+        px = segments[m, 0]
+        py = segments[m, 1]
+        ex = segments[m, 2] - px
+        ey = segments[m, 3] - py
+        wx = px - sx
+        wy = py - sy
+        num = wx * ey - wy * ex
+        fm = float(m)
+        for r in range(n_rays):
+            dx = ray[0, r]
+            dy = ray[1, r]
+            denom = dx * ey - dy * ex
+            ok = not abs(denom) < _EPS
+            d = denom if ok else 1.0  # no division by zero (nor its error)
+            t = num / d
+            s = (wx * dy - wy * dx) / d
+            hit = ok & (not (t < 0.0 or t >= ray[2, r])) & (0.0 <= s) & (s <= 1.0)
+            ray[2, r] = t if hit else ray[2, r]
+            ray[3, r] = fm if hit else ray[3, r]
+    echo = np.inf
+    last = -1  # the wall whose normal is (nxn, nyn): rays often share it
+    nxn = nyn = 0.0
+    for r in range(n_rays):  # `_cone`'s echo test, without the bounce
+        t = ray[2, r]
+        m = int(ray[3, r])
+        if m < 0 or t >= max_range or t >= echo:
+            continue
+        if m != last:
+            ex = segments[m, 2] - segments[m, 0]
+            ey = segments[m, 3] - segments[m, 1]
+            length = math.sqrt(ex * ex + ey * ey)
+            nxn = -ey / length
+            nyn = ex / length
+            last = m
+        cos_inc = abs(ray[0, r] * nxn + ray[1, r] * nyn)
+        if cos_inc >= cos_specular:
+            echo = t
+    return echo
+
+
 @nb.njit(**JIT)
 def _expected_pose_blocks(
-    k, poses, sensors, segments, start, block_segs, grid, n_rays, cone, max_range,
-    min_range, cos_specular, near, out,
+    k, poses, sensors, turns, segments, start, block_segs, grid, n_rays, cone,
+    max_range, min_range, cos_specular, near, ray, out,
 ):  # fmt: skip
     x0, y0, inv_block, nbx, nby, n_sectors = grid
     inv_sector = n_sectors / _TWO_PI
@@ -30,28 +93,42 @@ def _expected_pose_blocks(
     c = math.cos(poses[k, 2])
     s = math.sin(poses[k, 2])
     for i in range(sensors.shape[0]):
+        ci = turns[i, 0]
+        si = turns[i, 1]
         sx = poses[k, 0] + c * sensors[i, 0] - s * sensors[i, 1]
         sy = poses[k, 1] + s * sensors[i, 0] + c * sensors[i, 1]
         bx = math.floor((sx - x0) * inv_block)
         by = math.floor((sy - y0) * inv_block)
+        walls = segments
+        lo = 0
+        hi = segments.shape[0]
         if 0 <= bx < nbx and 0 <= by < nby:
             a = poses[k, 2] + sensors[i, 2]
             sector = int((a - _TWO_PI * math.floor(a / _TWO_PI)) * inv_sector)
             b = (int(by) * int(nbx) + int(bx)) * n_sectors + min(sector, n_sectors - 1)
-            walls = block_segs[start[b] : start[b + 1]]
-        else:
-            walls = segments
-        ci = math.cos(sensors[i, 2])
-        si = math.sin(sensors[i, 2])
-        count = cone_walls(
-            sx, sy, c * ci - s * si, s * ci + c * si, ch, sh, walls, max_range, near
-        )
-        echo = cone_echo(
-            sx, sy, poses[k, 2] + sensors[i, 2], near[:count], n_rays, cone,
-            max_range, cos_specular,
+            walls = block_segs
+            lo = start[b]
+            hi = start[b + 1]
+        count = _cone_walls_range(
+            sx, sy, c * ci - s * si, s * ci + c * si, ch, sh, walls, lo, hi,
+            max_range, near,
+        )  # fmt: skip
+        echo = cone_echo_rays(
+            sx, sy, poses[k, 2] + sensors[i, 2], near, count, n_rays, cone,
+            max_range, cos_specular, ray,
         )  # fmt: skip
         z = echo if echo < max_range else max_range
         out[k, i] = min(max(z, min_range), max_range)
+
+
+@nb.njit(**JIT)
+def _turns(sensors):
+    """Cosine and sine of each sensor's heading on the robot, (S, 2)."""
+    turns = np.empty((sensors.shape[0], 2))
+    for i in range(sensors.shape[0]):
+        turns[i, 0] = math.cos(sensors[i, 2])
+        turns[i, 1] = math.sin(sensors[i, 2])
+    return turns
 
 
 @nb.njit(**JIT)
@@ -67,14 +144,21 @@ def expected_scan_blocks(
     ``block_segs[start[b * n_sectors + q]:start[b * n_sectors + q + 1]]``
     (`wall_blocks`), and of those
     the ones in its cone (`robotlib.sensing._kernels.cone_walls`). A sensor outside
-    the blocks tests all ``segments``. The same readings as `expected_scan`.
+    the blocks tests all ``segments``. The same readings as `expected_scan`
+    (each cone's rays tested together, `cone_echo_rays`).
     """
     near = np.empty_like(segments)
+    ray = np.empty((4, max(n_rays, 1)))
+    turns = _turns(sensors)
     for k in range(poses.shape[0]):
         _expected_pose_blocks(
-            k, poses, sensors, segments, start, block_segs, grid, n_rays, cone,
-            max_range, min_range, cos_specular, near, out,
+            k, poses, sensors, turns, segments, start, block_segs, grid, n_rays,
+            cone, max_range, min_range, cos_specular, near, ray, out,
         )  # fmt: skip
+
+
+_EXACT_CHUNK = 16
+"""Poses one thread casts with one set of scratch arrays."""
 
 
 @nb.njit(**JIT_PARALLEL)
@@ -83,12 +167,16 @@ def expected_scan_blocks_parallel(
     min_range, cos_specular, out,
 ):  # fmt: skip
     """`expected_scan_blocks` with the poses spread over threads."""
-    for k in nb.prange(poses.shape[0]):
+    turns = _turns(sensors)
+    n = poses.shape[0]
+    for q in nb.prange((n + _EXACT_CHUNK - 1) // _EXACT_CHUNK):
         near = np.empty_like(segments)
-        _expected_pose_blocks(
-            k, poses, sensors, segments, start, block_segs, grid, n_rays, cone,
-            max_range, min_range, cos_specular, near, out,
-        )  # fmt: skip
+        ray = np.empty((4, max(n_rays, 1)))
+        for k in range(q * _EXACT_CHUNK, min(n, (q + 1) * _EXACT_CHUNK)):
+            _expected_pose_blocks(
+                k, poses, sensors, turns, segments, start, block_segs, grid,
+                n_rays, cone, max_range, min_range, cos_specular, near, ray, out,
+            )  # fmt: skip
 
 
 @nb.njit(**JIT)

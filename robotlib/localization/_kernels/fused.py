@@ -10,9 +10,37 @@ import numba as nb
 import numpy as np
 
 from ..._config import JIT, JIT_PARALLEL, serial_and_parallel
+from .common import _TWO_PI
 from .motion import _odometry_one
-from .tables import table_bin
 from .weights import _finish_weights, _pose_mean
+
+
+@nb.njit(**JIT, inline="always")
+def _flat_index(sx, sy, a, ny, nx, n_bins, x0, y0, inv_res):
+    """`table_bin`'s cell and bin as one flat index, without a branch.
+
+    ``(sx, sy)`` is the sensor's position and ``a`` its heading times
+    ``n_bins / (2 pi)``. The clamps and the bin's wrap are done on floats
+    (exact on these whole numbers), as selects a vector lane can run; NaN
+    and out-of-grid positions land on the edge, so the index is always in
+    the table. For every position within the grid's reach (|x|, |y| below
+    2^52 cells) it is `table_bin`'s cell and bin.
+    """
+    fc = np.floor((sx - x0) * inv_res)
+    fr = np.floor((sy - y0) * inv_res)
+    fb = np.floor(a + 0.5)
+    last_c = nx - 1.0
+    last_r = ny - 1.0
+    fn = float(n_bins)
+    fc = fc if fc > 0.0 else 0.0
+    fc = fc if fc < last_c else last_c
+    fr = fr if fr > 0.0 else 0.0
+    fr = fr if fr < last_r else last_r
+    fb = fb - fn * np.floor(fb / fn)  # b mod n_bins, on whole numbers
+    fb = fb if fb > 0.0 else 0.0
+    fb = fb if fb < fn - 1.0 else fn - 1.0
+    return np.int32((int(fr) * nx + int(fc)) * n_bins + int(fb))
+
 
 # -- one fused step: predict, weigh, normalise, estimate ---------------------------
 #
@@ -60,12 +88,24 @@ def _move_and_read(
     index by the table's entry (mm): independent reads the processor
     overlaps, the table being larger than its caches. Every helper is
     inlined: a call per particle inside the threaded loop costs more than
-    the particle's arithmetic.
+    the particle's arithmetic. The sensors' loop has no branch (`_flat_index`),
+    so the compiler runs it on vector lanes.
     """
     rot1, trans, rot2, sd1, sdt, sd2 = motion
     x0, y0, inv_res = where
     ny, nx, n_bins = table.shape
     s_count = sensors.shape[0]
+    # the sensors' columns, contiguous, and a mask that zeroes skipped indexes
+    ax = np.empty(s_count)
+    ay = np.empty(s_count)
+    aa = np.empty(s_count)
+    keep = np.empty(s_count, dtype=np.int32)
+    for i in range(s_count):
+        ax[i] = sensors[i, 0]
+        ay[i] = sensors[i, 1]
+        aa[i] = sensors[i, 2]
+        keep[i] = 0 if skip[i] else -1
+    bins = n_bins / _TWO_PI
     for j in nb.prange(particles.shape[0]):
         x, y, th = _odometry_one(
             j, particles, rot1, trans, rot2, sd1, sdt, sd2, normals, out_p
@@ -74,14 +114,12 @@ def _move_and_read(
         s = math.sin(th)
         cs[j, 0] = c
         cs[j, 1] = s
+        row = mm[j]
         for i in range(s_count):
-            if skip[i]:
-                mm[j, i] = 0
-                continue
-            row, col, b = table_bin(
-                x, y, th, c, s, sensors, i, ny, nx, n_bins, x0, y0, inv_res
-            )
-            mm[j, i] = (row * nx + col) * n_bins + b
+            row[i] = keep[i] & _flat_index(
+                x + c * ax[i] - s * ay[i], y + s * ax[i] + c * ay[i],
+                (th + aa[i]) * bins, ny, nx, n_bins, x0, y0, inv_res,
+            )  # fmt: skip
     flat = table.reshape(table.size)
     for j in nb.prange(particles.shape[0]):
         for i in range(s_count):
