@@ -136,8 +136,8 @@ class Lab:
         except OSError:
             pass
 
-    def close(self) -> None:
-        """Stop the server (its own process only)."""
+    def close(self, keep_log: Path | None = None) -> None:
+        """Stop the server (its own process only); copy its log to ``keep_log``."""
         self.shutdown_kernels()
         self.proc.terminate()
         try:
@@ -146,6 +146,9 @@ class Lab:
             self.proc.kill()
             self.proc.wait()
         self.log.close()
+        if keep_log is not None:
+            Path(keep_log).parent.mkdir(parents=True, exist_ok=True)
+            shutil.copyfile(self.log.name, keep_log)
 
 
 @dataclass
@@ -163,6 +166,8 @@ class Run:
     animations: list = field(default_factory=list)
     figures: list = field(default_factory=list)  # (natural, shown) widths, px
     cells_s: list = field(default_factory=list)  # each code cell's run time, s
+    open_s: float | None = None  # page load to an idle kernel, s
+    check_s: float | None = None  # screenshots, panels, animations and save, s
     notebook: dict = field(default_factory=dict)
 
 
@@ -184,28 +189,34 @@ class Browser:
                 "--disable-sync", "--disable-background-timer-throttling",
                 "--disable-renderer-backgrounding",
                 "--disable-backgrounding-occluded-windows",
+                # Every request but loopback goes to a proxy that is not there
+                # (chromium never proxies loopback), so nothing leaves the
+                # machine without passing every request through this process (as
+                # a playwright route would, slowly, and only while it is called).
+                f"--proxy-server=http://127.0.0.1:{_closed_port()}",
             ],
         )  # fmt: skip
 
     def page(self, run: Run):
-        """A new page that records console errors and blocks external requests."""
+        """A new page that records console errors and the external requests it tried."""
+        # A context of its own: two JupyterLab pages of one context opening
+        # at once fight over their window name (a page error).
         context = self.browser.new_context(viewport={"width": 1280, "height": 900})
         page = context.new_page()
         page.set_default_timeout(120_000)  # a loaded 2-core machine renders slowly
 
-        def route(r):
-            url = r.request.url
-            if url.startswith(("http://127.0.0.1", "ws://127.0.0.1", "data:", "blob:")):
-                r.continue_()
-            else:
-                run.blocked.append(url)
-                r.abort()
+        def request(r):
+            if not r.url.startswith(_LOCAL):
+                run.blocked.append(r.url)  # it fails: see the proxy in __init__
 
-        page.route("**/*", route)
-        page.on(
-            "console",
-            lambda m: run.console.append(m.text) if m.type == "error" else None,
-        )
+        page.on("request", request)
+
+        def console(m):
+            if m.type == "error":  # with the address, so a failed request says which
+                url = (m.location or {}).get("url", "")
+                run.console.append(f"{m.text} ({url})" if url else m.text)
+
+        page.on("console", console)
         page.on("pageerror", lambda e: run.console.append(f"page error: {e}"))
         return page
 
@@ -215,11 +226,23 @@ class Browser:
         self._pw.stop()
 
 
+_LOCAL = ("http://127.0.0.1", "ws://127.0.0.1", "data:", "blob:")
+_BLOCKED = ("net::ERR_PROXY_CONNECTION_FAILED", "net::ERR_TUNNEL_CONNECTION_FAILED",
+            "net::ERR_FAILED")  # fmt: skip
+
+
+def _closed_port() -> int:
+    """A loopback port nothing listens on (bound, then released at once)."""
+    return _free_port()
+
+
 def unexplained_console_errors(run: Run) -> list[str]:
     """Console errors other than those of requests the test blocked."""
     out = []
     for text in run.console:
-        blocked = "net::ERR_FAILED" in text or any(u in text for u in run.blocked)
+        blocked = any(e in text for e in _BLOCKED) or any(
+            u in text for u in run.blocked
+        )
         if not (blocked and run.blocked):
             out.append(text)
     return out
@@ -252,38 +275,72 @@ def _cell_seconds(cell) -> float | None:
     ).total_seconds()
 
 
+_READY = """() => !!document.querySelector('.jp-Notebook .jp-CodeCell')
+  && !!document.querySelector('.jp-Notebook-ExecutionIndicator')
+  && /\\|\\s*Idle/.test(
+    document.querySelector('#jp-main-statusbar')?.innerText || '')"""
+"""The notebook is shown and its kernel has started and answers."""
+
+
 class _Session:
-    """One notebook open in its own page, from Run All to its saved file."""
+    """One notebook open in its own page, from Run All to its saved file.
+
+    Nothing here blocks for long, so several notebooks are watched at once:
+    `ready` says when the page is up with an idle kernel (a page opens while
+    other notebooks run), `start` runs all cells, `poll` says when they are
+    done.
+    """
+
+    OPEN_LIMIT = 150.0  # s for JupyterLab's page and a kernel, on a loaded machine
 
     def __init__(self, lab: Lab, browser: Browser, path: str):
         self.lab, self.browser, self.path = lab, browser, path
         self.run = Run(path)
-        self.page = page = browser.page(self.run)
-        page.goto(lab.url(path))
-        page.wait_for_selector(".jp-Notebook .jp-CodeCell", timeout=60_000)
-        page.wait_for_selector(".jp-Notebook-ExecutionIndicator", timeout=60_000)
-        page.wait_for_function(  # the kernel has started and answers
-            "() => /\\|\\s*Idle/.test("
-            "document.querySelector('#jp-main-statusbar')?.innerText || '')",
-            timeout=90_000,
-        )
-        self.t0 = time.monotonic()
-        for _attempt in range(3):
-            page.locator(".jp-Notebook").first.click()
-            _menu(page, "Run", "Run All Cells")
-            started = time.monotonic() + 15
-            while time.monotonic() < started:  # until a cell is queued or done
-                if any(p not in ("[ ]:", "") for p in _prompts(page)):
-                    break
-                time.sleep(0.05)
-            else:
-                continue  # the kernel was not listening yet: ask again
-            break
+        self.opened = time.monotonic()
+        self.t0: float | None = None  # when Run All was asked
+        self._asked = 0.0  # the last time Run All was asked
+        self._attempts = 0
+        self._running = False
+        self.page = browser.page(self.run)
+        self.page.goto(lab.url(path), wait_until="commit")
+
+    def ready(self) -> bool:
+        """Return True once the notebook shows and its kernel is idle."""
+        if self.run.open_s is not None:
+            return True
+        from playwright.sync_api import Error
+
+        try:
+            shown = self.page.evaluate(_READY)
+        except Error:  # still navigating
+            shown = False
+        if shown:
+            self.run.open_s = time.monotonic() - self.opened
+            return True
+        if time.monotonic() - self.opened > self.OPEN_LIMIT:
+            raise TimeoutError(f"{self.path}: JupyterLab did not open it with a kernel")
+        return False
+
+    def start(self) -> None:
+        """Run All Cells from the menu (asked again if the kernel did not hear)."""
+        self.page.locator(".jp-Notebook").first.click()
+        _menu(self.page, "Run", "Run All Cells")
+        self._asked = time.monotonic()
+        self.t0 = self.t0 or self._asked
+        self._attempts += 1
 
     def poll(self) -> bool:
         """Note the first cell's time; return True once every cell has run."""
         run, page = self.run, self.page
         prompts = _prompts(page)
+        if not self._running:  # until a cell is queued or done
+            if any(p not in ("[ ]:", "") for p in prompts):
+                self._running = True
+            elif time.monotonic() - self._asked > 15 and self._attempts < 3:
+                self.start()  # the kernel was not listening yet: ask again
+                return False
+            else:
+                return False
         if run.first_cell_s is None and prompts and prompts[0] not in ("[*]:", "[ ]:"):
             run.first_cell_s = time.monotonic() - self.t0
         status = page.get_attribute(".jp-Notebook-ExecutionIndicator", "data-status")
@@ -292,9 +349,10 @@ class _Session:
         run.run_all_s = time.monotonic() - self.t0
         return run.finished
 
-    def finish(self, panel_bound: float) -> Run:
+    def finish(self, panel_bound: float, feedback_bound: float = 1.0) -> Run:
         """Screenshot, check panels and animations, save, read the errors."""
         run, page = self.run, self.page
+        started = time.monotonic()
         stem = self.path.replace("/", "_").removesuffix(".ipynb")
         page.screenshot(path=str(self.browser.screenshots / f"{stem}.png"))
         run.figures = page.eval_on_selector_all(
@@ -304,11 +362,16 @@ class _Session:
         )
         if run.finished:
             shots = self.browser.screenshots / stem
-            run.panels = check_panels(page, shots, panel_bound)
+            run.panels = check_panels(page, shots, panel_bound, feedback_bound)
             run.animations = check_animations(page)
+        saved = self.lab.root / self.path
+        before = saved.stat().st_mtime_ns
         page.keyboard.press("Control+s")
-        page.wait_for_timeout(1500)
-        run.notebook = json.loads((self.lab.root / self.path).read_text())
+        waited = time.monotonic()
+        while saved.stat().st_mtime_ns == before and time.monotonic() - waited < 15:
+            page.wait_for_timeout(50)  # (playwright's calls keep the page served)
+        page.wait_for_timeout(200)  # the write is done (JupyterLab writes at once)
+        run.notebook = json.loads(saved.read_text())
         code = [c for c in run.notebook["cells"] if c["cell_type"] == "code"]
         run.cells_s = [_cell_seconds(c) for c in code]
         if run.cells_s and run.cells_s[0] is not None:
@@ -320,6 +383,7 @@ class _Session:
                     run.errors.append((i, out.get("ename"), text))
         page.context.close()
         self.lab.shutdown_kernels(self.path)  # the next notebooks get the cores
+        run.check_s = time.monotonic() - started
         return run
 
 
@@ -330,29 +394,33 @@ def run_notebooks(
     timeout: float,
     panel_bound: float = 60.0,
     at_once: int = 2,
+    feedback_bound: float = 1.0,
 ) -> list[Run]:
     """Open each notebook, Run All Cells, wait (``timeout`` s each), check, save.
 
-    Up to ``at_once`` notebooks run at the same time (one kernel per core);
-    panels are checked once a notebook is done, while no other notebook of
-    the batch is running. Returns the `Run` of each path, in order; its
-    ``notebook`` is the saved file (outputs and all), ``errors`` the error
-    outputs in it.
+    Up to ``at_once`` notebooks run at the same time (one kernel per core),
+    in the order given, and the next one's page opens meanwhile: as soon as
+    one has finished and been checked (its panels and animations, while the
+    others keep running), the next one starts. Returns the `Run` of each
+    path, in order; its ``notebook`` is the saved file (outputs and all),
+    ``errors`` the error outputs in it.
     """
     runs: dict[str, Run] = {}
-    todo = list(paths)
-    while todo:
-        batch = [_Session(lab, browser, p) for p in todo[:at_once]]
-        todo = todo[at_once:]
-        waiting = list(batch)
-        while waiting:
-            for session in list(waiting):
-                late = time.monotonic() - session.t0 > timeout
-                if session.poll() or late:
-                    waiting.remove(session)
-            time.sleep(0.25)
-        for session in batch:
-            runs[session.path] = session.finish(panel_bound)
+    todo, opening, running = list(paths), [], []
+    while todo or opening or running:
+        if todo and len(opening) + len(running) < at_once + 1:
+            opening.append(_Session(lab, browser, todo.pop(0)))  # one opens ahead
+        for session in list(opening):
+            if session.ready() and len(running) < at_once:
+                opening.remove(session)
+                session.start()
+                running.append(session)
+        for session in list(running):
+            late = time.monotonic() - session.t0 > timeout
+            if session.poll() or late:
+                running.remove(session)
+                runs[session.path] = session.finish(panel_bound, feedback_bound)
+        time.sleep(0.25)
     return [runs[p] for p in paths]
 
 
@@ -361,49 +429,127 @@ def run_notebook(lab, browser, path, timeout, panel_bound: float = 60.0) -> Run:
     return run_notebooks(lab, browser, [path], timeout, panel_bound)[0]
 
 
-def check_panels(page, stem: Path, bound: float = 60.0) -> list[dict]:
+_PANEL_ERROR = """(root) => {
+  const e = root.querySelector(
+    '[data-mime-type="application/vnd.jupyter.stderr"], .jp-RenderedText.jp-mod-error');
+  if (!e) return null;
+  const lines = e.innerText.trim().split('\\n').filter(l => l.trim());
+  return lines.slice(-1)[0] || 'error';
+}"""
+
+_OUTSIDE = """(root, moved) => {
+  const parts = [];
+  for (const el of root.querySelectorAll('*')) {
+    if (moved.contains(el)) continue;
+    parts.push(el.tagName + '.' + el.className + (el.style.opacity || ''));
+  }
+  const walk = document.createTreeWalker(root, NodeFilter.SHOW_TEXT);
+  for (let n = walk.nextNode(); n; n = walk.nextNode()) {
+    if (!moved.contains(n)) parts.push(n.textContent);
+  }
+  return parts.join('|');
+}"""
+"""The panel's text and classes outside the slider that moved (whose own
+readout changes at once, which is no sign that the panel is running)."""
+
+_AT_TOP = """(h) => parseFloat(h.getAttribute('aria-valuenow'))
+  >= parseFloat(h.getAttribute('aria-valuemax'))"""
+
+
+def _settle(panel, slider, bound: float, quiet: float = 1.0) -> float:
+    """Wait until the panel has not changed for ``quiet`` s; return the wait, s.
+
+    A panel that draws its first figure in the background (the MCL panel)
+    may still be drawing when the notebook's kernel turns idle: a change of
+    its image then would not be an answer to the slider.
+    """
+    t0 = time.monotonic()
+    state, since = None, t0
+    while time.monotonic() - t0 < bound:
+        now = panel.evaluate(_HASH_IMAGES) + panel.evaluate(_OUTSIDE, slider)
+        if now != state or "loading" in now:
+            state, since = now, time.monotonic()
+        elif time.monotonic() - since >= quiet:
+            break
+        time.sleep(0.05)
+    return since - t0
+
+
+def _move(page, panel, handle, slider, bound: float, stem: str) -> dict:
+    """Move one slider one step once the panel is still; time its answer."""
+    key = "ArrowLeft" if handle.evaluate(_AT_TOP) else "ArrowRight"
+    settled = _settle(panel, slider, bound)  # a first run may still be drawing
+    before_pixels = panel.evaluate(_HASH_IMAGES)
+    before_text = panel.evaluate(_OUTSIDE, slider)
+    panel.screenshot(path=f"{stem}-before.png")
+    handle.focus()
+    t0 = time.monotonic()
+    page.keyboard.press(key)
+    feedback = redraw = error = None
+    while time.monotonic() - t0 < bound:
+        now = time.monotonic() - t0
+        if feedback is None and panel.evaluate(_OUTSIDE, slider) != before_text:
+            feedback = now
+        error = panel.evaluate(_PANEL_ERROR)
+        if error is not None:
+            break
+        pixels = panel.evaluate(_HASH_IMAGES)
+        if pixels not in (before_pixels, "") and "loading" not in pixels:
+            redraw = now
+            feedback = now if feedback is None else feedback  # the answer itself
+            break
+        time.sleep(0.02)
+    if redraw is not None or error is not None:
+        page.wait_for_timeout(300)
+        panel.screenshot(path=f"{stem}-after.png")
+    return {"key": key, "settle_s": settled, "feedback_s": feedback,
+            "redraw_s": redraw, "error": error}  # fmt: skip
+
+
+def check_panels(
+    page, stem: Path, bound: float = 60.0, feedback_bound: float = 1.0
+) -> list[dict]:
     """Move the first enabled slider of each panel; time feedback and redraw.
 
-    A panel is an output holding both a slider and an image. Returns, per
-    panel, ``feedback_s`` (until the panel's text or classes change: a status
-    line, a greyed figure), ``redraw_s`` (until its image's pixels change;
-    None if they did not within ``bound`` s) and the slider's label.
+    A panel is an output holding both a slider and an image, found once
+    before any slider moves (so a panel whose image is replaced while it
+    redraws, or by an error, is still the same panel). Its first enabled
+    slider moves one step right (left when it sits at its maximum), once the
+    panel has been still for a second (``settle_s``: how long it was still
+    changing). Returns, per panel, ``feedback_s`` (until the panel's text or
+    classes change: a status line, a greyed figure, or the new figure
+    itself; the moved slider's own readout does not count), ``redraw_s``
+    (until its image's pixels change; None if they did not within ``bound``
+    s), ``error`` (the last line of an error the panel shows instead, else
+    None) and the slider's label. A panel that redrew but showed its first
+    sign later than ``feedback_bound`` s (a loaded machine) is moved once
+    more and the second try counts (``tries``; ``first_try`` keeps the
+    first); a panel that does not redraw, or shows an error, is not.
     """
     results = []
     outputs = page.locator(".jp-OutputArea-output:has(.widget-slider):has(img)")
-    for k in range(outputs.count()):
-        panel = outputs.nth(k)
+    for k, panel in enumerate(outputs.element_handles()):
         panel.scroll_into_view_if_needed()
-        sliders = panel.locator(".widget-slider:not(.mod-disabled)")
-        if sliders.count() == 0:
+        handles = panel.query_selector_all(
+            ".widget-slider:not(.mod-disabled) .noUi-handle"
+        )
+        if not handles:
             continue
-        slider = sliders.first
-        label = slider.locator(".widget-label").first.text_content() or ""
-        before_pixels = panel.evaluate(_HASH_IMAGES)
-        before_text = panel.evaluate("e => e.innerText + e.innerHTML.length")
-        panel.screenshot(path=f"{stem}-panel{k}-before.png")
-        handle = slider.locator(".noUi-handle").first
-        handle.focus()
-        t0 = time.monotonic()
-        page.keyboard.press("ArrowRight")
-        feedback = redraw = None
-        while time.monotonic() - t0 < bound:
-            now = time.monotonic() - t0
-            if feedback is None:
-                text = panel.evaluate("e => e.innerText + e.innerHTML.length")
-                if text != before_text:
-                    feedback = now
-            pixels = panel.evaluate(_HASH_IMAGES)
-            if pixels != before_pixels and "loading" not in pixels:
-                redraw = now
+        handle = handles[0]
+        slider = handle.evaluate_handle("h => h.closest('.widget-slider')")
+        label = slider.evaluate(
+            "s => s.querySelector('.widget-label')?.textContent || ''"
+        )
+        tries = []
+        for attempt in range(2):  # once more if the answer came late
+            tried = _move(page, panel, handle, slider, bound, f"{stem}-panel{k}")
+            tries.append(tried)
+            late = tried["feedback_s"] is None or tried["feedback_s"] > feedback_bound
+            if tried["error"] or tried["redraw_s"] is None or not late or attempt:
                 break
-            time.sleep(0.02)
-        if redraw is not None:
-            page.wait_for_timeout(300)
-            panel.screenshot(path=f"{stem}-panel{k}-after.png")
         results.append(
-            {"panel": k, "slider": label.strip(), "feedback_s": feedback,
-             "redraw_s": redraw}
+            {"panel": k, "slider": label.strip(), **tries[-1], "tries": len(tries),
+             "first_try": tries[0]}
         )  # fmt: skip
     return results
 
@@ -412,12 +558,11 @@ def check_animations(page, wait: float = 2.0) -> list[dict]:
     """Press play on each jshtml player; return its frame before and after."""
     results = []
     players = page.locator(".jp-OutputArea-output .animation")
-    for k in range(players.count()):
-        player = players.nth(k)
+    for k, player in enumerate(players.element_handles()):
         player.scroll_into_view_if_needed()
-        frame = player.locator("input[type=range]").first
+        frame = player.query_selector("input[type=range]")
         start = int(frame.input_value())
-        player.locator("button[title='Play']").first.click()
+        player.query_selector("button[title='Play']").click()
         page.wait_for_timeout(int(wait * 1000))
         results.append({"player": k, "start": start, "after": int(frame.input_value())})
     return results

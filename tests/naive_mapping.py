@@ -269,3 +269,24 @@ def match_laser(L, origin, res, pose, mount, angles, ranges, max_range, steps, l
             best, p = vals[k], cands[k]
         sxy, sth = sxy / 2, sth / 2
     return np.array([p[0], p[1], math.atan2(math.sin(p[2]), math.cos(p[2]))])
+
+
+def points_box(xs, ys, origin, res, shape):
+    """Cells of the points' bounding box, one more all round, clipped."""
+    ny, nx = shape
+    i = np.floor((np.asarray(ys) - origin[1]) / res)
+    j = np.floor((np.asarray(xs) - origin[0]) / res)
+    return (
+        max(0, int(i.min()) - 1),
+        min(ny - 1, int(i.max()) + 1),
+        max(0, int(j.min()) - 1),
+        min(nx - 1, int(j.max()) + 1),
+    )
+
+
+def laser_box(lpose, angles, ranges, max_range, origin, res, shape):
+    z = np.minimum(ranges, max_range)
+    a = lpose[2] + np.asarray(angles)
+    xs = np.append(lpose[0] + z * np.cos(a), lpose[0])
+    ys = np.append(lpose[1] + z * np.sin(a), lpose[1])
+    return points_box(xs, ys, origin, res, shape)

@@ -39,3 +39,21 @@ def test_replay_matches_the_controller_that_drove():
     hp = panels.HistogramPanel(ep)
     hp.step.value = len(ep.time) // 2
     assert len(hp.figure.axes) == 2
+
+
+def test_episode_panel_says_it_runs_first_and_what_failed():
+    seen = []
+
+    def histogram(*args, **kwargs):  # a student's piece, watched, then broken
+        seen.append((panel.status.value, set(panel.output._dom_classes)))
+        raise RuntimeError("not written yet")
+
+    panel = panels.EpisodePanel("utrap", kind="potential field")
+    assert "robotlib-stale" not in panel.output._dom_classes
+    assert panel.status.value.startswith("potential field: local_minimum")
+    panel.parts["histogram"] = histogram
+    with pytest.raises(RuntimeError, match="not written yet"):
+        panel.kind.value = "VFH"
+    assert seen and seen[0][0] == "running VFH on pair 0 ..."  # said before the run
+    assert "robotlib-stale" in seen[0][1]  # and the old figure greyed
+    assert panel.status.value == "the run failed: RuntimeError: not written yet"

@@ -35,14 +35,10 @@ from tests.browser import (
 
 ROOT = Path(__file__).resolve().parents[1]
 ARTIFACTS = ROOT / "artifacts" / "browser"
-BROWSER_CHECKED = ("lab0", "lab3", "lab5")
-"""Labs whose panels have been through this test; Labs 1, 2, 4 and 6 landed
-after it and a panel of one of them does not render in time yet (open)."""
 NOTEBOOKS = [
     str(p.relative_to(ROOT))
     for folder in ("solutions", "labs")
     for p in sorted((ROOT / folder).glob("*.ipynb"))
-    if p.name.startswith(BROWSER_CHECKED)
 ]
 RUN_ALL_LIMIT = 600.0  # s per notebook: ~60 s under nbval, 4x that on a loaded machine
 PANEL_REDRAW = 60.0  # s from a slider change to the new figure
@@ -60,7 +56,7 @@ pytestmark = pytest.mark.skipif(not _have, reason=f"needs playwright and {CHROMI
 def lab(tmp_path_factory):
     server = Lab(ROOT, tmp=tmp_path_factory.mktemp("jupyterlab"))
     yield server
-    server.close()
+    server.close(keep_log=ARTIFACTS / "jupyterlab.log")  # a CI artefact too
 
 
 @pytest.fixture(scope="module")
@@ -82,7 +78,10 @@ def problems(run, solution: bool) -> list[str]:
         if solution or not unsolved:
             out.append(f"code cell {cell}: {ename} ({len(lines)} lines): {lines[:1]}")
     for p in run.panels:
-        if p["redraw_s"] is None or p["redraw_s"] > PANEL_REDRAW:
+        if p.get("error"):
+            said = f"shows an error after '{p['slider']}': {p['error']}"
+            out.append(f"panel {p['panel']} {said}")
+        elif p["redraw_s"] is None or p["redraw_s"] > PANEL_REDRAW:
             out.append(f"panel {p['panel']} did not redraw after '{p['slider']}'")
         elif p["feedback_s"] is None or p["feedback_s"] > PANEL_FEEDBACK:
             late = f"panel {p['panel']} showed no feedback within {PANEL_FEEDBACK} s"
@@ -110,12 +109,21 @@ def _record(run) -> None:
         "errors": len(run.errors),
         "figures": run.figures,
         "cells_s": run.cells_s,
+        "open_s": run.open_s,
+        "check_s": run.check_s,
     }
     path.write_text(json.dumps(timings, indent=1))
 
 
 def test_every_notebook_in_a_real_browser(lab, browser):
-    runs = run_notebooks(lab, browser, NOTEBOOKS, RUN_ALL_LIMIT, PANEL_REDRAW)
+    runs = run_notebooks(
+        lab,
+        browser,
+        NOTEBOOKS,
+        RUN_ALL_LIMIT,
+        PANEL_REDRAW,
+        feedback_bound=PANEL_FEEDBACK,
+    )
     found = {}
     for run in runs:
         _record(run)
@@ -156,6 +164,12 @@ SELFTEST = {
                 "    return w.VBox([s, label, img])",
                 "panel(live=True)",
                 "panel(live=False)  # a panel that stopped redrawing",
+                "from IPython.display import Image, display\n\n\n"
+                "def broken(v=1.0):  # a panel whose redraw fails\n"
+                "    if v != 1.0:\n        raise ValueError('the panel broke')\n"
+                "    display(Image(data=png(v)))\n\n\n"
+                "w.interact(broken, v=w.FloatSlider(value=1.0, min=0, max=5, step=0.1,"
+                " continuous_update=False));",
             ]
         )
     ],
@@ -178,11 +192,15 @@ def test_the_browser_test_fails_when_a_panel_stops_redrawing(lab, browser):
     t0 = time.monotonic()
     run = run_notebook(lab, browser, "selftest/panels.ipynb", 60, panel_bound=5.0)
     assert run.finished and not run.errors
-    assert [p["panel"] for p in run.panels] == [0, 1]
-    live, stuck = run.panels
+    assert [p["panel"] for p in run.panels] == [0, 1, 2]
+    live, stuck, broken = run.panels
     assert live["redraw_s"] is not None and live["feedback_s"] is not None
     assert stuck["redraw_s"] is None  # waited the whole bound, saw no new pixels
     assert stuck["feedback_s"] is not None  # its label still said "running"
+    assert broken["redraw_s"] is None and "the panel broke" in broken["error"]
     found = problems(run, solution=True)
-    assert found == ["panel 1 did not redraw after ''"], found
+    assert found == [
+        "panel 1 did not redraw after ''",
+        "panel 2 shows an error after 'v': ValueError: the panel broke",
+    ], found
     assert time.monotonic() - t0 < 90

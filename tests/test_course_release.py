@@ -112,3 +112,50 @@ def test_bad_check_metadata_is_reported():
                                   metadata={"robotlib": {"grade_id": "z"}})  # fmt: skip
     with pytest.raises(NotebookError, match="cannot hold a solution"):
         release_notebook(nbformat.v4.new_notebook(cells=[d]), "bad")
+
+
+@pytest.mark.parametrize("folder", ["solutions", "labs"])
+def test_every_graded_check_cell_says_so(folder):
+    """Every lab's graded checks open with '# CHECK (graded, N points)', tagged."""
+    import json
+
+    from robotlib.course.marking import unmarked
+
+    found = {}
+    for path in sorted((ROOT / folder).glob("*.ipynb")):
+        nb = json.loads(path.read_text())
+        checks = [
+            c for c in nb["cells"]
+            if "grade_id" in c["metadata"].get("robotlib", {})
+            and not c["metadata"]["robotlib"].get("manual")
+        ]  # fmt: skip
+        missing = unmarked(nb) if checks else ["no graded check cell"]
+        if missing:
+            found[path.name] = missing
+    assert not found, found
+
+
+def test_marking_adds_header_and_tag_once_and_fixes_wrong_points():
+    from robotlib.course.marking import check_header, mark_checks, unmarked
+
+    def cell(source, points=2, **meta):
+        robotlib_meta = {"grade_id": "g", "points": points, **meta}
+        return {"cell_type": "code", "metadata": {"robotlib": robotlib_meta},
+                "source": source}  # fmt: skip
+
+    nb = {"cells": [
+        cell("assert f(1) == 2\n", points=1),
+        cell(["# CHECK (graded, 5 points): old\n", "assert g()\n"], points=3),
+        cell("answer", manual=True),
+        {"cell_type": "code", "metadata": {}, "source": "x = 1"},
+    ]}  # fmt: skip
+    assert len(unmarked(nb)) == 4  # two headers (one missing, one wrong), two tags
+    assert mark_checks(nb) == 2
+    assert unmarked(nb) == []
+    assert nb["cells"][0]["source"] == check_header(1) + "\nassert f(1) == 2\n"
+    assert "(graded, 1 point)" in check_header(1)
+    assert nb["cells"][1]["source"] == [check_header(3) + "\n", "assert g()\n"]
+    assert nb["cells"][1]["metadata"]["tags"] == ["graded"]
+    assert "tags" not in nb["cells"][2]["metadata"]  # written answers: not checks
+    assert nb["cells"][3] == {"cell_type": "code", "metadata": {}, "source": "x = 1"}
+    assert mark_checks(nb) == 0  # re-running changes nothing

@@ -204,3 +204,38 @@ def test_legends_go_outside_the_map():
     assert len(set(PALETTE)) == 8
     w, h = map_figsize((0, 0, 29, 8))
     assert w == 9.0 and 1.8 <= h <= 6.0
+
+
+def test_interact_panel_says_it_runs_then_redraws_and_shows_errors():
+    import ipywidgets as w
+    import matplotlib.pyplot as plt
+
+    from robotlib.widgets.interact import InteractPanel
+
+    seen = []
+
+    def show(k=1.0):
+        if k > 2.5:
+            raise ValueError("too big")
+        seen.append((k, panel_status()))
+        fig, ax = plt.subplots()
+        ax.plot([0, 1], [0, k])
+        plt.show()
+
+    def panel_status():
+        return panel.status.value if "panel" in names else None
+
+    names = {}
+    slider = w.FloatSlider(value=1.0, min=0.0, max=3.0, step=0.5)
+    panel = InteractPanel(show, k=slider)
+    names["panel"] = panel
+    assert panel.runs == 1 and seen == [(1.0, None)]
+    assert slider.description == "k"
+    assert panel.status.value.startswith("k = 1 (drawn in")
+    slider.value = 2.0
+    assert seen[-1] == (2.0, "running: k = 2 ...")  # said before drawing
+    assert panel.runs == 2 and "robotlib-stale" not in panel.output._dom_classes
+    with pytest.raises(ValueError, match="too big"):  # outside a kernel it raises
+        slider.value = 3.0
+    assert panel.status.value == "running: k = 3 ..."
+    assert "robotlib-stale" in panel.output._dom_classes  # the old figure stays grey

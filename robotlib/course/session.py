@@ -121,6 +121,9 @@ def _env(job: str, sandbox: bool) -> dict[str, str]:
         "MPLBACKEND": "Agg",
         "TMPDIR": "/tmp" if sandbox else f"{s}/tmp",
         "NUMBA_CACHE_DIR": f"{s}/numba",
+        # cone tables are rebuilt in each process: none is written into the
+        # class cache that every submission's copy starts from
+        "ROBOTLIB_TABLE_CACHE": "off",
         "NUMBA_NUM_THREADS": "1",
         "OMP_NUM_THREADS": "1",
         "OPENBLAS_NUM_THREADS": "1",

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -35,8 +36,11 @@ from robotlib.localization.cones import _wall_blocks
 from robotlib.sensing import SonarModel
 side = float(sys.argv[1])
 out = {"side_m": side}
+cpu = [time.process_time()]
 def mark(name, t):
     out[name + "_s"] = time.perf_counter() - t
+    out[name + "_cpu"] = time.process_time() - cpu[0]  # processor time, s
+    cpu[0] = time.process_time()
     out["peak_mb"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     print(json.dumps(out), flush=True)
 t = time.perf_counter()
@@ -74,8 +78,11 @@ def bench_building(side: float, timeout: float = 120.0) -> dict:
         ``peak_mb``, and ``error`` or ``timeout`` when it did not finish.
     """
     cmd = [sys.executable, "-c", _CHILD, repr(float(side))]
+    env = {**os.environ, "ROBOTLIB_TABLE_CACHE": "off"}  # time the build itself
     try:
-        done = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout)
+        done = subprocess.run(
+            cmd, capture_output=True, text=True, timeout=timeout, env=env
+        )
         lines = done.stdout.strip().splitlines()
         out = json.loads(lines[-1]) if lines else {"side_m": side}
         if done.returncode != 0:
@@ -99,10 +106,16 @@ def _print(r: dict) -> None:
         tail = f"; stopped after {r['timeout']:g} s"
     if "error" in r:
         tail += f"; {r['error']}"
+    cpu = [
+        f"{k[:-4]} {r[k]:.2f} s" for k in
+        ("wall_blocks_cpu", "free_space_cpu", "cone_table_cpu", "mcl_best_cpu")
+        if k in r
+    ]  # fmt: skip
     print(  # noqa: T201
         f"{r['side_m']:g} m x {r['side_m']:g} m ({r.get('walls', '?')} walls): "
         f"{total:.2f} s set-up, peak {r.get('peak_mb', float('nan')):.0f} MB, "
         f"table {r.get('table_mb', float('nan')):.0f} MB ({', '.join(parts)}){tail}"
+        f"\n  processor time: {', '.join(cpu)}"
     )
 
 

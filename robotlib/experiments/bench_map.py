@@ -100,6 +100,11 @@ def speed(out: dict) -> None:
     out["sonar_update_numpy_us"] = n * 1e6
     _out(f"sonar grid update (8 cones, 5 cm cells): {k * 1e6:8.1f} us   "
           f"NumPy {n * 1e6:9.1f} us   x{n / k:6.1f}")  # fmt: skip
+    g10 = OccupancyGrid.for_world(world, 0.1)
+    k10 = _time(lambda: g10.update_sonar(log.truth[t], log.sonar[t], sonar))
+    out["sonar_update_10cm_us"] = k10 * 1e6
+    _out(f"sonar grid update (8 cones, 10 cm cells, the sonar maps' cells): "
+         f"{k10 * 1e6:8.1f} us")  # fmt: skip
     k = _time(lambda: g.update_laser(log.truth[t], log.laser[t]))
     out["laser_update_us"] = k * 1e6
     _out(f"laser grid update (181 beams):           {k * 1e6:8.1f} us")
@@ -109,18 +114,34 @@ def speed(out: dict) -> None:
     for i in range(t):
         f.step(log.odometry[i], log.laser[i])
     state = (f.maps.copy(), f.particles.copy(), f.logw.copy(), f._odo.copy())
+    diff0 = f._diff.copy()
+    state_resample = f.resample_below
+    resampled = []
 
-    def one_step():
+    def one_step(whole=False):
         f.maps[:], f.particles, f.logw, f._odo = (
             state[0],
             state[1].copy(),
             state[2].copy(),
             state[3].copy(),
         )
+        # whole: forget where the maps differ, so resampling copies whole maps
+        f._diff, f._diff_maps = diff0.copy(), (None if whole else f.maps)
+        r = f.resampled
         f.step(log.odometry[t], log.laser[t])
+        resampled.append(f.resampled - r)
 
     copy = _time(lambda: f.maps.__setitem__(slice(None), state[0]))
     step = _time(one_step) - copy
+    whole = _time(lambda: one_step(True)) - copy
+    out["fastslam_step_whole_copies_ms"] = whole * 1e3
+    out["fastslam_step_resamples"] = bool(resampled[-1])
+    f.resample_below = 2.0  # the same step, made to resample
+    rs = _time(one_step) - copy
+    rs_whole = _time(lambda: one_step(True)) - copy
+    f.resample_below = state_resample
+    out["fastslam_resampling_step_ms"] = rs * 1e3
+    out["fastslam_resampling_step_whole_copies_ms"] = rs_whole * 1e3
     out["fastslam_step_ms"] = step * 1e3
     out["fastslam_grid"] = list(f.maps.shape)
     lp = np.ascontiguousarray(laser_poses(f.particles, f.laser))
@@ -132,7 +153,11 @@ def speed(out: dict) -> None:
     out["fastslam_weigh_us"] = w * 1e6
     out["fastslam_weigh_numpy_us"] = wn * 1e6
     _out(f"FastSLAM step, 30 particles, laser, {f.maps.shape[1]} x "
-          f"{f.maps.shape[2]}: {step * 1e3:6.2f} ms")  # fmt: skip
+          f"{f.maps.shape[2]}: {step * 1e3:6.2f} ms (copying where maps differ); "
+          f"{whole * 1e3:6.2f} ms copying whole maps (resamples: "
+          f"{'yes' if out['fastslam_step_resamples'] else 'no'})")  # fmt: skip
+    _out(f"  the same step made to resample:        {rs * 1e3:6.2f} ms (copying where "
+          f"maps differ); {rs_whole * 1e3:6.2f} ms copying whole maps")  # fmt: skip
     _out(f"  of which weighing:                     {w * 1e6:8.1f} us   "
           f"NumPy {wn * 1e6:9.1f} us   x{wn / w:6.1f}")  # fmt: skip
 
@@ -186,6 +211,76 @@ def quality(out: dict, seeds: int, ekf_seeds: int) -> None:
           f"[{lo:.2f}, {hi:.2f}], steps in band {inside:.0%}")  # fmt: skip
 
 
+def peer(out: dict, steps: int = 500, landmarks: int = 20) -> None:
+    """Time the Robotics Toolbox's EKF-SLAM and ours on its own simulated run.
+
+    The toolbox simulates a bicycle on a random path among ``landmarks``
+    landmarks and runs its EKF-SLAM (one range-bearing reading a step, known
+    association) for ``steps`` steps; then `ekf_predict`, `ekf_update` and
+    `ekf_add_landmark` take the same odometry and readings. Skipped, with a
+    message, when the toolbox is not installed (``pip install
+    roboticstoolbox-python``). No grid FastSLAM is on PyPI to compare with
+    (the plain NumPy weighing above is that comparison).
+    """
+    try:
+        from roboticstoolbox import (
+            EKF,
+            Bicycle,
+            LandmarkMap,
+            RandomPath,
+            RangeBearingSensor,
+        )  # fmt: skip
+    except ImportError:
+        _out("peer: the Robotics Toolbox for Python is not installed "
+             "(pip install roboticstoolbox-python); skipped")  # fmt: skip
+        out["peer"] = None
+        return
+    import warnings
+
+    from ..mapping.ekfslam import ekf_add_landmark, ekf_predict, ekf_update
+    from ..sim import OdometryNoise
+
+    V = np.diag([0.02, np.deg2rad(0.5)]) ** 2
+    W = np.diag([0.1, np.deg2rad(1)]) ** 2
+    robot = Bicycle(covar=V, animation=None)
+    robot.control = RandomPath(workspace=10, seed=0)
+    lm = LandmarkMap(landmarks, workspace=10, seed=0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", DeprecationWarning)
+        sensor = RangeBearingSensor(robot=robot, map=lm, covar=W, animate=False,
+                                    seed=0)  # fmt: skip
+        ekf = EKF(robot=(robot, V), P0=np.diag([1e-9] * 3), sensor=(sensor, W),
+                  animate=False, x0=(0, 0, 0))  # fmt: skip
+        t0 = time.perf_counter()
+        ekf.run(T=steps * robot.dt)
+        theirs = (time.perf_counter() - t0) / len(ekf.history)
+    hist = ekf.history
+    noise = OdometryNoise()
+
+    def ours():
+        mu, P, ids = np.zeros(3), np.eye(3) * 1e-9, {}
+        for h in hist:
+            mu, P = ekf_predict(mu, P, float(h.odo[0]), float(h.odo[1]), noise)
+            if h.z is None or h.lm is None:
+                continue
+            if h.lm in ids:
+                mu, P = ekf_update(mu, P, h.z, ids[h.lm], W)
+            else:
+                ids[h.lm] = len(ids)
+                mu, P = ekf_add_landmark(mu, P, h.z, W)
+        return mu
+
+    mine = _time(ours) / len(hist)
+    out["peer"] = {"name": "roboticstoolbox EKF-SLAM", "steps": len(hist),
+                   "landmarks": landmarks, "theirs_ms": theirs * 1e3,
+                   "ours_ms": mine * 1e3}  # fmt: skip
+    _out(f"peer: EKF-SLAM step, {landmarks} landmarks, {len(hist)} steps of the "
+         f"Robotics Toolbox's own run: toolbox {theirs * 1e3:.3f} ms, robotlib "
+         f"{mine * 1e3:.3f} ms, x{theirs / mine:.1f}")  # fmt: skip
+    _out("peer: no grid FastSLAM is installable from PyPI; the FastSLAM weighing "
+         "is compared with plain NumPy above")  # fmt: skip
+
+
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Options of ``robotlib bench map``."""
     parser.add_argument(
@@ -204,15 +299,7 @@ def run(args: argparse.Namespace) -> int:
     """Run the benchmark; return 0."""
     out: dict = {}
     speed(out)
-    try:
-        import roboticstoolbox  # noqa: F401
-    except ImportError:
-        _out("peer: the Robotics Toolbox for Python is not installed "
-              "(pip install roboticstoolbox-python); skipped")  # fmt: skip
-        out["peer"] = None
-    else:
-        _out("peer: roboticstoolbox found, but no side-by-side run is wired; skipped")
-        out["peer"] = None
+    peer(out)
     if not args.speed_only:
         quality(out, args.seeds, args.ekf_seeds)
     if args.json:

@@ -33,6 +33,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import os
 import subprocess
 import sys
 import time
@@ -310,7 +311,15 @@ def bench_table(world_name: str) -> dict:
     from ..world import load_world
 
     world = square_world() if world_name == "square" else load_world(world_name)
-    t = ConeTable(world)
+    saved = os.environ.get("ROBOTLIB_TABLE_CACHE")
+    os.environ["ROBOTLIB_TABLE_CACHE"] = "off"  # time the build, not a disk read
+    try:
+        t = ConeTable(world)
+    finally:
+        if saved is None:
+            del os.environ["ROBOTLIB_TABLE_CACHE"]
+        else:
+            os.environ["ROBOTLIB_TABLE_CACHE"] = saved
     w, h = world.size
     return {
         "world": world_name,

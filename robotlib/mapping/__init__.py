@@ -9,6 +9,7 @@ from .fastslam import (
     GridFastSLAM,
     normalise_log_weights,
     resample_maps,
+    resample_parents,
     run_fastslam,
 )
 from .metrics import MapScore, dilate, heading_rms, map_score, trajectory_rms
@@ -23,6 +24,7 @@ from .occupancy import (
     map_sonar,
     probability,
 )
+from .sharing import MapDiff
 
 __all__ = [
     "ROUTES",
@@ -34,6 +36,8 @@ __all__ = [
     "arc_noise_cov",
     "normalise_log_weights",
     "resample_maps",
+    "resample_parents",
+    "MapDiff",
     "run_fastslam",
     "sample_arc_motion",
     "InverseLaserModel",

@@ -19,7 +19,11 @@ import threading
 import traceback
 from collections.abc import Callable
 
-__all__ = ["Cancelled", "LiveRunner", "in_kernel"]
+__all__ = ["STALE_CSS", "Cancelled", "LiveRunner", "in_kernel"]
+
+STALE_CSS = "<style>.robotlib-stale,.robotlib-stale img{opacity:.45}</style>"
+"""A panel puts this in its box; its last figure, class ``robotlib-stale``,
+shows greyed while a newer one computes."""
 
 
 class Cancelled(Exception):

@@ -33,6 +33,7 @@ from ..avoidance import (
 )
 from ..plotting.avoidance import plot_clearance, plot_episode, plot_polar_histogram
 from ..world import load_world
+from ._live import STALE_CSS
 
 __all__ = [
     "KINDS",
@@ -163,6 +164,7 @@ class EpisodePanel:
             c.observe(lambda change: self.refresh(), names="value")
         self.widget = w.VBox(
             [
+                w.HTML(STALE_CSS),
                 w.HBox([self.kind, self.pair]),
                 w.HBox([self.threshold, self.k_rep]),
                 w.HBox([self.d0, self.reach]),
@@ -188,10 +190,16 @@ class EpisodePanel:
         """Run the episode with the current choices and redraw."""
         from IPython.display import display
 
-        self.episode = ep = episode_for(
-            self.world_name, int(self.pair.value), self.kind.value, self.seed,
-            **self.settings(), **self.parts,
-        )  # fmt: skip
+        self.status.value = f"running {self.kind.value} on pair {self.pair.value} ..."
+        self.output.add_class("robotlib-stale")  # the old figure greys at once
+        try:
+            self.episode = ep = episode_for(
+                self.world_name, int(self.pair.value), self.kind.value, self.seed,
+                **self.settings(), **self.parts,
+            )  # fmt: skip
+        except Exception as e:  # a student's piece failed: say so, keep the trace
+            self.status.value = f"the run failed: {type(e).__name__}: {e}"
+            raise
         self.figure.clf()
         a, b = self.figure.subplots(1, 2, gridspec_kw={"width_ratios": [1.3, 1]})
         plot_episode(a, ep, self.world, echoes=False)
@@ -203,6 +211,7 @@ class EpisodePanel:
         self.output.clear_output(wait=True)
         with self.output:
             display(self.figure)
+        self.output.remove_class("robotlib-stale")
         return ep
 
     def _ipython_display_(self):
@@ -271,8 +280,9 @@ class HistogramPanel:
             continuous_update=False,
         )  # fmt: skip
         self.output = w.Output()
+        self.status = w.Label()
         self.step.observe(lambda change: self.refresh(), names="value")
-        self.widget = w.VBox([self.step, self.output])
+        self.widget = w.VBox([w.HTML(STALE_CSS), self.step, self.status, self.output])
         self.figure = plt.figure(figsize=(10, 4))
         plt.close(self.figure)
         self.refresh()
@@ -283,6 +293,8 @@ class HistogramPanel:
 
         k = int(self.step.value)
         ep, r = self.episode, self.replay
+        self.status.value = f"drawing cycle {k} ..."
+        self.output.add_class("robotlib-stale")
         self.figure.clf()
         a = self.figure.add_subplot(1, 2, 1)
         b = self.figure.add_subplot(1, 2, 2, projection="polar")
@@ -294,6 +306,8 @@ class HistogramPanel:
         self.output.clear_output(wait=True)
         with self.output:
             display(self.figure)
+        self.output.remove_class("robotlib-stale")
+        self.status.value = f"cycle {k} of {len(ep.time) - 1}, t = {ep.time[k]:.1f} s"
 
     def _ipython_display_(self):
         from IPython.display import display

@@ -19,6 +19,7 @@ from ..mapping import (
     run_fastslam,
 )
 from ..plotting.mapping import plot_map_vs_truth
+from ._live import STALE_CSS
 
 __all__ = ["build_map", "MappingPanel"]
 
@@ -65,26 +66,45 @@ class MappingPanel:
             options=["true", "odometry", "fastslam"], description="poses"
         )
         self.out = w.Output()
+        self.status = w.Label()
         for c in (self.l_occ, self.l_free, self.n, self.sensor, self.poses):
             c.observe(lambda _: self.redraw(), names="value")
         self.widget = w.VBox(
-            [self.sensor, self.poses, self.l_occ, self.l_free, self.n, self.out]
+            [
+                w.HTML(STALE_CSS),
+                self.sensor,
+                self.poses,
+                self.l_occ,
+                self.l_free,
+                self.n,
+                self.status,
+                self.out,
+            ]  # fmt: skip
         )
         self.score = None
         self.redraw()
 
     def redraw(self):
         """Rebuild the map from the current choices and draw it."""
-        grid, self.score = build_map(
-            self.log, self.sensor.value, self.poses.value, self.l_occ.value,
-            self.l_free.value, self.n.value,
-        )  # fmt: skip
+        what = f"{self.sensor.value}, {self.poses.value} poses"
+        self.status.value = f"mapping: {what} ..."
+        self.out.add_class("robotlib-stale")  # the old map greys at once
+        try:
+            grid, self.score = build_map(
+                self.log, self.sensor.value, self.poses.value, self.l_occ.value,
+                self.l_free.value, self.n.value,
+            )  # fmt: skip
+        except Exception as e:  # say so in the panel, keep the trace
+            self.status.value = f"the map failed: {type(e).__name__}: {e}"
+            raise
         with self.out:
             self.out.clear_output(wait=True)
             fig, ax = plt.subplots(figsize=(6, 4.5))
             plot_map_vs_truth(ax, grid, self.log.world,
                               title=f"F1 {self.score.f1:.2f}")  # fmt: skip
             plt.show()
+        self.out.remove_class("robotlib-stale")
+        self.status.value = f"{what}: F1 {self.score.f1:.2f}"
 
     def _ipython_display_(self):
         from IPython.display import display

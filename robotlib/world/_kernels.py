@@ -9,7 +9,7 @@ import math
 import numba as nb
 import numpy as np
 
-from .._config import JIT, JIT_PARALLEL
+from .._config import JIT, JIT_PARALLEL, serial_and_parallel
 
 
 @nb.njit(**JIT)
@@ -30,12 +30,13 @@ def point_segment_distance(px, py, x1, y1, x2, y2):
     return math.sqrt(ex * ex + ey * ey)
 
 
-@nb.njit(**JIT_PARALLEL)
-def min_distance_to_segments(points, segments, out):
+def _min_distance_to_segments(points, segments, out):
     """Write into ``out[k]`` the distance of ``points[k]`` to the nearest segment.
 
     ``points`` is (K, 2), ``segments`` (M, 4) as ``x1, y1, x2, y2``; ``out``
-    is (K,) and receives ``inf`` when there are no segments.
+    is (K,) and receives ``inf`` when there are no segments. Compiled
+    serially (``min_distance_to_segments_serial``) and in parallel
+    (``min_distance_to_segments``): the same numbers.
     """
     for k in nb.prange(points.shape[0]):
         best = np.inf
@@ -48,6 +49,11 @@ def min_distance_to_segments(points, segments, out):
             if d < best:
                 best = d
         out[k] = best
+
+
+min_distance_to_segments_serial, min_distance_to_segments = serial_and_parallel(
+    _min_distance_to_segments
+)
 
 
 @nb.njit(**JIT)

@@ -28,6 +28,12 @@ POINT_SIZE = 0.02
 
 _MAX_REDRAWS = 20
 _FIELD_BLOCK = 4  # cells a side of the distance field's blocks on large maps
+SERIAL_MAX_DISTANCES = 16_000_000
+"""Points times segments up to which `World.distance_to_walls` uses one thread.
+
+About 0.15 s on one thread at most (the office's 5 cm field: 15 million),
+and the serial kernel compiles without numba's parallel pass.
+"""
 
 
 @dataclass(frozen=True, eq=False)
@@ -160,7 +166,12 @@ class World:
         if len(self.obstacles) >= INDEX_MIN_SEGMENTS:
             return self.segment_index().distances(flat).reshape(xy.shape[:-1])
         out = np.empty(len(flat))
-        _kernels.min_distance_to_segments(flat, self.obstacles, out)
+        kernel = (  # one thread for small work: no parallel compile on a cold start
+            _kernels.min_distance_to_segments_serial
+            if len(flat) * len(self.obstacles) <= SERIAL_MAX_DISTANCES
+            else _kernels.min_distance_to_segments
+        )
+        kernel(flat, self.obstacles, out)
         return out.reshape(xy.shape[:-1])
 
     def segment_index(self) -> SegmentIndex:

@@ -60,6 +60,7 @@ from .table_models import (
 from .tables import (
     build_cone_table,
     build_cone_table_indexed,
+    cone_table_cells,
     expected_table,
     expected_table_parallel,
 )
@@ -82,6 +83,7 @@ __all__ = [
     "beam_table_step",
     "build_cone_table",
     "build_cone_table_indexed",
+    "cone_table_cells",
     "cumulative",
     "expected_scan_blocks",
     "expected_scan_blocks_parallel",

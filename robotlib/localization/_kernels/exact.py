@@ -192,22 +192,20 @@ def _block_span(lo, hi, origin, side, count):
 
 
 @nb.njit(**JIT)
-def _outside_wedge(seg, k, bx0, by0, side, a_lo, a_hi):
-    """Whether wall ``k`` lies beyond every ray from the block along [a_lo, a_hi].
+def _outside_wedge(seg, k, bx0, by0, side, edges, q):
+    """Whether wall ``k`` lies beyond every ray from the block into sector ``q``.
 
     The rays from the square block at ``(bx0, by0)`` of ``side`` m with
     directions in ``[a_lo, a_hi]`` (``a_hi - a_lo < pi``) sweep a region
     bounded by two lines: along ``a_hi`` through the block's corner furthest
     to its left, and along ``a_lo`` through the corner furthest to its right.
-    A wall with both end points beyond one of them is outside.
+    A wall with both end points beyond one of them is outside. ``edges[q]``
+    holds the two lines' outward normals, ``(-sin a_hi, cos a_hi, sin a_lo,
+    -cos a_lo)`` (`_sector_edges`).
     """
     for edge in range(2):
-        if edge == 0:  # left of the a_hi edge
-            nx = -math.sin(a_hi)
-            ny = math.cos(a_hi)
-        else:  # right of the a_lo edge
-            nx = math.sin(a_lo)
-            ny = -math.cos(a_lo)
+        nx = edges[q, 2 * edge]
+        ny = edges[q, 2 * edge + 1]
         bound = -np.inf
         for cx, cy in ((bx0, by0), (bx0 + side, by0), (bx0, by0 + side),
                        (bx0 + side, by0 + side)):  # fmt: skip
@@ -221,17 +219,38 @@ def _outside_wedge(seg, k, bx0, by0, side, a_lo, a_hi):
 
 
 @nb.njit(**JIT)
+def _sector_edges(n_sectors, half):
+    """Outward normals of each sector's two edge lines (`_outside_wedge`), (Q, 4)."""
+    width = _TWO_PI / n_sectors
+    edges = np.empty((n_sectors, 4))
+    for q in range(n_sectors):
+        a_lo = q * width - half
+        a_hi = (q + 1) * width + half
+        edges[q, 0] = -math.sin(a_hi)  # left of the a_hi edge
+        edges[q, 1] = math.cos(a_hi)
+        edges[q, 2] = math.sin(a_lo)  # right of the a_lo edge
+        edges[q, 3] = -math.cos(a_lo)
+    return edges
+
+
+@nb.njit(**JIT)
 def _wall_blocks(seg, xmin, ymin, side, nbx, nby, grow, n_sectors, half):
     """`wall_blocks` in two passes over the walls: count, then fill."""
     m = seg.shape[0]
-    width = _TWO_PI / n_sectors
+    edges = _sector_edges(n_sectors, half)
     spans = np.empty((m, 4), dtype=np.int64)
     counts = np.zeros(nby * nbx * n_sectors + 1, dtype=np.int64)
+    start = np.empty_like(counts)
+    fill = np.empty(nby * nbx * n_sectors, dtype=np.int64)
+    block_segs = np.empty((0, 4))
     for fill_pass in range(2):
         if fill_pass == 1:
-            start = np.cumsum(counts)
-            fill = start[:-1].copy()
-            block_segs = np.empty((start[-1], 4))
+            total = 0
+            for b in range(counts.shape[0]):  # cumulative counts
+                total += counts[b]
+                start[b] = total
+            fill[:] = start[:-1]
+            block_segs = np.empty((total, 4))
         for k in range(m):  # walls in order: each list keeps it
             if fill_pass == 0:
                 bx0, bx1 = _block_span(
@@ -247,9 +266,8 @@ def _wall_blocks(seg, xmin, ymin, side, nbx, nby, grow, n_sectors, half):
                 for bx in range(spans[k, 0], spans[k, 1] + 1):
                     for q in range(n_sectors):
                         if n_sectors > 1 and _outside_wedge(
-                            seg, k, xmin + side * bx, ymin + side * by, side,
-                            q * width - half, (q + 1) * width + half,
-                        ):  # fmt: skip
+                            seg, k, xmin + side * bx, ymin + side * by, side, edges, q
+                        ):
                             continue
                         b = (by * nbx + bx) * n_sectors + q
                         if fill_pass == 0:

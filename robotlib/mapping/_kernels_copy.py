@@ -1,0 +1,67 @@
+"""Numba kernels for cheap copies of particle maps in grid FastSLAM.
+
+Two particles' maps differ only in cells written since they last held the
+same map, so resampling need copy only a box around those cells
+(`robotlib.mapping.sharing` keeps the boxes); these kernels give the box of
+the cells a reading writes. Boxes are ``(i0, i1, j0, j1)``
+cell rows and columns, inclusive, empty when ``i0 > i1``. Imports nothing of
+robotlib's but the JIT config.
+"""
+
+import math
+
+import numba as nb
+import numpy as np
+
+from .._config import JIT
+
+
+@nb.njit(**JIT)
+def _box_of_points(xs, ys, x0, y0, res, ny, nx, out):
+    """Cells (one more all round) of the points' bounding box, clipped to the grid.
+
+    ``xs, ys`` (P,), P >= 1, m; writes ``(i0, i1, j0, j1)`` to ``out``.
+    """
+    xlo = xs.min()
+    xhi = xs.max()
+    ylo = ys.min()
+    yhi = ys.max()
+    out[0] = max(0, int(math.floor((ylo - y0) / res)) - 1)
+    out[1] = min(ny - 1, int(math.floor((yhi - y0) / res)) + 1)
+    out[2] = max(0, int(math.floor((xlo - x0) / res)) - 1)
+    out[3] = min(nx - 1, int(math.floor((xhi - x0) / res)) + 1)
+
+
+@nb.njit(**JIT)
+def laser_boxes(x0, y0, res, ny, nx, lposes, angles, ranges, max_range, out):
+    """Boxes ``out`` (N, 4) holding every cell a scan from ``lposes[n]`` writes.
+
+    Each beam writes cells from the laser to its end point (``max_range`` for
+    a beam with no return), so the box of the laser and the end points, one
+    cell wider all round, holds them.
+    """
+    nb_ = angles.shape[0]
+    xs = np.empty(nb_ + 1)
+    ys = np.empty(nb_ + 1)
+    for n in range(lposes.shape[0]):
+        xs[nb_] = lposes[n, 0]
+        ys[nb_] = lposes[n, 1]
+        for r in range(nb_):
+            z = ranges[r] if ranges[r] < max_range else max_range
+            a = lposes[n, 2] + angles[r]
+            xs[r] = lposes[n, 0] + z * math.cos(a)
+            ys[r] = lposes[n, 1] + z * math.sin(a)
+        _box_of_points(xs, ys, x0, y0, res, ny, nx, out[n])
+
+
+@nb.njit(**JIT)
+def disc_boxes(x0, y0, res, ny, nx, poses, radius, out):
+    """Boxes ``out`` (N, 4) of the discs of ``radius`` (m) about ``poses[n]``."""
+    xs = np.empty(2)
+    ys = np.empty(2)
+    for n in range(poses.shape[0]):
+        xs[0] = poses[n, 0] - radius
+        xs[1] = poses[n, 0] + radius
+        ys[0] = poses[n, 1] - radius
+        ys[1] = poses[n, 1] + radius
+        _box_of_points(xs, ys, x0, y0, res, ny, nx, out[n])
