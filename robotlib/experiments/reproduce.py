@@ -10,7 +10,14 @@ position error over those steps. A tracking-only run starts the filter at the
 true start pose.
 
 ``robotlib reproduce [--world W] --seeds 20 --json FILE`` runs the paper's
-configuration and the best one this project offers over many seeds.
+configuration and the best one this project offers over many seeds. A
+bundled corridor drives `drive_route`; any other world (a file, a real
+building) a seeded tour (`robotlib.experiments.tours.drive_tour`).
+
+``--kidnap STEP`` adds a run per seed and filter on the same tour with the
+robot moved to a random free pose just before step ``STEP`` (the filter is
+not told): "recovered after r steps" means the error is under 0.3 m at
+steps ``STEP + r`` to ``STEP + r + 4`` (`recovery_steps`).
 """
 
 from __future__ import annotations
@@ -27,13 +34,19 @@ from ..localization import BEST, MCL, History
 from ..localization.paper import RESIZE_FLOOR
 from ..world import World, load_world
 from .routes import MAX_STEPS, RouteLog, drive_route
+from .tours import drive_tour
 
 __all__ = [
     "FilterConfig",
     "PAPER",
     "BEST_CONFIG",
+    "RECOVERY",
+    "RECOVERY_CONFIG",
     "run_filter",
     "summarize",
+    "summarize_kidnap",
+    "recovery_steps",
+    "make_route",
     "reproduce",
     "add_arguments",
     "run",
@@ -43,6 +56,12 @@ SUCCESS_STEP = 25
 """The paper localized from step 25."""
 TOLERANCE = 0.5
 """Localized: position error at most this, m."""
+RECOVERED = 0.3
+"""Recovered from a kidnapping: position error under this, m ..."""
+HOLD = 5
+"""... for this many consecutive steps."""
+RECOVERY_STEPS = 30
+"""The recovery target: back within this many steps of the kidnapping."""
 
 
 @dataclass(frozen=True)
@@ -80,6 +99,8 @@ class FilterConfig:
             out = {**BEST, **out}
             out.setdefault("sensor", "beam (tempered), cone table")
             out.setdefault("resampling", "KLD-sampling when ESS < N/2")
+            if out.get("augmented"):
+                out.setdefault("recovery", "augmented MCL, random particles added")
         return out
 
 
@@ -87,6 +108,18 @@ PAPER = FilterConfig("paper", "paper", {"n": 300, "lam": 0.5, "floor": RESIZE_FL
 """The paper's filter as written (300 particles)."""
 BEST_CONFIG = FilterConfig("best", "best", {})
 """The strongest configuration (`robotlib.localization.BEST`)."""
+RECOVERY = {
+    "alpha_slow": 0.05,
+    "alpha_fast": 0.5,
+    "grow": 20_000,
+    "min_probability": 0.3,
+    "share": 0.05,
+}
+"""`MCL.best`'s recovery from a kidnapping: augmented MCL adding up to 20,000
+random particles (`AugmentedInjection` with ``grow``) when the short-term
+scan likelihood falls 30 % or more below the long-term one."""
+RECOVERY_CONFIG = FilterConfig("best+rec", "best", {"augmented": RECOVERY})
+"""`MCL.best` with `RECOVERY` on."""
 
 
 def run_filter(
@@ -150,7 +183,8 @@ def summarize(
     Returns
     -------
     dict
-        ``success_rate`` (share localized by step 25), ``success_rate_75``,
+        ``success_rate`` (share localized by step 25), ``success_rate_50``,
+        ``success_rate_75``,
         ``localized_step_median``, ``tracking_error_mean_m`` and
         ``tracking_error_std_m`` (over the steps after localization, pooled
         over the seeds that localized), ``tracking_from_start_error_mean_m``,
@@ -164,6 +198,7 @@ def summarize(
     n = max(len(runs), 1)
     return {
         "success_rate": sum(1 for s in steps if s and s <= SUCCESS_STEP) / n,
+        "success_rate_50": sum(1 for s in steps if s and s <= 50) / n,
         "success_rate_75": sum(1 for s in steps if s) / n,
         "localized_step_median": _nan_stat(steps, np.median),
         "tracking_error_mean_m": float(pooled.mean()) if len(pooled) else None,
@@ -182,11 +217,93 @@ def summarize(
     }
 
 
+def recovery_steps(errors, kidnap: int, tolerance: float = RECOVERED, hold: int = HOLD):
+    """Count the steps from a kidnapping until the error stays under ``tolerance``.
+
+    Parameters
+    ----------
+    errors : array_like, shape (T,)
+        Position error per step (index = log step), m.
+    kidnap : int
+        The log step the robot was moved before.
+    tolerance : float
+        m.
+    hold : int
+        Consecutive steps the error must stay under ``tolerance``.
+
+    Returns
+    -------
+    int or None
+        The smallest ``r >= 0`` with ``errors[kidnap + r : kidnap + r + hold]``
+        all under ``tolerance``; None when the log ends first.
+    """
+    ok = np.asarray(errors, dtype=float)[int(kidnap) :] < tolerance
+    for r in range(len(ok) - hold + 1):
+        if ok[r : r + hold].all():
+            return r
+    return None
+
+
+def summarize_kidnap(runs: list[History], kidnap: int) -> dict:
+    """Recovery figures of one configuration over seeds' kidnapping runs.
+
+    Returns
+    -------
+    dict
+        ``localized_at_kidnap_rate`` (error under 0.3 m at the step before),
+        ``recovered_rate`` (back within `RECOVERY_STEPS` steps),
+        ``recovered_rate_localized`` (the same among the runs localized at
+        the kidnapping), ``recovery_steps_median`` (over recovered runs) and
+        ``recovery_steps`` (per seed, None: not recovered).
+    """
+    steps = [recovery_steps(h.error, kidnap) for h in runs]
+    before = [bool(h.error[kidnap - 1] < RECOVERED) for h in runs]
+    n = max(len(runs), 1)
+    good = [s for s, b in zip(steps, before, strict=True) if b]
+    ok = [s is not None and s <= RECOVERY_STEPS for s in steps]
+    return {
+        "kidnap_step": int(kidnap),
+        "localized_at_kidnap_rate": sum(before) / n,
+        "recovered_rate": sum(ok) / n,
+        "recovered_rate_localized": (
+            sum(1 for s in good if s is not None and s <= RECOVERY_STEPS) / len(good)
+            if good
+            else None
+        ),
+        "recovery_steps_median": _nan_stat(steps, np.median),
+        "recovery_steps": steps,
+    }
+
+
+def make_route(world: World, seed: int, n_steps: int, route: str = "auto", kidnap=None):
+    """Drive one seed's route: ``"corridor"`` (`drive_route`), ``"tour"`` or ``"auto"``.
+
+    ``"auto"`` drives `drive_route` in the bundled worlds and a tour
+    (`drive_tour`) in any other; a kidnapping needs a tour.
+    """
+    if route == "auto":
+        from ..world.catalog import WORLDS_DIR
+
+        src = world.source
+        bundled = src is None or Path(src).resolve().parent == WORLDS_DIR.resolve()
+        route = "corridor" if bundled and kidnap is None else "tour"
+    if route == "corridor":
+        if kidnap is not None:
+            raise ValueError("a kidnapping needs a tour (route='tour')")
+        return drive_route(world, seed, n_steps)
+    if route == "tour":
+        return drive_tour(world, seed, n_steps, kidnap=kidnap)
+    raise ValueError(f"route must be 'auto', 'corridor' or 'tour', got {route!r}")
+
+
 def reproduce(
     world: World,
     seeds,
     configs: dict[str, FilterConfig] | None = None,
     n_steps: int = MAX_STEPS,
+    kidnap: int | None = None,
+    route: str = "auto",
+    tracking: bool = True,
 ) -> dict:
     """Run configurations over seeds on one world; return their summaries.
 
@@ -200,6 +317,14 @@ def reproduce(
         Default: ``{"paper": PAPER, "best": BEST_CONFIG}``.
     n_steps : int
         Steps per run.
+    kidnap : int, optional
+        Also run each configuration on the seed's tour with a kidnapping
+        before this step; adds the `summarize_kidnap` figures under
+        ``"kidnap"`` in each configuration's summary.
+    route : str
+        See `make_route`.
+    tracking : bool
+        Also run tracking from the true start pose.
 
     Returns
     -------
@@ -208,13 +333,21 @@ def reproduce(
     """
     configs = {"paper": PAPER, "best": BEST_CONFIG} if configs is None else configs
     seeds = list(seeds)
-    runs = {name: ([], []) for name in configs}
+    runs = {name: ([], [], []) for name in configs}
     for seed in seeds:
-        route = drive_route(world, seed, n_steps)
+        log = make_route(world, seed, n_steps, route)
+        taken = make_route(world, seed, n_steps, "tour", kidnap) if kidnap else None
         for name, config in configs.items():
-            runs[name][0].append(run_filter(route, config, seed))
-            runs[name][1].append(run_filter(route, config, seed, tracking=True))
-    out = {name: summarize(*runs[name], configs[name]) for name in configs}
+            runs[name][0].append(run_filter(log, config, seed))
+            if tracking:
+                runs[name][1].append(run_filter(log, config, seed, tracking=True))
+            if taken is not None:
+                runs[name][2].append(run_filter(taken, config, seed))
+    out = {}
+    for name, config in configs.items():
+        out[name] = summarize(runs[name][0], runs[name][1], config)
+        if kidnap:
+            out[name]["kidnap"] = summarize_kidnap(runs[name][2], kidnap)
     out["world"] = world.name or str(world.source)
     out["seeds"] = seeds
     return out
@@ -232,6 +365,7 @@ def format_table(result: dict) -> str:
     """Format `reproduce`'s figures as a plain-text table."""
     keys = [
         "success_rate",
+        "success_rate_50",
         "success_rate_75",
         "localized_step_median",
         "tracking_error_mean_m",
@@ -245,6 +379,21 @@ def format_table(result: dict) -> str:
     lines.append(f"{'':34s}" + "".join(f"{n:>12s}" for n in names))
     for k in keys:
         lines.append(f"{k:34s}" + "".join(f"{_fmt(result[n][k]):>12s}" for n in names))
+    kid = [n for n in names if "kidnap" in result[n]]
+    if kid:
+        step = result[kid[0]]["kidnap"]["kidnap_step"]
+        lines.append(f"kidnapped before step {step}:")
+        for k in (
+            "localized_at_kidnap_rate",
+            "recovered_rate",
+            "recovered_rate_localized",
+            "recovery_steps_median",
+        ):
+            row = "".join(
+                f"{_fmt(result[n]['kidnap'][k]) if n in kid else '-':>12s}"
+                for n in names
+            )
+            lines.append(f"{k:34s}" + row)
     return "\n".join(lines)
 
 
@@ -259,6 +408,24 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--lam", type=float, default=0.5, help="paper's lambda")
     parser.add_argument("--floor", type=int, default=RESIZE_FLOOR, help="resize floor")
     parser.add_argument("--json", type=Path, default=None, help="write results here")
+    parser.add_argument(
+        "--kidnap",
+        type=int,
+        default=None,
+        metavar="STEP",
+        help="also run with the robot moved to a random free pose before STEP",
+    )
+    parser.add_argument(
+        "--recovery",
+        action="store_true",
+        help="also run MCL.best with its kidnapping recovery on (best+rec)",
+    )
+    parser.add_argument(
+        "--route",
+        choices=("auto", "corridor", "tour"),
+        default="auto",
+        help="the corridor drive (bundled worlds) or a planned tour (any other)",
+    )
 
 
 def run(args: argparse.Namespace) -> int:
@@ -269,7 +436,19 @@ def run(args: argparse.Namespace) -> int:
     )
     seeds = range(args.first_seed, args.first_seed + args.seeds)
     t0 = time.perf_counter()
-    result = reproduce(world, seeds, {"paper": paper, "best": BEST_CONFIG}, args.steps)
+    if args.kidnap is not None and not 1 <= args.kidnap <= args.steps - HOLD:
+        raise SystemExit(f"--kidnap must be in [1, {args.steps - HOLD}]")
+    configs = {"paper": paper, "best": BEST_CONFIG}
+    if args.recovery:
+        configs["best+rec"] = RECOVERY_CONFIG
+    result = reproduce(
+        world,
+        seeds,
+        configs,
+        args.steps,
+        kidnap=args.kidnap,
+        route=args.route,
+    )
     result["seconds"] = time.perf_counter() - t0
     print(format_table(result))  # noqa: T201
     if args.json is not None:

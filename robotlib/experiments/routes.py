@@ -41,6 +41,12 @@ class RouteLog:
         Where it drove.
     seed : int
         The seed of the simulator and of the route.
+    kidnapped_at : int or None
+        The step before whose motion the robot was moved to another place
+        without its odometry knowing (`robotlib.experiments.tours`), or None.
+    trace : numpy.ndarray or None, shape (C, 3)
+        The true pose after every 100 ms cycle of the drive, m and rad (the
+        tours record it; None for `drive_route`).
     """
 
     odometry: np.ndarray
@@ -48,6 +54,8 @@ class RouteLog:
     truth: np.ndarray
     world: World
     seed: int
+    kidnapped_at: int | None = None
+    trace: np.ndarray | None = None
 
     def __len__(self) -> int:
         return len(self.odometry)

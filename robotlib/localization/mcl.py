@@ -337,8 +337,25 @@ class MCL:
             n = len(new)
             self.particles = new
             self.weights = np.full(n, 1.0 / n)
-            if self.injection is not None and self.injection.probability > 0:
-                mask = self.rng.random(n) < self.injection.probability
+            inj = self.injection
+            if inj is not None and inj.probability > 0 and inj.grow is not None:
+                prob = inj.probability
+                injected = int(prob * inj.grow)
+                if inj.share is not None:
+                    prob = min(prob, inj.share)
+                if injected:  # the random ones carry the probability's share
+                    extra = self.world.sample_free_poses(
+                        injected, self.rng, self.resolution, self.admissible_radius
+                    )
+                    self.particles = np.concatenate([new, extra])
+                    self.weights = np.concatenate(
+                        [
+                            np.full(n, (1.0 - prob) / n),
+                            np.full(injected, prob / injected),
+                        ]
+                    )
+            elif inj is not None and inj.probability > 0:
+                mask = self.rng.random(n) < inj.probability
                 injected = int(mask.sum())
                 if injected:
                     self.particles[mask] = self.world.sample_free_poses(

@@ -178,20 +178,46 @@ class AugmentedInjection:
     probability ``max(0, 1 - w_fast / w_slow)``. Both averages start at the
     first scan's ``w_avg``.
 
+    With ``grow`` set (for a filter whose population adapts, KLD-sampling),
+    the random particles are added instead: ``int(probability * grow)`` of
+    them on top of the resampled set, weighted to carry that probability's
+    share of the total (so they dilute the next scan's mean likelihood, the
+    signal, no more than replacing would), so a filter tracking with a few hundred
+    particles gets back a global filter's numbers once its scans stop
+    agreeing with its pose (a kidnapping); KLD-sampling then shrinks the set
+    again. ``min_probability`` ignores smaller drops (sonar noise).
+
     Attributes
     ----------
     alpha_slow, alpha_fast : float
         Smoothing rates, ``0 < alpha_slow < alpha_fast <= 1``.
+    grow : int or None
+        Add up to this many random particles instead of replacing (None:
+        replace, Thrun's table 8.3).
+    min_probability : float
+        Inject nothing while the probability is below this.
+    share : float or None
+        With ``grow``: the added particles' share of the total weight, at
+        most (None: the probability). A small share keeps a false alarm (a
+        stretch where the sonar disagrees with the map at the right pose)
+        from pulling the estimate away, and keeps the random particles from
+        diluting the signal; a kidnapped filter's particles all score so
+        badly that the random ones near the true pose still win.
     """
 
     alpha_slow: float = 0.05
     alpha_fast: float = 0.5
     w_slow: float = float("nan")
     w_fast: float = float("nan")
+    grow: int | None = None
+    min_probability: float = 0.0
+    share: float | None = None
 
     def __post_init__(self):
         if not 0 < self.alpha_slow < self.alpha_fast <= 1:
             raise ValueError("need 0 < alpha_slow < alpha_fast <= 1")
+        if self.grow is not None and self.grow < 1:
+            raise ValueError("grow must be None or at least 1")
 
     def update(self, log_mean_likelihood: float) -> None:
         """Feed one scan's log mean likelihood."""
@@ -207,7 +233,8 @@ class AugmentedInjection:
         """Probability that a resampled particle is replaced by a random one."""
         if not self.w_slow > 0:
             return 0.0
-        return max(0.0, 1.0 - self.w_fast / self.w_slow)
+        p = max(0.0, 1.0 - self.w_fast / self.w_slow)
+        return p if p >= self.min_probability else 0.0
 
     def reset(self) -> None:
         """Forget the averages."""

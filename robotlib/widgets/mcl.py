@@ -8,7 +8,11 @@ Each panel is a thin wrapper over plain, tested functions:
   and returns its `History`, `plot_mcl_run` draws the paper's Figs. 2-4 from
   that history; `MCLPanel` adds sliders for lambda and the particle count
   (``continuous_update=False``: a run starts when a slider is released),
-  choices of sensor model, resampler, preset and world.
+  choices of sensor model, resampler, preset and world, and a kidnapping:
+  the "Kidnap" button (or a step typed in "kidnap at") drives a seeded tour
+  (`robotlib.experiments.drive_tour`) on which the robot is moved to a
+  random free pose before that step, unknown to the filter, and the status
+  line says how many steps the filter took to recover.
 
 Panels run headless (their callbacks are plain methods), so tests set their
 values programmatically and read the results.
@@ -80,8 +84,9 @@ class MCLPanel:
         Run changes on a worker thread (default: inside a Jupyter kernel). The
         first run, when the panel is made, is always inline.
     **initial
-        Initial ``lam``, ``n``, ``sensor``, ``resampler``, ``tracking``, or a
-        ``preset`` (a key of `PRESETS`) for the choices not given.
+        Initial ``lam``, ``n``, ``sensor``, ``resampler``, ``tracking``,
+        ``kidnap`` (a step, 0 for none), or a ``preset`` (a key of
+        `PRESETS`) for the choices not given.
 
     Attributes
     ----------
@@ -106,7 +111,7 @@ class MCLPanel:
         from ..plotting.style import WIDTH
         from ..world import world_names
 
-        unknown = set(initial) - {*_DEFAULTS, "tracking", "preset"}
+        unknown = set(initial) - {*_DEFAULTS, "tracking", "preset", "kidnap"}
         if unknown:
             raise TypeError(f"unknown settings {sorted(unknown)}")
         preset = initial.get("preset")
@@ -151,6 +156,17 @@ class MCLPanel:
             value=here,
             description="world",
         )
+        steps = len(route) if n_steps is None else min(n_steps, len(route))
+        last = max(1, steps - 1)
+        self.kidnap = w.BoundedIntText(
+            value=int(initial.get("kidnap", 0)), min=0, max=last,
+            description="kidnap at", layout=w.Layout(width="170px"),
+            tooltip="move the robot elsewhere before this step (0: never)",
+        )  # fmt: skip
+        self.kidnap_button = w.Button(
+            description="Kidnap", tooltip="kidnap the robot halfway through the run"
+        )
+        self.kidnap_button.on_click(self._kidnap_clicked)
         self.status = w.Label()
         self.progress = w.IntProgress(
             value=0, min=0, max=1, layout=w.Layout(width="200px")
@@ -162,12 +178,14 @@ class MCLPanel:
         self.n_typed.observe(self._typed, names="value")
         self.preset.observe(self._preset_changed, names="value")
         self.world.observe(self._changed, names="value")
+        self.kidnap.observe(self._changed, names="value")
         self.widget = w.VBox(
             [
                 w.HTML(_STALE_CSS),
                 w.HBox([self.world, self.preset, self.tracking]),
                 w.HBox([self.lam, self.n, self.n_typed]),
                 w.HBox([self.sensor, self.resampler]),
+                w.HBox([self.kidnap_button, self.kidnap]),
                 w.HBox([self.progress, self.status]),
                 self.image,
             ]
@@ -176,6 +194,7 @@ class MCLPanel:
         self._grey_unused()
         self.figure = Figure(figsize=(WIDTH, 5.4))
         self.history: History | None = None
+        self.recovered_after: int | None = None
         self.runner = LiveRunner(self._job, self._done, self._failed, background)
         self.timings: dict[str, float] = {}
         inline, self.runner.background = self.runner.background, False
@@ -194,15 +213,31 @@ class MCLPanel:
         """The route of the chosen world (driven on first use)."""
         return self._route_of(self.world.value)
 
-    def _route_of(self, name):
-        if name not in self._routes:
+    def _route_of(self, name, kidnap: int = 0):
+        key = name if not kidnap else (name, int(kidnap))
+        if key not in self._routes:
             from ..experiments import drive_route
+            from ..experiments.tours import drive_tour
             from ..world import load_world
 
-            self._routes[name] = drive_route(
-                load_world(name), seed=self._route_seed, n_steps=self._route_len
-            )
-        return self._routes[name]
+            world = self._route_of(name).world if kidnap else load_world(name)
+            if kidnap:
+                self._routes[key] = drive_tour(
+                    world, self._route_seed, self._route_len, kidnap=int(kidnap)
+                )
+            else:
+                self._routes[key] = drive_route(
+                    world, seed=self._route_seed, n_steps=self._route_len
+                )
+        return self._routes[key]
+
+    def _kidnap_clicked(self, button=None) -> None:
+        """Kidnap the robot halfway through the run (or at the step typed)."""
+        steps = self._route_len if self.n_steps is None else self.n_steps
+        if self.kidnap.value == 0:
+            self.kidnap.value = max(1, min(self.kidnap.max, steps // 2))  # runs
+        else:
+            self.refresh()
 
     def settings(self) -> dict:
         """Return the current choices, as `run_mcl` keywords."""
@@ -287,6 +322,7 @@ class MCLPanel:
         request = {
             "settings": self.settings(),
             "world": self.world.value,
+            "kidnap": int(self.kidnap.value),
             "asked": time.perf_counter(),
         }
         self.status.value = f"running: {self.describe(request['settings'])} ..."
@@ -298,7 +334,7 @@ class MCLPanel:
         return None if self.runner.background else self.history
 
     def _job(self, request):
-        route = self._route_of(request["world"])
+        route = self._route_of(request["world"], request.get("kidnap", 0))
         last = [0.0]
 
         def on_step(k, steps):
@@ -335,6 +371,17 @@ class MCLPanel:
             result += f"{err[loc - 1 :].mean():.2f} m"
         else:
             result = f"not localized (final error {err[-1]:.2f} m)"
+        kidnap = request.get("kidnap", 0)
+        if kidnap and kidnap < len(err):
+            from ..experiments.reproduce import recovery_steps
+
+            r = recovery_steps(err, kidnap)
+            self.recovered_after = r
+            result += f"; kidnapped before step {kidnap}: " + (
+                f"recovered after {r} steps" if r is not None else "not recovered"
+            )
+        else:
+            self.recovered_after = None
         self.status.value = (
             f"{request['world']}, {self.preset.value}: {result}; "
             f"{step_ms:.0f} ms per step"
