@@ -88,6 +88,27 @@ def _job_pids(job: str) -> list[int]:
     return pids
 
 
+def _descendants(pid: int) -> list[int]:
+    """Every process below ``pid`` (children first seen, then theirs), from /proc."""
+    parents: dict[int, list[int]] = {}
+    for entry in os.listdir("/proc"):
+        if not entry.isdigit():
+            continue
+        try:
+            with open(f"/proc/{entry}/stat", "rb") as f:
+                stat = f.read()
+        except OSError:
+            continue
+        ppid = int(stat[stat.rindex(b")") + 2 :].split()[1])  # after "(comm) state"
+        parents.setdefault(ppid, []).append(int(entry))
+    out, todo = [], [pid]
+    while todo:
+        kids = parents.get(todo.pop(), [])
+        out += kids
+        todo += kids
+    return out
+
+
 def kill_job(job: str, rounds: int = 10) -> int:
     """End every process whose environment carries ``JOB_ENV=job``, one by one."""
     killed = 0
@@ -221,10 +242,14 @@ class _Proc:
         if not self.alive:
             return
         self.alive = False
-        try:
-            os.kill(self.popen.pid, signal.SIGKILL)
-        except ProcessLookupError:
-            pass
+        # bubblewrap's child (the sandbox's pid 1) waits for its parent during
+        # set-up before it asks to die with it: killed in that window, it would
+        # wait for ever, so the whole tree is killed, not only its top
+        for pid in [self.popen.pid, *_descendants(self.popen.pid)]:
+            try:
+                os.kill(pid, signal.SIGKILL)
+            except (ProcessLookupError, PermissionError):
+                pass
         try:
             self.popen.wait(timeout=10)
         except subprocess.TimeoutExpired:
