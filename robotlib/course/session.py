@@ -109,6 +109,36 @@ def _descendants(pid: int) -> list[int]:
     return out
 
 
+def _kill_tree(pid: int, settle: float = 1.0) -> None:
+    """Kill ``pid`` and every process below it, one stopped snapshot of the tree.
+
+    bubblewrap's child (the sandbox's pid 1) waits for its parent during
+    set-up before it asks to die with it: killed in that window, the parent
+    would leave it waiting for ever. So the parent is stopped first (it can
+    then start no child), the tree is read once it has stopped, and all of
+    it is killed.
+    """
+    try:
+        os.kill(pid, signal.SIGSTOP)
+    except ProcessLookupError:
+        return
+    deadline = time.monotonic() + settle
+    while time.monotonic() < deadline:
+        try:
+            with open(f"/proc/{pid}/stat", "rb") as f:
+                stat = f.read()
+        except OSError:
+            break
+        if stat[stat.rindex(b")") + 2 :][:1] in (b"T", b"t", b"Z", b"X"):
+            break
+        time.sleep(0.002)
+    for p in [pid, *_descendants(pid)]:
+        try:
+            os.kill(p, signal.SIGKILL)
+        except (ProcessLookupError, PermissionError):
+            pass
+
+
 def kill_job(job: str, rounds: int = 10) -> int:
     """End every process whose environment carries ``JOB_ENV=job``, one by one."""
     killed = 0
@@ -242,14 +272,7 @@ class _Proc:
         if not self.alive:
             return
         self.alive = False
-        # bubblewrap's child (the sandbox's pid 1) waits for its parent during
-        # set-up before it asks to die with it: killed in that window, it would
-        # wait for ever, so the whole tree is killed, not only its top
-        for pid in [self.popen.pid, *_descendants(self.popen.pid)]:
-            try:
-                os.kill(pid, signal.SIGKILL)
-            except (ProcessLookupError, PermissionError):
-                pass
+        _kill_tree(self.popen.pid)
         try:
             self.popen.wait(timeout=10)
         except subprocess.TimeoutExpired:
