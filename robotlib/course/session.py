@@ -88,19 +88,22 @@ def _job_pids(job: str) -> list[int]:
     return pids
 
 
+def _stat(pid: int) -> list[bytes] | None:
+    """Read ``/proc/PID/stat``: the fields after the command (state, ppid, ...)."""
+    try:
+        with open(f"/proc/{pid}/stat", "rb") as f:
+            stat = f.read()
+    except OSError:
+        return None
+    return stat[stat.rindex(b")") + 2 :].split()
+
+
 def _descendants(pid: int) -> list[int]:
     """Every process below ``pid`` (children first seen, then theirs), from /proc."""
     parents: dict[int, list[int]] = {}
     for entry in os.listdir("/proc"):
-        if not entry.isdigit():
-            continue
-        try:
-            with open(f"/proc/{entry}/stat", "rb") as f:
-                stat = f.read()
-        except OSError:
-            continue
-        ppid = int(stat[stat.rindex(b")") + 2 :].split()[1])  # after "(comm) state"
-        parents.setdefault(ppid, []).append(int(entry))
+        if entry.isdigit() and (fields := _stat(int(entry))) is not None:
+            parents.setdefault(int(fields[1]), []).append(int(entry))
     out, todo = [], [pid]
     while todo:
         kids = parents.get(todo.pop(), [])
@@ -124,12 +127,8 @@ def _kill_tree(pid: int, settle: float = 1.0) -> None:
         return
     deadline = time.monotonic() + settle
     while time.monotonic() < deadline:
-        try:
-            with open(f"/proc/{pid}/stat", "rb") as f:
-                stat = f.read()
-        except OSError:
-            break
-        if stat[stat.rindex(b")") + 2 :][:1] in (b"T", b"t", b"Z", b"X"):
+        fields = _stat(pid)
+        if fields is None or fields[0] in (b"T", b"t", b"Z", b"X"):
             break
         time.sleep(0.002)
     for p in [pid, *_descendants(pid)]:
