@@ -19,3 +19,17 @@ def need_sandbox() -> None:
     if os.environ.get("ROBOTLIB_REQUIRE_SANDBOX") == "1":
         pytest.fail(f"the grading sandbox is required here and does not run: {why}")
     pytest.skip(f"no sandbox here: {why}")
+
+
+def procs_with(needle: bytes) -> list[int]:
+    """Pids of this machine's processes whose command line contains ``needle``."""
+    out = []
+    for entry in os.listdir("/proc"):
+        if entry.isdigit():
+            try:
+                with open(f"/proc/{entry}/cmdline", "rb") as f:
+                    if needle in f.read():
+                        out.append(int(entry))
+            except OSError:
+                pass
+    return out

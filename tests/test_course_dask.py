@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import copy
 import csv
-import os
 import subprocess
 import sys
 from pathlib import Path
@@ -20,7 +19,7 @@ import pytest
 
 from robotlib.course.notebooks import read_notebook, release_notebook, write_notebook
 
-from .sandboxing import need_sandbox
+from .sandboxing import need_sandbox, procs_with
 
 TINY = Path(__file__).parent / "data" / "course" / "tiny.ipynb"
 
@@ -67,17 +66,4 @@ def test_grade_on_a_local_dask_cluster(tmp_path):
     assert rows["alias"]["add"] == "1"
     assert rows["hang"]["add"] == "0" and "timed out" in rows["hang"]["notes"]
     worker = f"{sys.executable}\0-m\0robotlib.course.worker".encode()
-    assert _procs(worker) == []  # every worker's sandboxes ended with the cluster
-
-
-def _procs(needle: bytes) -> list[int]:
-    out = []
-    for entry in os.listdir("/proc"):
-        if entry.isdigit():
-            try:
-                with open(f"/proc/{entry}/cmdline", "rb") as f:
-                    if needle in f.read():
-                        out.append(int(entry))
-            except OSError:
-                pass
-    return out
+    assert procs_with(worker) == []  # every worker's sandboxes ended with the cluster

@@ -28,7 +28,7 @@ import pytest
 from robotlib.course import grade as g
 from robotlib.course.notebooks import read_notebook, release_notebook, write_notebook
 
-from .sandboxing import need_sandbox
+from .sandboxing import need_sandbox, procs_with
 
 ROOT = Path(__file__).resolve().parents[1]
 DATA = Path(__file__).parent / "data" / "course"
@@ -230,19 +230,6 @@ def _cli(folder, out, *extra):
     return subprocess.run(cmd, capture_output=True, text=True, timeout=600)
 
 
-def _procs(needle: bytes) -> list[int]:
-    out = []
-    for entry in os.listdir("/proc"):
-        if entry.isdigit():
-            try:
-                with open(f"/proc/{entry}/cmdline", "rb") as f:
-                    if needle in f.read():
-                        out.append(int(entry))
-            except OSError:
-                pass
-    return out
-
-
 @pytest.fixture(scope="module")
 def graded(tmp_path_factory):
     need_sandbox()
@@ -317,7 +304,7 @@ def test_nobody_was_harmed(graded):
     assert "x" not in (folder / "solution" / "tiny.ipynb").read_text()[-5:]
     needles = (b"sleep\x00987", b"sleep\x00988", b"989", b"sleep\x00991", b"robotlib.course.worker")  # fmt: skip
     for needle in needles:
-        assert _procs(needle) == [], needle
+        assert procs_with(needle) == [], needle
 
 
 def test_secrets_and_hooks_stay_out(graded):
@@ -399,14 +386,16 @@ def test_interrupt_leaves_no_process(tmp_path, sig):
            "--cell-timeout", "30", "--jobs", "2", "--quiet"]  # fmt: skip
     proc = subprocess.Popen(cmd, stderr=subprocess.PIPE, text=True)
     deadline = time.monotonic() + 120
-    while time.monotonic() < deadline and len(_procs(b"robotlib.course.worker")) < 3:
+    while (
+        time.monotonic() < deadline and len(procs_with(b"robotlib.course.worker")) < 3
+    ):
         time.sleep(0.2)
     time.sleep(1.0)
     proc.send_signal(getattr(signal, sig))  # in the middle of the class
     proc.wait(timeout=60)
     assert proc.returncode == 130, proc.stderr.read()
     time.sleep(0.5)
-    assert _procs(b"robotlib.course.worker") == []
+    assert procs_with(b"robotlib.course.worker") == []
 
 
 # -- unit tests ---------------------------------------------------------------------
