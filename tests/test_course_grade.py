@@ -534,3 +534,24 @@ def test_slow_setup_on_a_cold_cache_does_not_zero_correct_work(tmp_path):
     assert got == {k: float(v) for k, v in FULL.items()}, rows["sol"].reasons
     assert rows["sol"].status == "ok", rows["sol"].status
     assert all(v == 0 for v in rows["rel"].points.values()), rows["rel"].points
+
+
+def test_a_submission_out_of_restarts_is_graded_not_a_grader_error(tmp_path):
+    """Hanging more often than ``--restarts`` allows ends in zeros with reasons.
+
+    With no restart left, the hung cell's timer and the killed process's
+    end-of-file both used to reach the grader again, which then called a
+    process it had already dropped: the submission got "grader error".
+    """
+    need_sandbox()
+    hang = with_cell(
+        solution(), MEAN, "def mean(xs):\n    pass\n\n\nwhile True:\n    pass"
+    )
+    (tmp_path / "subs" / "hang").mkdir(parents=True)
+    write_notebook(hang, tmp_path / "subs" / "hang" / "tiny.ipynb")
+    opts = g.Options(cell_timeout=CELL_TIMEOUT, timeout=120, restarts=0)
+    results, _ = g.grade(tmp_path / "subs", "tiny", TINY, jobs=1, opts=opts, progress=False)  # fmt: skip
+    (r,) = results
+    assert not r.status.startswith("grader error"), r.status
+    assert r.points["mean"] == 0 and r.points["scale"] == 0, r.points
+    assert "hanging or crashing" in r.reasons["scale"], r.reasons

@@ -236,6 +236,7 @@ def test_cheats_score_zero_for_their_exercise_only(lab_graded):
     auto = [c for c in items if not c.manual]
     for i, cheated in enumerate(plans):
         r = rows[f"cheat{i}"]
+        assert r.status == "ok", (r.status, r.passes, r.details)
         for c in auto:
             hit = [e for e in c.exercises if e in cheated]
             if not hit:

@@ -344,6 +344,8 @@ def run_submission(
             st["pending"] = None
 
     def student_died(why: str):
+        if procs["student"] is None:
+            return  # given up already: a late event of the last process
         procs["student"].kill()
         out.restarts += 1
         if st["cell"] is not None:
@@ -355,7 +357,7 @@ def run_submission(
             start_student()
         else:
             procs["student"] = None
-            st["ready"] = False
+            st.update(ready=False, cell=None)
             if st["queued"] is not None:
                 st["queued"] = None
                 procs["check"].post(
