@@ -27,13 +27,13 @@ import numpy as np
 from ..world import World
 from . import _kernels
 from .motion import (
+    NORMALS_CHUNK,
     PARALLEL_MIN,
     OdometryMotionModel,
     Scratch,
     _noise_std,
     _particles,
     odometry_increment,
-    standard_normals,
 )
 from .paper import (
     ADMISSIBLE_RADIUS,
@@ -156,6 +156,7 @@ class MCL:
         self.n_initial = int(n)
         self.init_std = tuple(float(s) for s in init_std)
         self._scratch = Scratch()
+        self._mine = (None, None)  # the set the last step left (known plain)
         self.reset(init)
 
     # -- set up ---------------------------------------------------------------
@@ -279,35 +280,55 @@ class MCL:
         if self.injection is not None:
             self.injection.update(self._log_mean)
 
-    def _fused_step(self, odo_prev, odo_now, z) -> bool:
-        """Predict, update and estimate in one kernel when the models allow it.
+    def _fused_step(self, odo_prev, odo_now, z):
+        """Predict, update, estimate (and resample) in one call when the models allow.
 
         The same numbers as `predict`, `update`, `estimate` in turn (the same
-        draws from the rng); False (nothing done) for other models.
+        draws from the rng), and, when the policy resamples every step by
+        low variance, `resample`'s gathering too (its draw taken after the
+        noise, as `resample` would). Returns False (nothing done) for other
+        models, None when the set is still to be resampled, else the
+        resampled ``(particles, weights)``.
         """
         sensor = self.sensor
         if not (
             getattr(sensor, "fast", False)
-            and hasattr(sensor, "_step")
+            and hasattr(sensor, "_run")
             and type(self.motion).sample is OdometryMotionModel.sample
         ):
             return False
         rot1, trans, rot2 = odometry_increment(odo_prev, odo_now)
         motion = (rot1, trans, rot2, *_noise_std(self.motion.alphas, rot1, trans, rot2))
         p, w = self.particles, self.weights
-        if not _plain(p, 2) or p.shape[1] != 3:  # set from outside
-            p = _particles(p)
-        if not _plain(w, 1):
+        if p is not self._mine[0]:  # set from outside: checked
+            if not _plain(p, 2) or p.shape[1] != 3:
+                p = _particles(p)
+        if w is not self._mine[1] and not _plain(w, 1):
             w = np.ascontiguousarray(w, dtype=np.float64)
-        if w.shape != (len(p),):
+        if w.shape != (len(p),) or p.shape[1:] != (3,):
             raise ValueError("weights must have shape (N,) like the particles")
+        n = len(p)
         scratch = self._scratch
-        noise = standard_normals(self.rng, len(p), scratch.take("normals", p.shape))
-        self.particles, weights, log_mean, ess, self.last_estimate = sensor._step(
-            p, w, motion, noise, z, scratch
+        noise = scratch.take("normals", (n, 3))
+        key = None
+        if n <= NORMALS_CHUNK:  # as `standard_normals`
+            self.rng.standard_normal(out=noise)
+        else:  # drawn chunk by chunk in the step
+            key = int(self.rng.integers(np.iinfo(np.int64).max))
+        policy = self.resampling
+        u = -1.0
+        if (
+            type(policy) is ThresholdResampling
+            and policy.threshold >= 1.0
+            and policy.method in ("systematic", "low_variance")
+        ):
+            u = self.rng.random()  # `ThresholdResampling._resample`'s draw
+        moved, weights, log_mean, ess, self.last_estimate, new_p, new_w = sensor._run(
+            p, w, motion, noise, key, z, scratch, u
         )
+        self.particles = moved
         self._weighed(weights, log_mean, ess)
-        return True
+        return None if new_p is None else (new_p, new_w)
 
     def estimate(self) -> np.ndarray:
         """Weighted mean pose (circular mean of the heading), shape (3,)."""
@@ -332,11 +353,15 @@ class MCL:
         else:
             idx = policy.indexes(self)
             new = None if idx is None else _gather(self.particles, idx)
+        return self._adopt(new)
+
+    def _adopt(self, new, weights=None) -> tuple[bool, int, int]:
+        """`resample` from the resampled set ``new`` on (None: not resampled)."""
         injected = 0
         if new is not None:
             n = len(new)
             self.particles = new
-            self.weights = np.full(n, 1.0 / n)
+            self.weights = np.full(n, 1.0 / n) if weights is None else weights
             inj = self.injection
             if inj is not None and inj.probability > 0 and inj.grow is not None:
                 prob = inj.probability
@@ -397,19 +422,24 @@ class MCL:
             The estimate after the update (before resampling).
         """
         n = len(self.particles)
-        fused = self._fused_step(odo_prev, odo_now, z)
+        done = self._fused_step(odo_prev, odo_now, z)
+        fused = done is not False
         if not fused:
             self.predict(odo_prev, odo_now)
             self.update(z)
             self.last_estimate = self.estimate()
         est, log_mean = self.last_estimate, self._log_mean
         lent = (self.particles, self.weights)
-        resampled, injected, regenerated = self.resample()
+        if done:  # resampled in the same call
+            resampled, injected, regenerated = self._adopt(*done)
+        else:
+            resampled, injected, regenerated = self.resample()
         if fused:  # arrays lent by the scratch and still in use are not lent again
             own = type(self.resampling) in _OWN_POLICIES
             for a in lent:
                 if not own or a is self.particles or a is self.weights:
                     self._scratch.drop(a)
+        self._mine = (self.particles, self.weights)
         self.info = StepInfo(
             n, self.ess, resampled, len(self.particles), injected, regenerated, log_mean
         )

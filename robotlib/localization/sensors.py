@@ -26,7 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..sensing import SonarModel
-from . import _kernels
+from . import _kernels, stepping
 from .cones import cone_table, expected_readings
 from .motion import PARALLEL_MIN, _particles
 
@@ -84,14 +84,18 @@ def _outputs(scratch, n: int, s: int) -> tuple:
     if scratch is None:
         return (
             np.empty((n, 3)), np.empty(n), np.empty((n, 2)),
-            np.empty((n, s), dtype=np.int32),
+            np.empty((n, s), dtype=np.int32) if s else None,
         )  # fmt: skip
     return (
         scratch.take("particles", (n, 3)),
         scratch.take("weights", (n,)),
         scratch.take("cs", (n, 2)),
-        scratch.take("mm", (n, s), np.int32),
+        scratch.take("mm", (n, s), np.int32) if s else None,
     )
+
+
+_NONE_P = np.empty((0, 3))
+_NONE_W = np.empty(0)
 
 
 class _ExpectedModel:
@@ -110,6 +114,42 @@ class _ExpectedModel:
     def _where(self):
         t = self.table
         return t.table, (t.origin[0], t.origin[1], 1.0 / t.resolution)
+
+    def _run(self, particles, weights, motion, noise, key, z, scratch, u):
+        """Move, weigh, estimate and (``u >= 0``) resample: `MCL.step`'s fused call.
+
+        ``noise`` (N, 3) holds the motion noise, or with ``key`` receives it
+        (`stepping.run_step`); ``u`` is the systematic resampling's draw or
+        -1. Returns ``(out_p, out_w, log_mean, ess, est, new_p, new_w)``:
+        moved particles and their weights, and the resampled set (None
+        without ``u``).
+        """
+        z = _scan(z, len(self.sonar.sensors))
+        n = len(particles)
+        large = n >= PARALLEL_MIN
+        out_p, out_w, cs, mm = _outputs(scratch, n, len(z) if large else 0)
+        if u >= 0.0:
+            new = (np.empty((n, 3)), np.empty(n))
+        else:
+            new = (_NONE_P, _NONE_W)
+        out = (out_p, out_w, cs, mm, *new)
+        t = self.table
+        where = (float(t.origin[0]), float(t.origin[1]), 1.0 / t.resolution)
+        sensors = self.sonar.sensors
+        if large:
+            prm, skip, lut = self._large(z, motion, where, n)
+            log_mean, ess, est = stepping.run_step(
+                self.name, particles, weights, prm, noise, key, sensors, skip,
+                t.table, lut, out, u,
+            )  # fmt: skip
+        else:
+            prm, model = self._small(z, motion, where, n)
+            log_mean, ess, est = stepping.small_step(
+                self.name, particles, weights, prm, noise, sensors, self.table.table,
+                model, out, u,
+            )  # fmt: skip
+        got = (None, None) if u < 0.0 else new
+        return (out_p, out_w, log_mean, ess, est, *got)
 
 
 class PaperSensorModel(_ExpectedModel):
@@ -164,25 +204,23 @@ class PaperSensorModel(_ExpectedModel):
         """Move, weigh, estimate in one kernel (see `MCL.step`; fast path only).
 
         ``scratch`` (a `robotlib.localization.motion.Scratch`) lends the
-        output and work arrays; None makes new ones.
+        output and work arrays; None makes new ones. Returns ``(out_p, out_w,
+        log_mean, ess, est)``.
         """
-        z = _scan(z, len(self.sonar.sensors))
-        n = len(particles)
-        out_p, out_w, cs, mm = _outputs(scratch, n, len(z))
-        table, where = self._where()
-        if n >= PARALLEL_MIN:  # each reading's term per millimetre, then lookups
-            k = np.arange(int(round(self.sonar.max_range * 1000)) + 1)
-            terms = np.abs((z[:, None] - k * 0.001) / z[:, None])
-            log_mean, ess, est = _kernels.paper_lut_step_parallel(
-                particles, normals, motion, self.sonar.sensors, table, where, terms,
-                1.0 / n, weights, out_p, out_w, cs, mm,
-            )  # fmt: skip
-        else:
-            log_mean, ess, est = _kernels.paper_table_step(
-                particles, normals, motion, self.sonar.sensors, table, where, z,
-                1.0 / n, weights, out_p, out_w,
-            )  # fmt: skip
-        return out_p, out_w, log_mean, ess, est
+        return self._run(particles, weights, motion, normals, None, z, scratch, -1.0)[
+            :5
+        ]
+
+    def _small(self, z, motion, where, n):
+        return np.array([*motion, *where, 1.0 / n]), (z,)
+
+    def _large(self, z, motion, where, n):
+        k = getattr(self, "_mm", None)
+        if k is None:
+            k = self._mm = np.arange(int(round(self.sonar.max_range * 1000)) + 1)
+        terms = np.abs((z[:, None] - k * 0.001) / z[:, None])
+        skip = np.zeros(len(z), dtype=np.bool_)
+        return np.array([*motion, *where, 1.0 / n]), skip, terms
 
 
 @dataclass(frozen=True)
@@ -319,25 +357,23 @@ class BeamSensorModel(_ExpectedModel):
     def _step(self, particles, weights, motion, normals, z, scratch=None):
         """Move, weigh, estimate in one kernel (see `MCL.step`; fast path only).
 
-        ``scratch`` as for `PaperSensorModel._step`.
+        ``scratch`` and the result as for `PaperSensorModel._step`.
         """
-        z = _scan(z, len(self.sonar.sensors))
-        n = len(particles)
-        out_p, out_w, cs, mm = _outputs(scratch, n, len(z))
+        return self._run(particles, weights, motion, normals, None, z, scratch, -1.0)[
+            :5
+        ]
+
+    def _small(self, z, motion, where, n):
         model = self._model(z)
-        table, where = self._where()
-        sensors, exponent = self.sonar.sensors, float(self.params.exponent)
-        if n >= PARALLEL_MIN:  # one model table per scan, then lookups
-            log_mean, ess, est = _kernels.lut_table_step_parallel(
-                particles, normals, motion, sensors, table, where, self._lut(model),
-                model[2], exponent, weights, out_p, out_w, cs, mm,
-            )  # fmt: skip
-        else:
-            log_mean, ess, est = _kernels.beam_table_step(
-                particles, normals, motion, sensors, table, where, *model[:5],
-                (*model[5:], exponent, self._u2_skip), weights, out_p, out_w,
-            )  # fmt: skip
-        return out_p, out_w, log_mean, ess, est
+        prm = np.array(
+            [*motion, *where, float(self.params.exponent), *model[5:], self._u2_skip]
+        )
+        return prm, model[:5]
+
+    def _large(self, z, motion, where, n):
+        model = self._model(z)
+        lut = stepping.beam_lut(model, len(self._norms[0]))
+        return np.array([*motion, *where, float(self.params.exponent)]), model[2], lut
 
     def _table_log_likelihood(self, particles, z) -> np.ndarray:
         p = _particles(particles)

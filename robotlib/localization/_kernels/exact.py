@@ -249,7 +249,8 @@ def _wall_blocks(seg, xmin, ymin, side, nbx, nby, grow, n_sectors, half):
             for b in range(counts.shape[0]):  # cumulative counts
                 total += counts[b]
                 start[b] = total
-            fill[:] = start[:-1]
+            for b in range(fill.shape[0]):  # a loop: a slice copy compiles slowly
+                fill[b] = start[b]
             block_segs = np.empty((total, 4))
         for k in range(m):  # walls in order: each list keeps it
             if fill_pass == 0:

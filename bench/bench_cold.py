@@ -1,0 +1,109 @@
+"""Cold and warm start of `MCL.best` for two robotlib source trees, interleaved.
+
+Run ``python bench/bench_cold.py OLD_TREE NEW_TREE [--rounds R] [--world W]``
+(trees as for ``bench/bench_ab.py``). Each round, per tree (the order
+alternates), one fresh process with an empty numba cache (a new
+``NUMBA_CACHE_DIR``, so the cone table's disk cache is empty too) and then
+one more on the cache it left (warm): each imports robotlib, loads the
+world, builds `MCL.best` and takes its first step. Prints per tree the
+median CPU time (all threads) and wall time of each part (import, filter,
+first step), the total, the ratios old / new, the number of kernels numba
+compiled, and the load average. The scan the step weighs is computed
+before the timer of the step starts (outside the totals). Asserts nothing.
+"""
+
+import argparse
+import json
+import os
+import shutil
+import statistics
+import subprocess
+import sys
+import tempfile
+
+_CHILD = r"""
+import json, os, sys, time
+tree, world_name = sys.argv[1:3]
+sys.meta_path[:] = [f for f in sys.meta_path if "editable" not in repr(f).lower()]
+sys.path.insert(0, tree)
+c0, t0 = time.process_time(), time.perf_counter()
+from numba.core import event
+compiled = []
+class _Count(event.Listener):
+    def on_start(self, ev):
+        pass
+    def on_end(self, ev):
+        compiled.append(1)
+event.register("numba:compile", _Count())
+import numpy as np
+from robotlib.localization import MCL, expected_readings
+from robotlib.world import load_world
+import robotlib
+assert robotlib.__file__.startswith(os.path.abspath(tree)), robotlib.__file__
+world = load_world(world_name)
+c1, t1 = time.process_time(), time.perf_counter()
+mcl = MCL.best(world, rng=0)
+c2, t2 = time.process_time(), time.perf_counter()
+n_before = len(compiled)
+z = expected_readings(world, np.array([world.start]))[0]
+odo = np.array(world.start)
+n_scan = len(compiled) - n_before
+c3, t3 = time.process_time(), time.perf_counter()
+mcl.step(odo, odo + [0.5, 0.0, 0.05], z)
+c4, t4 = time.process_time(), time.perf_counter()
+print(json.dumps({"import": [c1 - c0, t1 - t0], "filter": [c2 - c1, t2 - t1],
+                  "step": [c4 - c3, t4 - t3],
+                  "total": [c4 - c3 + c2 - c0, t4 - t3 + t2 - t0],
+                  "compiled": len(compiled) - n_scan}))
+"""
+
+_PARTS = ("import", "filter", "step", "total")
+
+
+def _run(tree: str, cache: str, world: str) -> dict:
+    env = dict(os.environ, NUMBA_CACHE_DIR=cache)
+    env.pop("ROBOTLIB_TABLE_CACHE", None)
+    cmd = [sys.executable, "-c", _CHILD, tree, world]
+    done = subprocess.run(cmd, capture_output=True, text=True, env=env, check=True)
+    return json.loads(done.stdout.strip().splitlines()[-1])
+
+
+def main() -> int:
+    """Run the comparison; return the exit status."""
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("old")
+    parser.add_argument("new")
+    parser.add_argument("--rounds", type=int, default=1)
+    parser.add_argument("--world", default="corridor")
+    args = parser.parse_args()
+    runs = {(t, k): [] for t in ("old", "new") for k in ("cold", "warm")}
+    for r in range(args.rounds):
+        for name in ("old", "new") if r % 2 == 0 else ("new", "old"):
+            cache = tempfile.mkdtemp(prefix="robotlib-cold-")
+            try:
+                tree = getattr(args, name)
+                for kind in ("cold", "warm"):
+                    runs[name, kind].append(_run(tree, cache, args.world))
+            finally:
+                shutil.rmtree(cache, ignore_errors=True)
+    for kind in ("cold", "warm"):
+        for name in ("old", "new"):
+            rows = runs[name, kind]
+            parts = ", ".join(
+                f"{p} {statistics.median(x[p][0] for x in rows):.2f}"
+                f" ({statistics.median(x[p][1] for x in rows):.2f} wall)"
+                for p in _PARTS
+            )
+            n = statistics.median(x["compiled"] for x in rows)
+            print(f"{kind} {name}: CPU s {parts}; {n:g} kernels compiled")  # noqa: T201
+        ratio = statistics.median(x["total"][0] for x in runs["old", kind]) / (
+            statistics.median(x["total"][0] for x in runs["new", kind])
+        )
+        print(f"{kind} old/new total CPU: {ratio:.2f}")  # noqa: T201
+    with open("/proc/loadavg") as f:
+        print("load average:", " ".join(f.read().split()[:3]))  # noqa: T201
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

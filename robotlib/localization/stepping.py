@@ -1,0 +1,151 @@
+"""Running a fused MCL step on a cone table: one kernel call, or chunks over threads.
+
+`run_step` is what `MCL.step` calls when its models allow the fused step
+(the odometry motion model, a ``fast`` paper or beam model): below
+`PARALLEL_MIN` particles one serial kernel moves, weighs, estimates and
+(when the caller passes the resampling draw) resamples; from
+`PARALLEL_MIN` on the step runs in chunks on a pool of Python threads
+(`robotlib.localization._kernels.chunked`): each chunk draws its own rows
+of motion noise (`robotlib.localization.motion.standard_normals`' streams,
+so the numbers do not depend on the threads) and then moves and weighs
+them; the sums run serially at the end. A waiting thread sleeps (no
+OpenMP spinning), so a step keeps its pace when another process shares
+the cores. Same numbers, bit for bit, as the models' kernels in turn.
+
+Imports the localization's kernels and `robotlib.localization.motion`;
+never the sensor models or `robotlib.localization.mcl`.
+"""
+
+from __future__ import annotations
+
+import numba
+import numpy as np
+
+from ._kernels import chunked
+from ._kernels.fused import move_and_read
+from .motion import NORMALS_CHUNK, PARALLEL_MIN, _executor, _fill
+
+__all__ = ["run_step", "spans"]
+
+LUT_CHUNKS = 2
+"""Column ranges `beam_lut` splits a scan's model table into."""
+
+
+def spans(n: int, parts: int) -> list[tuple[int, int]]:
+    """Split ``range(n)`` into ``parts`` near-equal ``(lo, hi)`` ranges (none empty)."""
+    parts = max(1, min(parts, n))
+    edges = [n * k // parts for k in range(parts + 1)]
+    return [(edges[k], edges[k + 1]) for k in range(parts)]
+
+
+def _threads() -> int:
+    return numba.get_num_threads()
+
+
+def _run(fn, args: list) -> list:
+    """Return ``[fn(*a) for a in args]``, over the pool when there are threads."""
+    threads = min(_threads(), len(args))
+    if threads <= 1:
+        return [fn(*a) for a in args]
+    pool = _executor(threads)
+    return [f.result(timeout=600) for f in [pool.submit(fn, *a) for a in args]]
+
+
+def beam_lut(model, n_mm: int) -> np.ndarray:
+    """`_kernels.beam_scan_lut`'s table (S, n_mm), over threads."""
+    lut = np.empty((len(model[0]), n_mm))
+
+    def part(lo, hi):
+        chunked.lut_part(lo, hi, *model, lut)
+
+    _run(part, spans(n_mm, LUT_CHUNKS if n_mm >= 1024 else 1))
+    return lut
+
+
+def run_step(kind, particles, weights, prm, noise, key, sensors, skip, table, lut,
+             out, u):  # fmt: skip
+    """Move, weigh, normalise, estimate (and resample) ``particles`` in chunks.
+
+    Parameters
+    ----------
+    kind : str
+        ``"beam"`` (``lut``: `beam_lut`'s table, ``prm[9]`` the exponent)
+        or ``"paper"`` (``lut``: the per-millimetre terms, ``prm[9] = 1/N``).
+    particles, weights : numpy.ndarray, shapes (N, 3) and (N,)
+        The set before the step.
+    prm : numpy.ndarray, shape (10,)
+        The per-step scalars (`robotlib.localization._kernels.chunked`).
+    noise : numpy.ndarray, shape (N, 3)
+        The motion noise; when ``key`` is given, filled here chunk by chunk
+        from the streams ``SeedSequence([key, c])``.
+    key : int or None
+        The noise's key (`standard_normals` beyond `NORMALS_CHUNK` rows), or
+        None for noise drawn already.
+    sensors, skip : numpy.ndarray
+        Sensor poses (S, 3) and readings whose entries are not read (S,).
+    table : numpy.ndarray, shape (ny, nx, n_bins)
+        The cone table; ``prm[6:9]`` its origin and ``1 / resolution``.
+    out : tuple
+        ``(out_p, out_w, cs, mm, new_p, new_w)``: moved particles (N, 3),
+        their weights (N,), heading cosines and sines (N, 2), table entries
+        (N, S) int32, and the resampled set (N, 3) and its weights (N,),
+        written when ``u >= 0``.
+    u : float
+        The systematic resampling's draw in [0, 1), or -1 for none.
+
+    Returns
+    -------
+    tuple
+        ``(log_mean, ess, estimate)``.
+    """
+    n = len(particles)
+    out_p, out_w, cs, mm, new_p, new_w = out
+    rows = chunked.beam_rows if kind == "beam" else chunked.paper_rows
+    motion, where, const = tuple(prm[:6]), tuple(prm[6:9]), float(prm[9])
+    if key is None:
+        parts = [(lo, hi, -1) for lo, hi in spans(n, _threads())]
+    else:
+        parts = [
+            (lo, min(lo + NORMALS_CHUNK, n), c)
+            for c, lo in enumerate(range(0, n, NORMALS_CHUNK))
+        ]
+
+    def move_weigh(lo, hi, c):
+        if c >= 0:
+            _fill(key, c, noise[lo:hi])
+        m = mm[lo:hi]
+        move_and_read(
+            particles[lo:hi], noise[lo:hi], motion, sensors, table, where, skip,
+            out_p[lo:hi], cs[lo:hi], m,
+        )  # fmt: skip
+        return rows(m, lut, const, out_w[lo:hi])
+
+    top = -np.inf
+    for t in _run(move_weigh, parts):  # the first of equal values, never NaN
+        if t > top:
+            top = t
+
+    def exp(lo, hi):
+        chunked.exp_chunk(lo, hi, weights, top, out_w)
+
+    _run(exp, spans(n, _threads()))
+    return chunked.finish(weights, top, out_w, out_p, cs, u, new_p, new_w)
+
+
+def small_step(kind, particles, weights, prm, noise, sensors, table, model, out, u):
+    """`run_step` in one serial kernel call (below `PARALLEL_MIN` particles).
+
+    ``model``: the beam model's per-scan arrays and scalars (``(z, e_short,
+    is_max, hit, short)``, then ``prm`` carries ``z_max, p_rand, inv_sigma,
+    u2_skip`` from index 10) or, for the paper's, ``(z,)``; ``table`` the
+    cone table (ny, nx, n_bins).
+    """
+    out_p, out_w, _, _, new_p, new_w = out
+    if kind == "beam":
+        return chunked.beam_small(particles, noise, prm, sensors, table, *model,
+                                  weights, out_p, out_w, u, new_p, new_w)  # fmt: skip
+    return chunked.paper_small(particles, noise, prm, sensors, table, model[0],
+                               weights, out_p, out_w, u, new_p, new_w)  # fmt: skip
+
+
+__all__ += ["small_step", "beam_lut", "PARALLEL_MIN"]
