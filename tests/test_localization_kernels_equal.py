@@ -83,3 +83,129 @@ def test_flat_index_equals_table_bin():
     sensors = SonarModel().sensors
     out = _indexes_both(poses, sensors, 120, 180, 72, 0.0, 0.0, 20.0)
     np.testing.assert_array_equal(out[..., 0], out[..., 1])
+
+
+# -- the chunked and one-call MCL steps against the kernels they replace -----------
+
+
+@pytest.fixture(scope="module")
+def corridor():
+    from robotlib.world import load_world
+
+    return load_world("corridor")
+
+
+def _scan(world):
+    from robotlib.localization import expected_readings
+
+    z = expected_readings(world, np.array([world.start]))[0]
+    z[3] = 5.0  # a max reading (skipped by the beam model's lookups)
+    return z
+
+
+def _filters(world, n, kind):
+    from robotlib.localization import (
+        MCL,
+        BeamParameters,
+        BeamSensorModel,
+        PaperSensorModel,
+        ThresholdResampling,
+    )
+
+    def make(seed):
+        sensor = (
+            BeamSensorModel(world, fast=True, params=BeamParameters(exponent=0.2))
+            if kind == "beam"
+            else PaperSensorModel(world, fast=True)
+        )
+        return MCL(
+            world, sensor, resampling=ThresholdResampling("systematic", 1.0), n=n,
+            rng=seed, check=True,
+        )  # fmt: skip
+
+    return make
+
+
+@pytest.mark.parametrize("kind", ["beam", "paper"])
+@pytest.mark.parametrize("n", [300, 5000, 20000])
+def test_fused_resampling_step_equals_its_parts(corridor, kind, n):
+    """Resampled in the step's own call (one call, or chunks on threads): same bits.
+
+    300: one serial call; 5000: noise drawn first, then chunks; 20000:
+    noise drawn chunk by chunk inside the step.
+    """
+    make = _filters(corridor, n, kind)
+    z = _scan(corridor)
+    odo = [np.array(corridor.start) + k * np.array([0.3, 0.0, 0.05]) for k in range(4)]
+    a, b = make(3), make(3)
+    for k in range(3):
+        est = a.step(odo[k], odo[k + 1], z).copy()
+        b.predict(odo[k], odo[k + 1])
+        b.update(z)
+        np.testing.assert_array_equal(est, b.estimate())
+        assert a.ess == b.ess and a._log_mean == b._log_mean
+        b.resample()
+        np.testing.assert_array_equal(a.particles, b.particles)
+        np.testing.assert_array_equal(a.weights, b.weights)
+    assert a.info.resampled and a.info.n_after == n
+
+
+def test_lut_part_equals_beam_scan_lut(corridor):
+    from robotlib.localization import BeamParameters, BeamSensorModel
+    from robotlib.localization import _kernels
+    from robotlib.localization.stepping import beam_lut
+
+    model = BeamSensorModel(corridor, fast=True, params=BeamParameters(exponent=0.2))
+    m = model._model(_scan(corridor))
+    ref = np.empty((len(m[0]), len(model._norms[0])))
+    _kernels.beam_scan_lut(*m, ref)
+    np.testing.assert_array_equal(beam_lut(m, ref.shape[1]), ref)
+
+
+@pytest.mark.parametrize("kind", ["beam", "paper"])
+def test_chunk_rows_equal_the_threaded_kernels(corridor, kind):
+    """`run_step` over 1 and 2 threads against `lut_table_step_parallel` & co."""
+    from robotlib.localization import BeamParameters, BeamSensorModel, PaperSensorModel
+    from robotlib.localization import _kernels
+
+    n = 9000
+    rng = np.random.default_rng(5)
+    p = corridor.sample_free_poses(n, 6)
+    w = rng.random(n)
+    w /= w.sum()
+    noise = rng.standard_normal((n, 3))
+    motion = (0.1, 0.3, -0.05, 0.02, 0.03, 0.01)
+    z = _scan(corridor)
+    model = (
+        BeamSensorModel(corridor, fast=True, params=BeamParameters(exponent=0.2))
+        if kind == "beam"
+        else PaperSensorModel(corridor, fast=True)
+    )
+    table, where = model._where()
+    s = model.sonar.sensors
+    ref_p, ref_w = np.empty((n, 3)), np.empty(n)
+    cs, mm = np.empty((n, 2)), np.empty((n, len(z)), dtype=np.int32)
+    if kind == "beam":
+        m = model._model(z)
+        lut = np.empty((len(z), len(model._norms[0])))
+        _kernels.beam_scan_lut(*m, lut)
+        ref = _kernels.lut_table_step_parallel(
+            p, noise, motion, s, table, where, lut, m[2], 0.2, w, ref_p, ref_w, cs, mm
+        )
+    else:
+        k = np.arange(int(round(model.sonar.max_range * 1000)) + 1)
+        terms = np.abs((z[:, None] - k * 0.001) / z[:, None])
+        ref = _kernels.paper_lut_step_parallel(
+            p, noise, motion, s, table, where, terms, 1.0 / n, w, ref_p, ref_w, cs, mm
+        )
+    threads = nb.get_num_threads()
+    try:
+        for t in sorted({1, threads}):
+            nb.set_num_threads(t)
+            got = model._step(p, w, motion, noise, z)
+            np.testing.assert_array_equal(got[0], ref_p)
+            np.testing.assert_array_equal(got[1], ref_w)
+            assert got[2:4] == ref[:2]
+            np.testing.assert_array_equal(got[4], ref[2])
+    finally:
+        nb.set_num_threads(threads)

@@ -29,7 +29,13 @@ import numba as nb
 import numpy as np
 
 from ..._config import JIT
-from .fused import beam_table_step, paper_table_step
+from .fused import (
+    _beam_mm_row,
+    _buffers,
+    _paper_mm,
+    _weigh_estimate,
+    move_and_read,
+)
 from .table_models import _beam_mm
 from .weights import _finish_weights, _pose_mean
 
@@ -138,18 +144,38 @@ def _gather_into(particles, weights, u, new_p, new_w):
 # -- a few particles: the whole step in one call -------------------------------------
 
 
+_beam_row = nb.njit(**JIT, inline="always")(_beam_mm_row.py_func)
+_paper_row = nb.njit(**JIT, inline="always")(_paper_mm.py_func)
+
+
 @nb.njit(**JIT)
 def beam_small(particles, normals, prm, sensors, table, z, e_short, is_max, hit, short,
                weights, out_p, out_w, u, new_p, new_w):  # fmt: skip
     """`fused.beam_table_step`, then (``u >= 0``) resampling as in `finish`.
 
-    ``prm[10:14]`` is ``(z_max, p_rand, inv_sigma, u2_skip)``.
+    The same passes, with the per-particle model written in (a call per
+    particle costs about as much as its arithmetic). ``prm[10:14]`` is
+    ``(z_max, p_rand, inv_sigma, u2_skip)``.
     """
-    log_mean, ess, est = beam_table_step(
+    n = particles.shape[0]
+    cs, mm = _buffers(n, sensors.shape[0])
+    move_and_read(
         particles, normals, (prm[0], prm[1], prm[2], prm[3], prm[4], prm[5]), sensors,
-        table, (prm[6], prm[7], prm[8]), z, e_short, is_max, hit, short,
-        (prm[10], prm[11], prm[12], prm[9], prm[13]), weights, out_p, out_w,
+        table, (prm[6], prm[7], prm[8]), is_max, out_p, cs, mm,
     )  # fmt: skip
+    z_max, p_rand, inv_sigma, exponent, u2_skip = (
+        prm[10],
+        prm[11],
+        prm[12],
+        prm[9],
+        prm[13],
+    )
+    for j in range(n):
+        _beam_row(
+            j, mm, z, e_short, is_max, hit, short, z_max, p_rand, inv_sigma,
+            exponent, u2_skip, out_w,
+        )  # fmt: skip
+    log_mean, ess, est = _weigh_estimate(weights, out_p, cs, out_w)
     if u >= 0.0:
         _gather_into(out_p, out_w, u, new_p, new_w)
     return log_mean, ess, est
@@ -159,10 +185,17 @@ def beam_small(particles, normals, prm, sensors, table, z, e_short, is_max, hit,
 def paper_small(particles, normals, prm, sensors, table, z, weights, out_p, out_w, u,
                 new_p, new_w):  # fmt: skip
     """`fused.paper_table_step`, then (``u >= 0``) resampling as in `finish`."""
-    log_mean, ess, est = paper_table_step(
+    n = particles.shape[0]
+    skip = np.zeros(sensors.shape[0], dtype=np.bool_)
+    cs, mm = _buffers(n, sensors.shape[0])
+    move_and_read(
         particles, normals, (prm[0], prm[1], prm[2], prm[3], prm[4], prm[5]), sensors,
-        table, (prm[6], prm[7], prm[8]), z, prm[9], weights, out_p, out_w,
+        table, (prm[6], prm[7], prm[8]), skip, out_p, cs, mm,
     )  # fmt: skip
+    inv_n = prm[9]
+    for j in range(n):
+        _paper_row(j, mm, z, inv_n, out_w)
+    log_mean, ess, est = _weigh_estimate(weights, out_p, cs, out_w)
     if u >= 0.0:
         _gather_into(out_p, out_w, u, new_p, new_w)
     return log_mean, ess, est
