@@ -22,6 +22,9 @@ import sys
 
 CHILD = r"""
 import json, subprocess, sys, time
+if sys.argv[4]:  # a source tree to time instead of the installed robotlib
+    sys.meta_path[:] = [f for f in sys.meta_path if "editable" not in repr(f).lower()]
+    sys.path.insert(0, sys.argv[4])
 import numpy as np
 import numba
 from robotlib.localization import (
@@ -61,10 +64,15 @@ for _ in range(rounds):
         if hog is not None:
             hog.kill()
             hog.wait()
-print(json.dumps({"layer": numba.threading_layer(), **times}))
+try:
+    layer = numba.threading_layer()
+except ValueError:  # no parallel kernel ran: the step's chunks on Python threads
+    layer = "none"
+print(json.dumps({"layer": layer, **times}))
 """
 
 CONFIGS = [  # GOMP_SPINCOUNT=300000 is libgomp's own default: numba's spinning
+    ("robotlib's default (no variable set)", {}),
     (
         "omp, spinning (numba's default)",
         {"NUMBA_THREADING_LAYER": "omp", "GOMP_SPINCOUNT": "300000"},
@@ -88,17 +96,22 @@ def main() -> int:
     parser.add_argument("--rounds", type=int, default=4)
     parser.add_argument("--reps", type=int, default=15)
     parser.add_argument("--json", default=None)
+    parser.add_argument("--tree", default="", help="a source tree (bench_ab.py's)")
+    parser.add_argument("--configs", default="", help="indexes, e.g. 0,3 (all)")
     args = parser.parse_args()
     rows = []
     print(f"fast beam MCL step, N={args.n}, ms (median / fastest)")
     print(f"{'layer':42s}{'quiet':>16s}{'busy':>16s}{'busy/quiet':>12s}")
-    for name, env in CONFIGS:
+    chosen = [int(k) for k in args.configs.split(",")] if args.configs else None
+    for k, (name, env) in enumerate(CONFIGS):
+        if chosen is not None and k not in chosen:
+            continue
         drop = ("OMP_WAIT_POLICY", "GOMP_SPINCOUNT")
         full = {k: v for k, v in os.environ.items() if k not in drop}
         full.update(env)
         done = subprocess.run(
             [sys.executable, "-c", CHILD, str(args.n), str(args.rounds),
-             str(args.reps)],
+             str(args.reps), args.tree],
             env=full, capture_output=True, text=True, timeout=600,
         )  # fmt: skip
         if done.returncode != 0:  # tbb: numba needs a tbb it can load
@@ -111,7 +124,7 @@ def main() -> int:
         mq, mb = 1e3 * q[len(q) // 2], 1e3 * b[len(b) // 2]
         print(
             f"{name:42s}{mq:8.2f} /{1e3 * q[0]:6.2f}{mb:8.2f} /{1e3 * b[0]:6.2f}"
-            f"{mb / mq:12.2f}"
+            f"{mb / mq:12.2f}  (layer {res['layer']})"
         )
         rows.append({"config": name, "layer": res["layer"], "median_quiet_ms": mq,
                      "median_busy_ms": mb, "min_quiet_ms": 1e3 * q[0],
@@ -119,6 +132,8 @@ def main() -> int:
     if args.json:
         with open(args.json, "w") as f:
             json.dump(rows, f, indent=2)
+    with open("/proc/loadavg") as f:
+        print("load average:", " ".join(f.read().split()[:3]))
     return 0
 
 

@@ -151,8 +151,7 @@ def test_fused_resampling_step_equals_its_parts(corridor, kind, n):
 
 
 def test_lut_part_equals_beam_scan_lut(corridor):
-    from robotlib.localization import BeamParameters, BeamSensorModel
-    from robotlib.localization import _kernels
+    from robotlib.localization import BeamParameters, BeamSensorModel, _kernels
     from robotlib.localization.stepping import beam_lut
 
     model = BeamSensorModel(corridor, fast=True, params=BeamParameters(exponent=0.2))
@@ -165,8 +164,12 @@ def test_lut_part_equals_beam_scan_lut(corridor):
 @pytest.mark.parametrize("kind", ["beam", "paper"])
 def test_chunk_rows_equal_the_threaded_kernels(corridor, kind):
     """`run_step` over 1 and 2 threads against `lut_table_step_parallel` & co."""
-    from robotlib.localization import BeamParameters, BeamSensorModel, PaperSensorModel
-    from robotlib.localization import _kernels
+    from robotlib.localization import (
+        BeamParameters,
+        BeamSensorModel,
+        PaperSensorModel,
+        _kernels,
+    )
 
     n = 9000
     rng = np.random.default_rng(5)

@@ -101,7 +101,11 @@ def run_step(kind, particles, weights, prm, noise, key, sensors, skip, table, lu
     n = len(particles)
     out_p, out_w, cs, mm, new_p, new_w = out
     rows = chunked.beam_rows if kind == "beam" else chunked.paper_rows
-    motion, where, const = tuple(prm[:6]), tuple(prm[6:9]), float(prm[9])
+    motion, where, const = (
+        tuple(prm[:6].tolist()),
+        tuple(prm[6:9].tolist()),
+        float(prm[9]),
+    )
     if key is None:
         parts = [(lo, hi, -1) for lo, hi in spans(n, _threads())]
     else:

@@ -36,7 +36,6 @@ from .fused import (
     _weigh_estimate,
     move_and_read,
 )
-from .table_models import _beam_mm
 from .weights import _finish_weights, _pose_mean
 
 
@@ -86,17 +85,27 @@ def exp_chunk(lo, hi, weights, top, out_w):
         out_w[j] = weights[j] * math.exp(out_w[j] - top)
 
 
-_beam_mm_inline = nb.njit(**JIT, inline="always")(_beam_mm.py_func)
-
-
 @nb.njit(**JIT)
 def lut_part(lo, hi, z, e_short, is_max, hit, short, z_max, p_rand, inv_sigma, lut):
-    """Columns ``lo:hi`` of `beam_scan_lut`'s table (the same entries)."""
+    """Columns ``lo:hi`` of `beam_scan_lut`'s table (the same entries).
+
+    `_beam_mm` with each reading's values read once (a store to ``lut``
+    could alias them: read in the loop, they are read again each time).
+    """
     for i in range(lut.shape[0]):
+        if is_max[i]:
+            for mm in range(lo, hi):
+                lut[i, mm] = z_max
+            continue
+        zi = z[i]
+        ei = e_short[i]
         for mm in range(lo, hi):
-            lut[i, mm] = _beam_mm_inline(
-                i, mm, z, e_short, is_max, hit, short, z_max, p_rand, inv_sigma
-            )
+            zhat = mm * 0.001
+            u = (zi - zhat) * inv_sigma
+            p = hit[mm] * math.exp(-0.5 * u * u) + p_rand
+            if zi <= zhat:
+                p += short[mm] * ei
+            lut[i, mm] = p
 
 
 @nb.njit(**JIT)
