@@ -555,3 +555,32 @@ def test_a_submission_out_of_restarts_is_graded_not_a_grader_error(tmp_path):
     assert not r.status.startswith("grader error"), r.status
     assert r.points["mean"] == 0 and r.points["scale"] == 0, r.points
     assert "hanging or crashing" in r.reasons["scale"], r.reasons
+
+
+def test_a_process_that_cannot_start_is_restarted(tmp_path, monkeypatch):
+    """The system refusing a process (out of pids) is a restart, not a grader error."""
+    import errno
+
+    from robotlib.course import session
+
+    need_sandbox()
+    (tmp_path / "subs" / "sol").mkdir(parents=True)
+    write_notebook(solution(), tmp_path / "subs" / "sol" / "tiny.ipynb")
+    real, students = session.subprocess.Popen, []
+
+    def popen(cmd, *args, **kwargs):
+        if "student" in cmd:
+            students.append(cmd)
+            if len(students) == 2:  # the submission's first (the reference ran one)
+                raise OSError(errno.EAGAIN, "Resource temporarily unavailable")
+        return real(cmd, *args, **kwargs)
+
+    monkeypatch.setattr(session.subprocess, "Popen", popen)
+    opts = g.Options(cell_timeout=CELL_TIMEOUT, timeout=120)
+    results, _ = g.grade(tmp_path / "subs", "tiny", TINY, jobs=1, opts=opts, progress=False)  # fmt: skip
+    (r,) = results
+    assert len(students) == 3, len(students)
+    assert r.status.startswith("restarted"), r.status
+    assert {k: r.points[k] for k in FULL} == {k: float(v) for k, v in FULL.items()}, (
+        r.reasons
+    )
