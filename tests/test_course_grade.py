@@ -454,10 +454,16 @@ def test_scan_code_routes():
         "import importlib\nm = importlib.import_module('robotlib.localization.paper')\nm.innovation_weights",
         "exec('from robotlib.localization.paper import innovation_weights')",
         "from robotlib.localization.paper import *",
+        "from robotlib.localization import paper as p\nf = vars(p)['innovation_weights']",
+        "import operator, robotlib.localization.paper as p\noperator.attrgetter('innovation_weights')(p)",
     ]
     for src in bad:
         assert any(f.listed for f in scan_code(src, names)), src
-    honest = "from robotlib.localization import paper\nzhat = paper.expected(w, p)\n"
+    # a listed function's bare name is a lookup only where something is fetched by it
+    honest = (
+        "from robotlib.localization import paper\nzhat = paper.expected(w, p)\n"
+        "table = {'innovation_weights': 1}\nprint('innovation_weights', table['innovation_weights'])\n"
+    )
     assert scan_code(honest, names) == []
 
 
