@@ -10,8 +10,10 @@ admissible area (the paper's step 3). `MCL.paper` builds the paper's filter
 exactly; `MCL.best` the strongest configuration this project offers.
 
 With the odometry motion model and a sensor model on a cone table (``fast``),
-`MCL.step` moves, weighs and estimates in one kernel call, and low-variance
-resampling gathers in one more: the same numbers as `MCL.predict`,
+`MCL.step` moves, weighs and estimates in one call (a serial kernel for a
+few particles, chunks on Python threads for many: see
+`robotlib.localization.stepping`), resampling included when the policy
+resamples every step by low variance: the same numbers as `MCL.predict`,
 `MCL.update`, `MCL.estimate` and `MCL.resample` in turn, with the same draws.
 
 The resampling policies are in `robotlib.localization.policies`.

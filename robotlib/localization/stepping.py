@@ -1,10 +1,11 @@
 """Running a fused MCL step on a cone table: one kernel call, or chunks over threads.
 
-`run_step` is what `MCL.step` calls when its models allow the fused step
-(the odometry motion model, a ``fast`` paper or beam model): below
-`PARALLEL_MIN` particles one serial kernel moves, weighs, estimates and
-(when the caller passes the resampling draw) resamples; from
-`PARALLEL_MIN` on the step runs in chunks on a pool of Python threads
+The sensor models' fused step (``_run``, which `MCL.step` calls when its
+models allow: the odometry motion model, a ``fast`` paper or beam model)
+runs here: below `PARALLEL_MIN` particles `small_step`, one serial kernel
+that moves, weighs, estimates and (when the caller passes the resampling
+draw) resamples; from `PARALLEL_MIN` on `run_step`, in chunks on a pool of
+Python threads
 (`robotlib.localization._kernels.chunked`): each chunk draws its own rows
 of motion noise (`robotlib.localization.motion.standard_normals`' streams,
 so the numbers do not depend on the threads) and then moves and weighs
@@ -25,7 +26,7 @@ from ._kernels import chunked
 from ._kernels.fused import move_and_read
 from .motion import NORMALS_CHUNK, PARALLEL_MIN, _executor, _fill
 
-__all__ = ["run_step", "spans"]
+__all__ = ["PARALLEL_MIN", "beam_lut", "run_step", "small_step", "spans"]
 
 LUT_CHUNKS = 2
 """Column ranges `beam_lut` splits a scan's model table into."""
@@ -150,6 +151,3 @@ def small_step(kind, particles, weights, prm, noise, sensors, table, model, out,
                                   weights, out_p, out_w, u, new_p, new_w)  # fmt: skip
     return chunked.paper_small(particles, noise, prm, sensors, table, model[0],
                                weights, out_p, out_w, u, new_p, new_w)  # fmt: skip
-
-
-__all__ += ["small_step", "beam_lut", "PARALLEL_MIN"]

@@ -9,6 +9,8 @@
 - `weights`: the Bayes update, normalisation, effective sample size, the estimate
 - `resample`: cumulative weights, index searches, KLD-sampling, gathering
 - `fused`: predict, read the table, weigh, normalise and estimate in one call
+- `chunked`: the fused step in chunks for a pool of Python threads, and in
+  one call with the resampling for a few particles
 
 Every kernel takes contiguous arrays and scalars only; random numbers are
 drawn by the caller's ``numpy.random.Generator`` and passed in, so a seed
