@@ -127,13 +127,19 @@ def _filters(world, n, kind):
 
 
 @pytest.mark.parametrize("kind", ["beam", "paper"])
-@pytest.mark.parametrize("n", [300, 5000, 20000])
-def test_fused_resampling_step_equals_its_parts(corridor, kind, n):
+@pytest.mark.parametrize("n", [300, 5000, 20000, "openmp"])
+def test_fused_resampling_step_equals_its_parts(corridor, kind, n, monkeypatch):
     """Resampled in the step's own call (one call, or chunks on threads): same bits.
 
     300: one serial call; 5000: noise drawn first, then chunks; 20000:
-    noise drawn chunk by chunk inside the step.
+    noise drawn chunk by chunk inside the step; "openmp": 20000 on numba's
+    threaded kernels (`stepping.OPENMP_MIN` lowered for the test).
     """
+    if n == "openmp":
+        from robotlib.localization import stepping
+
+        monkeypatch.setattr(stepping, "OPENMP_MIN", 10_000)
+        n = 20000
     make = _filters(corridor, n, kind)
     z = _scan(corridor)
     odo = [np.array(corridor.start) + k * np.array([0.3, 0.0, 0.05]) for k in range(4)]
