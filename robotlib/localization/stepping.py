@@ -24,7 +24,6 @@ import numpy as np
 
 from . import _kernels
 from ._kernels import chunked
-from ._kernels.fused import move_and_read
 from .motion import NORMALS_CHUNK, PARALLEL_MIN, _executor, _fill
 
 __all__ = ["PARALLEL_MIN", "beam_lut", "run_step", "small_step", "spans"]
@@ -114,7 +113,7 @@ def run_step(kind, particles, weights, prm, noise, key, sensors, skip, table, lu
     if n >= OPENMP_MIN:
         return _openmp_step(kind, particles, weights, prm, noise, key, sensors, skip,
                             table, lut, out, u)  # fmt: skip
-    rows = chunked.beam_rows if kind == "beam" else chunked.paper_rows
+    kernel = chunked.beam_chunk if kind == "beam" else chunked.paper_chunk
     motion, where, const = (
         tuple(prm[:6].tolist()),
         tuple(prm[6:9].tolist()),
@@ -128,20 +127,24 @@ def run_step(kind, particles, weights, prm, noise, key, sensors, skip, table, lu
             for c, lo in enumerate(range(0, n, NORMALS_CHUNK))
         ]
 
-    def move_weigh(lo, hi, c):
-        if c >= 0:
-            _fill(key, c, noise[lo:hi])
-        m = mm[lo:hi]
-        move_and_read(
-            particles[lo:hi], noise[lo:hi], motion, sensors, table, where, skip,
-            out_p[lo:hi], cs[lo:hi], m,
-        )  # fmt: skip
-        return rows(m, lut, const, out_w[lo:hi])
+    def move_weigh(group):
+        tops = []
+        for lo, hi, c in group:
+            if c >= 0:
+                _fill(key, c, noise[lo:hi])
+            tops.append(kernel(
+                particles[lo:hi], noise[lo:hi], motion, sensors, table, where, skip,
+                out_p[lo:hi], cs[lo:hi], mm[lo:hi], lut, const, out_w[lo:hi],
+            ))  # fmt: skip
+        return tops
 
+    # one task per thread, each a run of consecutive chunks (few hand-overs)
+    groups = [(parts[lo:hi],) for lo, hi in spans(len(parts), _threads())]
     top = -np.inf
-    for t in _run(move_weigh, parts):  # the first of equal values, never NaN
-        if t > top:
-            top = t
+    for tops in _run(move_weigh, groups):  # in order: the first of equal values
+        for t in tops:  # never NaN
+            if t > top:
+                top = t
 
     def exp(lo, hi):
         chunked.exp_chunk(lo, hi, weights, top, out_w)

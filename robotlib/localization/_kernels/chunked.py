@@ -79,6 +79,26 @@ def paper_rows(mm, terms, inv_n, out_w):
 
 
 @nb.njit(**JIT)
+def beam_chunk(particles, normals, motion, sensors, table, where, skip, out_p, cs, mm,
+               lut, exponent, out_w):  # fmt: skip
+    """`fused.move_and_read` then `beam_rows` on one chunk's rows: one call."""
+    move_and_read(
+        particles, normals, motion, sensors, table, where, skip, out_p, cs, mm
+    )
+    return beam_rows(mm, lut, exponent, out_w)
+
+
+@nb.njit(**JIT)
+def paper_chunk(particles, normals, motion, sensors, table, where, skip, out_p, cs, mm,
+                terms, inv_n, out_w):  # fmt: skip
+    """`fused.move_and_read` then `paper_rows` on one chunk's rows: one call."""
+    move_and_read(
+        particles, normals, motion, sensors, table, where, skip, out_p, cs, mm
+    )
+    return paper_rows(mm, terms, inv_n, out_w)
+
+
+@nb.njit(**JIT)
 def exp_chunk(lo, hi, weights, top, out_w):
     """``out_w[j] = weights[j] exp(out_w[j] - top)`` for rows ``lo:hi``."""
     for j in range(lo, hi):
