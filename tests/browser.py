@@ -25,6 +25,8 @@ import urllib.request
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from tests import browser_feedback as in_page
+
 CHROMIUM = "/usr/bin/chromium"
 LAB_SETTINGS = {
     "@jupyterlab/notebook-extension/tracker.jupyterlab-settings": {
@@ -476,16 +478,25 @@ def _settle(panel, slider, bound: float, quiet: float = 1.0) -> float:
 
 
 def _move(page, panel, handle, slider, bound: float, stem: str) -> dict:
-    """Move one slider one step once the panel is still; time its answer."""
+    """Move one slider one step once the panel is still; time its answer.
+
+    Once the kernel has said it runs (the status line no longer reads the
+    browser's own "running ..."), and before the new figure shows, the
+    slider moves once more: ``busy`` times the answer to that second move,
+    made while the kernel is busy with the first.
+    """
     key = "ArrowLeft" if handle.evaluate(_AT_TOP) else "ArrowRight"
     settled = _settle(panel, slider, bound)  # a first run may still be drawing
     before_pixels = panel.evaluate(_HASH_IMAGES)
     before_text = panel.evaluate(_OUTSIDE, slider)
+    before_status = in_page.status_text(panel)
     panel.screenshot(path=f"{stem}-before.png")
     handle.focus()
+    in_page.watch(panel, slider)
     t0 = time.monotonic()
     page.keyboard.press(key)
     feedback = redraw = error = None
+    page_times, busy = None, None
     while time.monotonic() - t0 < bound:
         now = time.monotonic() - t0
         if feedback is None and panel.evaluate(_OUTSIDE, slider) != before_text:
@@ -498,12 +509,23 @@ def _move(page, panel, handle, slider, bound: float, stem: str) -> dict:
             redraw = now
             feedback = now if feedback is None else feedback  # the answer itself
             break
+        status = in_page.status_text(panel)
+        if busy is None and status not in (None, before_status, "running ..."):
+            page_times = in_page.read(page)  # the kernel runs the first move
+            in_page.watch(panel, slider)
+            busy = {"at_s": time.monotonic() - t0, "status": status}
+            page.keyboard.press(key)
         time.sleep(0.02)
+    if busy is None:
+        page_times = in_page.read(page)
+    else:
+        busy.update(in_page.read(page))
     if redraw is not None or error is not None:
         page.wait_for_timeout(300)
         panel.screenshot(path=f"{stem}-after.png")
     return {"key": key, "settle_s": settled, "feedback_s": feedback,
-            "redraw_s": redraw, "error": error}  # fmt: skip
+            "redraw_s": redraw, "error": error, "in_page": page_times,
+            "busy": busy, "status_line": before_status is not None}  # fmt: skip
 
 
 def check_panels(
