@@ -26,6 +26,7 @@ __all__ = [
     "in_kernel",
     "figure_output",
     "error_output",
+    "status_line",
 ]
 
 STALE_CSS = "<style>.robotlib-stale,.robotlib-stale img{opacity:.45}</style>"
@@ -183,3 +184,14 @@ def figure_output(figure) -> dict:
 def error_output(text: str) -> dict:
     """Return a traceback's text as an ``ipywidgets.Output`` output (stderr)."""
     return {"output_type": "stream", "name": "stderr", "text": text}
+
+
+def status_line():
+    """Return a new `robotlib.widgets._status.StatusLine` (anywidget loads on use).
+
+    Imported here, not at the top of the panels' modules, so that importing
+    a panel (a lab's first cell) does not load anywidget.
+    """
+    from ._status import StatusLine
+
+    return StatusLine()

@@ -35,8 +35,14 @@ from ..avoidance import (
 )
 from ..plotting.avoidance import plot_clearance, plot_episode, plot_polar_histogram
 from ..world import load_world
-from ._live import STALE_CSS, Cancelled, LiveRunner, error_output, figure_output
-from ._status import StatusLine
+from ._live import (
+    STALE_CSS,
+    Cancelled,
+    LiveRunner,
+    error_output,
+    figure_output,
+    status_line,
+)
 
 __all__ = [
     "KINDS",
@@ -154,7 +160,7 @@ class EpisodePanel:
             value=start["reach"], min=0.3, max=3.0, step=0.1,
             description="Br. reach", **opts,
         )  # fmt: skip
-        self.status = StatusLine()
+        self.status = status_line()
         self.output = w.Output()
         self.output.add_class("robotlib-figure")
         controls = (
@@ -309,7 +315,7 @@ class HistogramPanel:
         )  # fmt: skip
         self.output = w.Output()
         self.output.add_class("robotlib-figure")
-        self.status = StatusLine()
+        self.status = status_line()
         self.step.observe(lambda change: self.refresh(), names="value")
         self.status.watch(self.step)
         self.widget = w.VBox([w.HTML(STALE_CSS), self.step, self.status, self.output])

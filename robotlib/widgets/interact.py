@@ -21,8 +21,7 @@ from __future__ import annotations
 import time
 from collections.abc import Callable
 
-from ._live import STALE_CSS
-from ._status import StatusLine
+from ._live import STALE_CSS, status_line
 
 __all__ = ["InteractPanel", "interact"]
 
@@ -53,7 +52,7 @@ class InteractPanel:
         import ipywidgets as w
 
         self.function, self.controls = function, controls
-        self.status = StatusLine()
+        self.status = status_line()
         self.output = w.Output()
         self.output.add_class("robotlib-figure")
         self.widget = w.VBox(

@@ -21,8 +21,14 @@ from ..mapping import (
     run_fastslam,
 )
 from ..plotting.mapping import plot_map_vs_truth
-from ._live import STALE_CSS, Cancelled, LiveRunner, error_output, figure_output
-from ._status import StatusLine
+from ._live import (
+    STALE_CSS,
+    Cancelled,
+    LiveRunner,
+    error_output,
+    figure_output,
+    status_line,
+)
 
 __all__ = ["build_map", "MappingPanel"]
 
@@ -70,7 +76,7 @@ class MappingPanel:
         )
         self.out = w.Output()
         self.out.add_class("robotlib-figure")
-        self.status = StatusLine()
+        self.status = status_line()
         controls = (self.l_occ, self.l_free, self.n, self.sensor, self.poses)
         for c in controls:
             c.observe(lambda _: self.redraw(), names="value")

@@ -27,7 +27,7 @@ import numpy as np
 
 from ..localization import History
 from ..plotting.mcl import plot_mcl_run, plot_particle_snapshots
-from ._live import LiveRunner
+from ._live import LiveRunner, status_line
 from ._mcl_choices import (
     _DEFAULTS,
     PRESETS,
@@ -36,7 +36,6 @@ from ._mcl_choices import (
     mcl_filter,
     run_mcl,
 )
-from ._status import StatusLine
 
 __all__ = [
     "SENSORS",
@@ -168,7 +167,7 @@ class MCLPanel:
             description="Kidnap", tooltip="kidnap the robot halfway through the run"
         )
         self.kidnap_button.on_click(self._kidnap_clicked)
-        self.status = StatusLine()
+        self.status = status_line()
         self.progress = w.IntProgress(
             value=0, min=0, max=1, layout=w.Layout(width="200px")
         )
