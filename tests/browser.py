@@ -6,10 +6,11 @@ no news; `Browser` opens Debian's chromium through playwright (its
 executable path set: no browser download) with every non-loopback request
 blocked. `run_notebook` opens a notebook, runs all cells from the menu,
 saves it and returns what happened; `check_panels` moves the first slider
-of each panel and times its first feedback and its redraw (a change of the
-pixels of its image, read through a canvas, so a greyed-out old figure does
-not count); `check_animations` presses each player's play button and reads
-its frame slider.
+of each panel and times its first feedback (polled, and in the page) and
+its redraw (a change of the pixels of its image, read through a canvas, so a
+greyed-out old figure does not count), and its answer to a second move made
+while the kernel runs the first; `check_animations` presses each player's
+play button and reads its frame slider.
 """
 
 from __future__ import annotations
@@ -543,10 +544,17 @@ def check_panels(
     itself; the moved slider's own readout does not count), ``redraw_s``
     (until its image's pixels change; None if they did not within ``bound``
     s), ``error`` (the last line of an error the panel shows instead, else
-    None) and the slider's label. A panel that redrew but showed its first
-    sign later than ``feedback_bound`` s (a loaded machine) is moved once
-    more and the second try counts (``tries``; ``first_try`` keeps the
-    first); a panel that does not redraw, or shows an error, is not.
+    None) and the slider's label; ``in_page`` the same first sign timed in
+    the page (`tests.browser_feedback`: no polling latency), with
+    ``running_s`` until a robotlib status line (``status_line``) read
+    "running"; ``busy`` the page's times for a second move made once the
+    kernel said it runs the first (None if the figure came first), and
+    ``at_s`` when that was (``redraw_s - at_s``: the newest change's
+    redraw, a superseded run's figure being dropped). A panel that redrew
+    but showed its first sign later than ``feedback_bound`` s (a loaded
+    machine) is moved once more and the second try counts (``tries``;
+    ``first_try`` keeps the first); a panel that does not redraw, or shows
+    an error, is not.
     """
     results = []
     outputs = page.locator(".jp-OutputArea-output:has(.widget-slider):has(img)")
