@@ -25,7 +25,8 @@ most 0.035 ms, N=100k at most 8 ms and N=1M at most 90 ms on 2 cores; exact
 path N=300 in the office at most 0.5 ms; the first step of `MCL.best` in a
 fresh process at most 3 s with an empty numba cache and 0.7 s with a warm
 one. ``robotlib bench buildings`` measures large buildings,
-``bench/bench_threads.py`` the step under a second busy process.
+``bench/bench_threads.py`` the step under a second busy process,
+``bench/bench_cold.py`` the cold and warm start of two source trees.
 """
 
 from __future__ import annotations
