@@ -127,7 +127,8 @@ def clearance_field(occupied, out):
             inside = 0 < i <= ny and 0 < j <= nx
             f[j] = np.inf if inside and not occupied[i - 1, j - 1] else 0.0
         _edt_1d(f, nx + 2, v, z, d)
-        sq[i, :] = d[: nx + 2]
+        for j in range(nx + 2):  # a loop: a slice copy compiles seconds slower
+            sq[i, j] = d[j]
     for j in range(nx + 2):
         for i in range(ny + 2):
             f[i] = sq[i, j]
