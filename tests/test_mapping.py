@@ -120,7 +120,7 @@ def test_a_backend_without_a_laser_says_so():
 SONAR_ARGS = dict(thickness=0.1, l_occ=0.9, l_free=-0.35, max_weight=0.3)
 
 
-@pytest.mark.parametrize("sigma", [0.0, 0.15])
+@pytest.mark.parametrize("sigma", [0.0, 0.1, 0.15])  # none, table, polynomial
 def test_sonar_cone_kernel_matches_the_reference(sigma):
     rng = np.random.default_rng(1)
     shape, origin, res = (60, 80), (-0.5, -0.3), 0.05
