@@ -171,7 +171,9 @@ def _cone_update(
 
     Each row visits the cells between the cone's edges and inside its reach:
     cells more than 1e-6 cells inside that interval pass every test and are
-    written by a loop without branches; the few at its ends are tested.
+    written by a loop without branches; those within 1e-6 cells of its ends
+    (and every cell of a row whose interval is not exact: an edge along the
+    row) are tested.
     """
     ny, nx = L.shape
     echo = z < max_range
@@ -239,13 +241,20 @@ def _cone_update(
                     exact = False
         if lo > hi + res:
             continue
-        ja = max(j0, int(math.floor((lo + sx - x0) / res - 0.5)) - 1)
-        jb = min(j1, int(math.ceil((hi + sx - x0) / res - 0.5)) + 1)
-        ia = jb + 1
-        ib = jb
+        c_lo = (lo + sx - x0) / res - 0.5  # the interval's ends in cell indexes
+        c_hi = (hi + sx - x0) / res - 0.5
         if exact:
-            ia = max(ja, int(math.ceil((lo + sx - x0) / res - 0.5 + 1e-6)))
-            ib = min(jb, int(math.floor((hi + sx - x0) / res - 0.5 - 1e-6)))
+            # centres inside [lo, hi] are in the cone; only those within 1e-6
+            # cells of an end (rounding) are tested
+            ja = max(j0, int(math.ceil(c_lo - 1e-6)))
+            jb = min(j1, int(math.floor(c_hi + 1e-6)))
+            ia = max(ja, int(math.ceil(c_lo + 1e-6)))
+            ib = min(jb, int(math.floor(c_hi - 1e-6)))
+        else:
+            ja = max(j0, int(math.floor(c_lo)) - 1)
+            jb = min(j1, int(math.ceil(c_hi)) + 1)
+            ia = jb + 1
+            ib = jb
 
         cy2 = cy * cy
         # the ends of the interval: every test
