@@ -1,8 +1,9 @@
 """``robotlib bench map`` (also ``slam``): mapping and SLAM, speed and quality.
 
 Prints, in one run: one sonar grid update (8 cones) and one laser scan
-update against plain NumPy versions of the same work; one grid FastSLAM
-step (30 particles, laser, the loop world's grid) and its weighing against
+update against plain NumPy versions of the same work; grid FastSLAM steps
+(30 particles, laser, the loop world's grid) as they come in a run, and one
+step repeated on restored maps (cold caches), and its weighing against
 NumPy; known-pose map F1 in the office (sonar, laser); grid FastSLAM in the
 loop world over seeds (trajectory RMS, map F1; sonar: map error against
 odometry-pose mapping); EKF-SLAM's average NEES over seeds against the 95 %
