@@ -296,18 +296,16 @@ class World:
         key = ("free", float(resolution), float(radius))
         if key not in self._cache:
             dist = self.distance_field(resolution)
-            # is_free at the centres, with the distances already measured
-            xy = dist.centres()
+            # is_free at the centres, with the distances already measured (the
+            # centres' rows and columns, not a (ny, nx, 2) array of them)
+            ny, nx = dist.shape
+            xs = dist.origin[0] + (np.arange(nx) + 0.5) * dist.resolution
+            ys = dist.origin[1] + (np.arange(ny) + 0.5) * dist.resolution
             xmin, ymin, xmax, ymax = self.bounds
-            free = (
-                (xy[..., 0] - radius >= xmin)
-                & (xy[..., 0] + radius <= xmax)
-                & (xy[..., 1] - radius >= ymin)
-                & (xy[..., 1] + radius <= ymax)
-                & (dist.data > radius)
-            )
+            free = dist.data > radius
+            free &= ((ys - radius >= ymin) & (ys + radius <= ymax))[:, None]
+            free &= ((xs - radius >= xmin) & (xs + radius <= xmax))[None, :]
             i, j = dist.cell_of(np.array(self.start[:2]))
-            ny, nx = free.shape
             if 0 <= i < ny and 0 <= j < nx and free[i, j]:
                 free = _flood_fill(free, int(i), int(j))
             free.setflags(write=False)
