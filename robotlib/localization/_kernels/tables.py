@@ -336,6 +336,23 @@ def indexed_cone_table(
                 table[i, j, b] = _table_entry(echo, max_range, min_range)
 
 
+def _below(field):
+    """``field`` in float32, each value rounded down: half the memory to walk over.
+
+    A ray jumps over no more clear space than the float64 field shows, so
+    it finds the same walls.
+    """
+    low = field.astype(np.float32)
+    over = low.astype(np.float64) > field
+    low[over] = np.nextafter(low[over], np.float32(-np.inf))
+    return low
+
+
+def _compact(start):
+    """Bucket offsets as int32 when they fit (half the memory), else as given."""
+    return start.astype(np.int32) if start[-1] < 2**31 - 1 else start
+
+
 def build_cone_table_indexed(
     segments, x0, y0, resolution, n_bins, ray_step, n_rays, cone, max_range,
     min_range, cos_specular, bx0, by0, bsize, nbx, nby, start, items, field,
@@ -349,14 +366,16 @@ def build_cone_table_indexed(
     walls or points. ``field`` is the distance field on the table's own
     cells (rays jump over clear space with it). Rows are filled in parallel
     (`table_rays.walked_sweep_table` for shared rays, on the index's walls
-    copied in bucket order; `indexed_cone_table` otherwise).
+    copied in bucket order, the field in float32 rounded down and the
+    offsets in int32: less to read from memory, which bounds the walks;
+    `indexed_cone_table` otherwise).
     """
     if ray_step > 0:
         walls, ids = bucket_walls(segments, items)
         walked_sweep_table(
             segments, _unit_normals(segments), walls, ids, x0, y0, resolution,
             n_bins, ray_step, n_rays, max_range, min_range, cos_specular, bx0,
-            by0, bsize, nbx, nby, start, field, table,
+            by0, bsize, nbx, nby, _compact(start), _below(field), table,
         )  # fmt: skip
     else:
         indexed_cone_table(
