@@ -338,7 +338,14 @@ class World:
         """
         rng = as_rng(rng)
         grid = self.free_space(resolution, radius)
-        cells = np.flatnonzero(grid.data)
+        key = ("free cells", float(resolution), float(radius))
+        if key not in self._cache:  # found once (filters draw every step), int32
+            flat = np.flatnonzero(grid.data)
+            self._cache[key] = flat.astype(
+                np.int32 if grid.data.size < 2**31 else flat.dtype
+            )
+            self._cache[key].setflags(write=False)
+        cells = self._cache[key]
         if len(cells) == 0:
             raise ValueError(f"world {self.name!r} has no free space for r={radius}")
         out = np.empty((n, 3))
