@@ -189,6 +189,10 @@ sweep 6.3 us, indexed 11.9 us; ``sauljabin_columbia2.map`` (495 walls, 44
 near) 7.4 and 11.2 us; ``amrisim_AMROffice.map`` (46,625 segments, 8,800
 near) 425 and 35 us; ``columbia.map`` (127,092, 9,950 near) 962 and 48 us.
 The sweep grows by about 0.05 us a near wall: the two meet near 130.
+(Since then the indexed builder walks its own finer index, `_table_index`,
+with `_kernels.table_rays`: ``columbia.map`` 24-28 s against 15.5-21 s of
+processor time for the whole table, interleaved under a load of 9-19; the
+crossover was not measured again.)
 """
 
 
