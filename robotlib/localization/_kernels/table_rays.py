@@ -96,10 +96,27 @@ def _bucket_first(ox, oy, dx, dy, walls, ids, lo, hi, best, best_m):
     return best, best_m
 
 
+@nb.njit(**JIT, inline="always")
+def first_jump(ox, oy, size, field, fx0, fy0, fres):
+    """Where `walk_ray`'s first step from ``(ox, oy)`` lands, whatever the direction.
+
+    The clearance the field shows at the origin (less the slack) when it
+    exceeds two buckets, else 0: the very sums of `walk_ray`'s first step.
+    """
+    fny, fnx = field.shape
+    fxf = (ox - fx0) * (1.0 / fres)
+    fyf = (oy - fy0) * (1.0 / fres)
+    if 0.0 <= fyf < fny and 0.0 <= fxf < fnx:
+        clear = field[int(fyf), int(fxf)] - (0.7072 * fres + 1e-9)
+        if clear > 2.0 * size:
+            return 0.0 + clear
+    return 0.0
+
+
 @nb.njit(**JIT)
 def walk_ray(
     ox, oy, dx, dy, segments, walls, ids, x0, y0, size, nbx, nby, start, reach,
-    field, fx0, fy0, fres,
+    field, fx0, fy0, fres, t_start,
 ):  # fmt: skip
     """`robotlib.sensing._kernels.indexed_ray` on `bucket_walls`: the same ``(t, m)``.
 
@@ -108,7 +125,8 @@ def walk_ray(
     half a cell's diagonal) shows where it exceeds two buckets, and stops
     at the first bucket holding a hit before the ray leaves it: the nearest
     hit, the lowest index among equals, when nearer than ``reach``. A ray
-    from outside the index is cast against every wall.
+    from outside the index is cast against every wall. ``t_start`` is
+    `first_jump` of the origin (the same for every direction), or 0.
     """
     inv_size = 1.0 / size
     gx = (ox - x0) * inv_size
@@ -127,7 +145,7 @@ def walk_ray(
     ady = abs(dy)
     d_x = size / adx if adx > 0.0 else np.inf
     d_y = size / ady if ady > 0.0 else np.inf
-    t = 0.0
+    t = t_start
     while t <= reach:
         px = ox + t * dx
         py = oy + t * dy
@@ -202,12 +220,13 @@ def walked_sweep_table(
         cy = y0 + (i + 0.5) * resolution
         for j in range(nx):
             cx = x0 + (j + 0.5) * resolution
+            t0 = first_jump(cx, cy, bsize, field, x0, y0, resolution)
             for b in range(n_bins):
                 dx = dirs[b, 0]
                 dy = dirs[b, 1]
                 t, m = walk_ray(
                     cx, cy, dx, dy, segments, walls, ids, bx0, by0, bsize, nbx,
-                    nby, start, max_range, field, x0, y0, resolution,
+                    nby, start, max_range, field, x0, y0, resolution, t0,
                 )  # fmt: skip
                 r = np.inf
                 if m >= 0 and t < max_range:
