@@ -660,9 +660,12 @@ def building(seed: int = 17) -> tuple[list[Segment], list[tuple[int, int]]]:
     return segs, points
 
 
-def building_map() -> str:
-    """Return the text of ``building.map`` (`building`, MobileSim ``2D-Map``)."""
-    segs, points = building()
+def building_map(seed: int = 17) -> str:
+    """Return the text of ``building.map`` (`building`, MobileSim ``2D-Map``).
+
+    ``seed`` 17 is the shipped building; another seed draws another.
+    """
+    segs, points = building(seed)
     xs = [v for s in segs for v in s[0::2]]
     ys = [v for s in segs for v in s[1::2]]
     lines = [
