@@ -114,3 +114,22 @@ def test_every_room_is_reachable(building):
     # and the world's own admissible area agrees
     reach = building.free_space(0.1).data.sum() * 0.1**2
     assert reach > 300.0
+
+
+def test_lab3_panel_kidnaps_in_the_building(building):
+    """Lab 3's last panel: `MCL.best` on a building tour, kidnapped by the button."""
+    from robotlib.experiments import drive_tour
+    from robotlib.experiments.reproduce import recovery_steps
+    from robotlib.widgets.mcl import MCLPanel
+
+    tour = drive_tour(building, 0, 24)
+    panel = MCLPanel(tour, n_steps=24, preset="best (beam + KLD)")
+    assert panel.world.value == "building" and panel.history.localized_step()
+    panel.kidnap_button.click()
+    assert panel.kidnap.value == 12
+    taken = panel._route_of("building", 12)
+    assert taken.kidnapped_at == 12 and taken.world is building
+    np.testing.assert_array_equal(taken.truth[:12], tour.truth[:12])
+    assert np.hypot(*(taken.truth[12, :2] - tour.truth[12, :2])) > 1.0
+    assert "kidnapped before step 12" in panel.status.value
+    assert panel.recovered_after == recovery_steps(panel.history.error, 12)
