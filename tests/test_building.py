@@ -133,3 +133,19 @@ def test_lab3_panel_kidnaps_in_the_building(building):
     assert np.hypot(*(taken.truth[12, :2] - tour.truth[12, :2])) > 1.0
     assert "kidnapped before step 12" in panel.status.value
     assert panel.recovered_after == recovery_steps(panel.history.error, 12)
+
+
+def test_mcl_figure_puts_a_tall_building_beside_the_plots(building):
+    from matplotlib.figure import Figure
+
+    from robotlib.experiments import drive_tour
+    from robotlib.widgets.mcl import plot_mcl_run, run_mcl
+
+    history = run_mcl(drive_tour(building, 1, 6), seed=0)
+    fig = plot_mcl_run(history, building, Figure(figsize=(9, 5.4)))
+    ax_map, ax_err, ax_n = fig.axes[:3]
+    fig.canvas.draw()
+    m, e, n = (a.get_position() for a in (ax_map, ax_err, ax_n))
+    assert m.x1 < e.x0 and m.x1 < n.x0  # the map on the left
+    assert n.y1 < e.y0  # error above particles
+    assert m.height > 1.5 * e.height
