@@ -454,10 +454,16 @@ def test_scan_code_routes():
         "import importlib\nm = importlib.import_module('robotlib.localization.paper')\nm.innovation_weights",
         "exec('from robotlib.localization.paper import innovation_weights')",
         "from robotlib.localization.paper import *",
+        "from robotlib.localization import paper as p\nf = vars(p)['innovation_weights']",
+        "import operator, robotlib.localization.paper as p\noperator.attrgetter('innovation_weights')(p)",
     ]
     for src in bad:
         assert any(f.listed for f in scan_code(src, names)), src
-    honest = "from robotlib.localization import paper\nzhat = paper.expected(w, p)\n"
+    # a listed function's bare name is a lookup only where something is fetched by it
+    honest = (
+        "from robotlib.localization import paper\nzhat = paper.expected(w, p)\n"
+        "table = {'innovation_weights': 1}\nprint('innovation_weights', table['innovation_weights'])\n"
+    )
     assert scan_code(honest, names) == []
 
 
@@ -555,3 +561,32 @@ def test_a_submission_out_of_restarts_is_graded_not_a_grader_error(tmp_path):
     assert not r.status.startswith("grader error"), r.status
     assert r.points["mean"] == 0 and r.points["scale"] == 0, r.points
     assert "hanging or crashing" in r.reasons["scale"], r.reasons
+
+
+def test_a_process_that_cannot_start_is_restarted(tmp_path, monkeypatch):
+    """The system refusing a process (out of pids) is a restart, not a grader error."""
+    import errno
+
+    from robotlib.course import session
+
+    need_sandbox()
+    (tmp_path / "subs" / "sol").mkdir(parents=True)
+    write_notebook(solution(), tmp_path / "subs" / "sol" / "tiny.ipynb")
+    real, students = session.subprocess.Popen, []
+
+    def popen(cmd, *args, **kwargs):
+        if "student" in cmd:
+            students.append(cmd)
+            if len(students) == 2:  # the submission's first (the reference ran one)
+                raise OSError(errno.EAGAIN, "Resource temporarily unavailable")
+        return real(cmd, *args, **kwargs)
+
+    monkeypatch.setattr(session.subprocess, "Popen", popen)
+    opts = g.Options(cell_timeout=CELL_TIMEOUT, timeout=120)
+    results, _ = g.grade(tmp_path / "subs", "tiny", TINY, jobs=1, opts=opts, progress=False)  # fmt: skip
+    (r,) = results
+    assert len(students) == 3, len(students)
+    assert r.status.startswith("restarted"), r.status
+    assert {k: r.points[k] for k in FULL} == {k: float(v) for k, v in FULL.items()}, (
+        r.reasons
+    )

@@ -198,6 +198,13 @@ def _const_str(node) -> str | None:
     return None
 
 
+_LOOKUPS = {
+    "getattr", "hasattr", "attrgetter", "methodcaller", "__getattribute__",
+    "__getattr__", "get", "pop", "setdefault", "import_module", "__import__",
+}  # fmt: skip
+"""Calls whose string arguments name a thing to fetch (a bare name counts there)."""
+
+
 class _Scanner(ast.NodeVisitor):
     def __init__(self, names: dict[str, str]):
         self.names = names  # alias path -> listed
@@ -205,6 +212,7 @@ class _Scanner(ast.NodeVisitor):
         self.env: dict[str, str] = {}  # local name -> dotted path
         self.found: list[Finding] = []
         self.docstrings: set[int] = set()
+        self.lookups: set[int] = set()  # strings used as a name to look up
 
     def hit(self, dotted: str, how: str, node) -> bool:
         for path, listed in self.names.items():
@@ -295,6 +303,10 @@ class _Scanner(ast.NodeVisitor):
             self.found.append(Finding(DYNAMIC[node.id], "used", node.lineno, False))
 
     def visit_Call(self, node):
+        f = node.func
+        called = f.id if isinstance(f, ast.Name) else getattr(f, "attr", "")
+        if called in _LOOKUPS:
+            self.lookups.update(id(a) for a in node.args)
         d = self.dotted(node)
         if d and d in self.names:
             self.hit(d, "looked up by a string", node)
@@ -305,6 +317,12 @@ class _Scanner(ast.NodeVisitor):
                 for fd in scan_code(s, self.names):
                     how, line = f"in {f.id}()", node.lineno
                     self.found.append(Finding(fd.function, how, line, via=fd.via))
+        self.generic_visit(node)
+
+    def visit_Subscript(self, node):
+        v = node.value
+        if isinstance(v, ast.Call) or getattr(v, "attr", "") == "__dict__":
+            self.lookups.add(id(node.slice))  # vars(m)["name"], m.__dict__["name"]
         self.generic_visit(node)
 
     def visit_Constant(self, node):
@@ -319,7 +337,7 @@ class _Scanner(ast.NodeVisitor):
         self.generic_visit(node)
 
     def _string(self, s: str, node) -> None:
-        if s.strip() in self.lasts:
+        if s.strip() in self.lasts and id(node) in self.lookups:
             listed = self.lasts[s.strip()]
             self.found.append(Finding(listed, "named in a string", node.lineno))
         for path, listed in self.names.items():

@@ -234,21 +234,29 @@ class _Proc:
             (scratch / "numba").mkdir()
             if uid is not None:
                 os.chown(scratch / "numba", uid, uid)
-        self.popen = subprocess.Popen(
-            cmd,
-            env=env,
-            stdin=subprocess.DEVNULL,
-            stdout=log,
-            stderr=log,
-            pass_fds=(r_in, w_out),
-            start_new_session=True,
-        )
-        os.close(r_in)
-        os.close(w_out)
         self.fin, self.fout = r_out, w_in
         self.sandbox = opts.sandbox
         self.alive = True
-        send(self.fout, spec)
+        try:
+            self.popen = subprocess.Popen(
+                cmd,
+                env=env,
+                stdin=subprocess.DEVNULL,
+                stdout=log,
+                stderr=log,
+                pass_fds=(r_in, w_out),
+                start_new_session=True,
+            )
+        except OSError as exc:  # no process (out of pids, ...): reported as its end
+            self.popen = None
+            log.write(f"could not start the {role} process: {exc}\n".encode())
+        os.close(r_in)
+        os.close(w_out)
+        if self.popen is not None:
+            try:
+                send(self.fout, spec)
+            except OSError:
+                pass  # it died at start: its reader sees the end of its pipe
         threading.Thread(target=self._read, args=(events,), daemon=True).start()
 
     def _read(self, events: queue.Queue) -> None:
@@ -271,11 +279,12 @@ class _Proc:
         if not self.alive:
             return
         self.alive = False
-        _kill_tree(self.popen.pid)
-        try:
-            self.popen.wait(timeout=10)
-        except subprocess.TimeoutExpired:
-            pass
+        if self.popen is not None:
+            _kill_tree(self.popen.pid)
+            try:
+                self.popen.wait(timeout=10)
+            except subprocess.TimeoutExpired:
+                pass
         if not self.sandbox:
             kill_job(self.job)
         for fd in (self.fin, self.fout):
@@ -422,8 +431,8 @@ def run_submission(
                 role, g, header, payload = events.get(timeout=0.2)
             except queue.Empty:
                 continue
-            if g != gen[role]:
-                continue  # from a process already replaced
+            if g != gen[role] or procs[role] is None:
+                continue  # from a process already replaced or given up
             op = header.get("op")
             if role == "student":
                 if op == "cell":

@@ -3,7 +3,8 @@
 Also the disc inflation of a grid and the segment clearance the sampling
 planners use. Kernels take only contiguous arrays and scalars; the public
 functions in `robotlib.planning` validate their input and call them. This
-module imports nothing of robotlib's but the JIT options.
+module imports nothing of robotlib's but the JIT options and the world's
+point-to-segment distance.
 
 Grids are ``(ny, nx)``, row ``i`` is ``y`` and column ``j`` is ``x``; a
 node is the flat index ``k = i * nx + j``. A move to a neighbour costs its
@@ -20,6 +21,7 @@ import numba as nb
 import numpy as np
 
 from .._config import JIT
+from ..world._kernels import point_segment_distance
 
 SQRT2 = math.sqrt(2.0)
 
@@ -521,20 +523,6 @@ def inflate(occupied, r_cells, out):
 
 # -- continuous geometry for the sampling planners -------------------------
 @nb.njit(**JIT)
-def _point_segment(px, py, x1, y1, x2, y2):
-    dx = x2 - x1
-    dy = y2 - y1
-    len2 = dx * dx + dy * dy
-    t = 0.0
-    if len2 > 0.0:
-        t = ((px - x1) * dx + (py - y1) * dy) / len2
-        t = min(1.0, max(0.0, t))
-    ex = x1 + t * dx - px
-    ey = y1 + t * dy - py
-    return math.sqrt(ex * ex + ey * ey)
-
-
-@nb.njit(**JIT)
 def _cross(ax, ay, bx, by):
     return ax * by - ay * bx
 
@@ -550,10 +538,10 @@ def segment_distance(ax, ay, bx, by, cx, cy, dx, dy):
         (d3 > 0.0 and d4 < 0.0) or (d3 < 0.0 and d4 > 0.0)
     ):
         return 0.0
-    best = _point_segment(ax, ay, cx, cy, dx, dy)
-    best = min(best, _point_segment(bx, by, cx, cy, dx, dy))
-    best = min(best, _point_segment(cx, cy, ax, ay, bx, by))
-    best = min(best, _point_segment(dx, dy, ax, ay, bx, by))
+    best = point_segment_distance(ax, ay, cx, cy, dx, dy)
+    best = min(best, point_segment_distance(bx, by, cx, cy, dx, dy))
+    best = min(best, point_segment_distance(cx, cy, ax, ay, bx, by))
+    best = min(best, point_segment_distance(dx, dy, ax, ay, bx, by))
     return best
 
 
