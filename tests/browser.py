@@ -6,10 +6,11 @@ no news; `Browser` opens Debian's chromium through playwright (its
 executable path set: no browser download) with every non-loopback request
 blocked. `run_notebook` opens a notebook, runs all cells from the menu,
 saves it and returns what happened; `check_panels` moves the first slider
-of each panel and times its first feedback and its redraw (a change of the
-pixels of its image, read through a canvas, so a greyed-out old figure does
-not count); `check_animations` presses each player's play button and reads
-its frame slider.
+of each panel and times its first feedback (polled, and in the page) and
+its redraw (a change of the pixels of its image, read through a canvas, so a
+greyed-out old figure does not count), and its answer to a second move made
+while the kernel runs the first; `check_animations` presses each player's
+play button and reads its frame slider.
 """
 
 from __future__ import annotations
@@ -24,6 +25,8 @@ import time
 import urllib.request
 from dataclasses import dataclass, field
 from pathlib import Path
+
+from tests import browser_feedback as in_page
 
 CHROMIUM = "/usr/bin/chromium"
 LAB_SETTINGS = {
@@ -476,16 +479,25 @@ def _settle(panel, slider, bound: float, quiet: float = 1.0) -> float:
 
 
 def _move(page, panel, handle, slider, bound: float, stem: str) -> dict:
-    """Move one slider one step once the panel is still; time its answer."""
+    """Move one slider one step once the panel is still; time its answer.
+
+    Once the kernel has said it runs (the status line no longer reads the
+    browser's own "running ..."), and before the new figure shows, the
+    slider moves once more: ``busy`` times the answer to that second move,
+    made while the kernel is busy with the first.
+    """
     key = "ArrowLeft" if handle.evaluate(_AT_TOP) else "ArrowRight"
     settled = _settle(panel, slider, bound)  # a first run may still be drawing
     before_pixels = panel.evaluate(_HASH_IMAGES)
     before_text = panel.evaluate(_OUTSIDE, slider)
+    before_status = in_page.status_text(panel)
     panel.screenshot(path=f"{stem}-before.png")
     handle.focus()
+    in_page.watch(panel, slider)
     t0 = time.monotonic()
     page.keyboard.press(key)
     feedback = redraw = error = None
+    page_times, busy = None, None
     while time.monotonic() - t0 < bound:
         now = time.monotonic() - t0
         if feedback is None and panel.evaluate(_OUTSIDE, slider) != before_text:
@@ -498,12 +510,23 @@ def _move(page, panel, handle, slider, bound: float, stem: str) -> dict:
             redraw = now
             feedback = now if feedback is None else feedback  # the answer itself
             break
+        status = in_page.status_text(panel)
+        if busy is None and status not in (None, before_status, "running ..."):
+            page_times = in_page.read(page)  # the kernel runs the first move
+            in_page.watch(panel, slider)
+            busy = {"at_s": time.monotonic() - t0, "status": status}
+            page.keyboard.press(key)
         time.sleep(0.02)
+    if busy is None:
+        page_times = in_page.read(page)
+    else:
+        busy.update(in_page.read(page))
     if redraw is not None or error is not None:
         page.wait_for_timeout(300)
         panel.screenshot(path=f"{stem}-after.png")
     return {"key": key, "settle_s": settled, "feedback_s": feedback,
-            "redraw_s": redraw, "error": error}  # fmt: skip
+            "redraw_s": redraw, "error": error, "in_page": page_times,
+            "busy": busy, "status_line": before_status is not None}  # fmt: skip
 
 
 def check_panels(
@@ -521,10 +544,17 @@ def check_panels(
     itself; the moved slider's own readout does not count), ``redraw_s``
     (until its image's pixels change; None if they did not within ``bound``
     s), ``error`` (the last line of an error the panel shows instead, else
-    None) and the slider's label. A panel that redrew but showed its first
-    sign later than ``feedback_bound`` s (a loaded machine) is moved once
-    more and the second try counts (``tries``; ``first_try`` keeps the
-    first); a panel that does not redraw, or shows an error, is not.
+    None) and the slider's label; ``in_page`` the same first sign timed in
+    the page (`tests.browser_feedback`: no polling latency), with
+    ``running_s`` until a robotlib status line (``status_line``) read
+    "running"; ``busy`` the page's times for a second move made once the
+    kernel said it runs the first (None if the figure came first), and
+    ``at_s`` when that was (``redraw_s - at_s``: the newest change's
+    redraw, a superseded run's figure being dropped). A panel that redrew
+    but showed its first sign later than ``feedback_bound`` s (a loaded
+    machine) is moved once more and the second try counts (``tries``;
+    ``first_try`` keeps the first); a panel that does not redraw, or shows
+    an error, is not.
     """
     results = []
     outputs = page.locator(".jp-OutputArea-output:has(.widget-slider):has(img)")

@@ -43,6 +43,9 @@ NOTEBOOKS = [
 RUN_ALL_LIMIT = 600.0  # s per notebook: ~60 s under nbval, 4x that on a loaded machine
 PANEL_REDRAW = 60.0  # s from a slider change to the new figure
 PANEL_FEEDBACK = 1.0  # s to the first sign of a run (100 ms on an idle laptop)
+# s from the key press to "running ..." in the page, for a panel with a status
+# line (robotlib's answer in the browser, kernel or no kernel: a few ms)
+PANEL_RUNNING_IN_PAGE = 0.3
 UNSOLVED_LINES = 4
 SHRUNK = 0.7  # a figure shown below 70 % of its own width is too wide for the page
 
@@ -86,6 +89,11 @@ def problems(run, solution: bool) -> list[str]:
         elif p["feedback_s"] is None or p["feedback_s"] > PANEL_FEEDBACK:
             late = f"panel {p['panel']} showed no feedback within {PANEL_FEEDBACK} s"
             out.append(late)
+        for when, t in (("", p.get("in_page")), (" while busy", p.get("busy"))):
+            s = None if t is None else t.get("running_s")
+            if p.get("status_line") and t and (s is None or s > PANEL_RUNNING_IN_PAGE):
+                said = f"did not read 'running' within {PANEL_RUNNING_IN_PAGE} s"
+                out.append(f"panel {p['panel']} {said}{when}")
     for natural, shown in run.figures:
         if shown < SHRUNK * natural:
             out.append(f"a {natural} px figure is shrunk to {shown / natural:.0%}")

@@ -19,7 +19,15 @@ import threading
 import traceback
 from collections.abc import Callable
 
-__all__ = ["STALE_CSS", "Cancelled", "LiveRunner", "in_kernel"]
+__all__ = [
+    "STALE_CSS",
+    "Cancelled",
+    "LiveRunner",
+    "in_kernel",
+    "figure_output",
+    "error_output",
+    "status_line",
+]
 
 STALE_CSS = "<style>.robotlib-stale,.robotlib-stale img{opacity:.45}</style>"
 """A panel puts this in its box; its last figure, class ``robotlib-stale``,
@@ -100,6 +108,12 @@ class LiveRunner:
             raise Cancelled
 
     @property
+    def newer_waiting(self) -> bool:
+        """True when a request newer than the running one waits."""
+        with self._cond:
+            return self._pending is not None
+
+    @property
     def busy(self) -> bool:
         """True while a request is waiting or running."""
         with self._cond:
@@ -143,3 +157,41 @@ class LiveRunner:
                     self._thread = None
                     return
             self._run_pending()
+
+
+def figure_output(figure) -> dict:
+    """Return ``figure`` as an output (PNG) to put in an ``ipywidgets.Output``.
+
+    Setting ``output.outputs = (figure_output(fig),)`` shows it from any
+    thread (no ``with output:`` capture, which belongs to the kernel's main
+    thread); drawn as Jupyter's inline backend draws (tight box).
+    """
+    import base64
+    import io
+
+    buf = io.BytesIO()
+    figure.savefig(buf, format="png", bbox_inches="tight")
+    return {
+        "output_type": "display_data",
+        "data": {
+            "image/png": base64.b64encode(buf.getvalue()).decode("ascii"),
+            "text/plain": f"<Figure of {len(figure.axes)} axes>",
+        },
+        "metadata": {},
+    }
+
+
+def error_output(text: str) -> dict:
+    """Return a traceback's text as an ``ipywidgets.Output`` output (stderr)."""
+    return {"output_type": "stream", "name": "stderr", "text": text}
+
+
+def status_line():
+    """Return a new `robotlib.widgets._status.StatusLine` (anywidget loads on use).
+
+    Imported here, not at the top of the panels' modules, so that importing
+    a panel (a lab's first cell) does not load anywidget.
+    """
+    from ._status import StatusLine
+
+    return StatusLine()

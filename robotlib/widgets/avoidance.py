@@ -12,7 +12,9 @@ Thin wrappers over plain, tested functions:
   cycle; `HistogramPanel` shows them with a time slider, beside the map.
 
 Panels run headless (their callbacks are plain methods), so tests set their
-values programmatically and read the results.
+values programmatically and read the results. In a kernel an episode runs
+on a worker thread (`LiveRunner`: a newer change supersedes it), so the
+panel keeps answering; its `StatusLine` greys it in the browser at once.
 """
 
 from __future__ import annotations
@@ -20,8 +22,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from functools import partial
 
-import matplotlib.pyplot as plt
 import numpy as np
+from matplotlib.figure import Figure
 
 from ..avoidance import (
     VFH,
@@ -33,7 +35,14 @@ from ..avoidance import (
 )
 from ..plotting.avoidance import plot_clearance, plot_episode, plot_polar_histogram
 from ..world import load_world
-from ._live import STALE_CSS
+from ._live import (
+    STALE_CSS,
+    Cancelled,
+    LiveRunner,
+    error_output,
+    figure_output,
+    status_line,
+)
 
 __all__ = [
     "KINDS",
@@ -151,17 +160,15 @@ class EpisodePanel:
             value=start["reach"], min=0.3, max=3.0, step=0.1,
             description="Br. reach", **opts,
         )  # fmt: skip
-        self.status = w.Label()
+        self.status = status_line()
         self.output = w.Output()
-        for c in (
-            self.kind,
-            self.pair,
-            self.threshold,
-            self.k_rep,
-            self.d0,
-            self.reach,
-        ):
+        self.output.add_class("robotlib-figure")
+        controls = (
+            self.kind, self.pair, self.threshold, self.k_rep, self.d0, self.reach,
+        )  # fmt: skip
+        for c in controls:
             c.observe(lambda change: self.refresh(), names="value")
+        self.status.watch(*controls)
         self.widget = w.VBox(
             [
                 w.HTML(STALE_CSS),
@@ -172,10 +179,15 @@ class EpisodePanel:
                 self.output,
             ]
         )
-        self.figure = plt.figure(figsize=(10, 4))
-        plt.close(self.figure)
+        self.widget.add_class("robotlib-panel")
+        self.figure = Figure(figsize=(10, 4))
         self.episode = None
-        self.refresh()
+        self.runner = LiveRunner(self._job, self._done, self._failed)
+        inline, self.runner.background = self.runner.background, False
+        try:  # the first figure is drawn before the cell ends
+            self.refresh()
+        finally:
+            self.runner.background = inline
 
     def settings(self) -> dict:
         """Return the current gains, as `make_controller` keywords."""
@@ -187,32 +199,54 @@ class EpisodePanel:
         }
 
     def refresh(self):
-        """Run the episode with the current choices and redraw."""
-        from IPython.display import display
+        """Run the episode with the current choices and redraw.
 
-        self.status.value = f"running {self.kind.value} on pair {self.pair.value} ..."
+        Says at once that it runs; returns the episode when the run is
+        inline (tests, scripts, the first run), else None (on a worker
+        thread, the panel redraws itself when the run ends).
+        """
+        request = {
+            "kind": self.kind.value, "pair": int(self.pair.value),
+            "settings": self.settings(), "front": self.status.values(),
+        }  # fmt: skip
+        self.status.value = f"running {request['kind']} on pair {request['pair']} ..."
+        self.status.busy = True
         self.output.add_class("robotlib-stale")  # the old figure greys at once
+        self.runner.submit(request)
+        return None if self.runner.background else self.episode
+
+    def _job(self, request):
         try:
-            self.episode = ep = episode_for(
-                self.world_name, int(self.pair.value), self.kind.value, self.seed,
-                **self.settings(), **self.parts,
+            ep = episode_for(
+                self.world_name, request["pair"], request["kind"], self.seed,
+                **request["settings"], **self.parts,
             )  # fmt: skip
+        except Cancelled:
+            raise
         except Exception as e:  # a student's piece failed: say so, keep the trace
             self.status.value = f"the run failed: {type(e).__name__}: {e}"
+            self.status.answered(request["front"], busy=self.runner.newer_waiting)
             raise
+        self.runner.check()
         self.figure.clf()
         a, b = self.figure.subplots(1, 2, gridspec_kw={"width_ratios": [1.3, 1]})
         plot_episode(a, ep, self.world, echoes=False)
         plot_clearance(b, ep)
+        self.runner.check()
+        return ep, figure_output(self.figure)
+
+    def _done(self, request, result) -> None:
+        self.episode = ep = result[0]
+        self.output.outputs = (result[1],)
+        self.output.remove_class("robotlib-stale")
         self.status.value = (
             f"{ep.controller}: {ep.outcome} after {ep.duration:.1f} s, "
             f"min clearance {ep.min_clearance:.2f} m, {ep.collisions} collision(s)"
         )
-        self.output.clear_output(wait=True)
-        with self.output:
-            display(self.figure)
-        self.output.remove_class("robotlib-stale")
-        return ep
+        self.status.answered(request["front"], busy=self.runner.newer_waiting)
+
+    def _failed(self, request, text) -> None:
+        self.output.outputs = (error_output(text),)
 
     def _ipython_display_(self):
         from IPython.display import display
@@ -280,21 +314,31 @@ class HistogramPanel:
             continuous_update=False,
         )  # fmt: skip
         self.output = w.Output()
-        self.status = w.Label()
+        self.output.add_class("robotlib-figure")
+        self.status = status_line()
         self.step.observe(lambda change: self.refresh(), names="value")
+        self.status.watch(self.step)
         self.widget = w.VBox([w.HTML(STALE_CSS), self.step, self.status, self.output])
-        self.figure = plt.figure(figsize=(10, 4))
-        plt.close(self.figure)
-        self.refresh()
+        self.widget.add_class("robotlib-panel")
+        self.figure = Figure(figsize=(10, 4))
+        self.runner = LiveRunner(self._job, self._done, self._failed)
+        inline, self.runner.background = self.runner.background, False
+        try:
+            self.refresh()
+        finally:
+            self.runner.background = inline
 
     def refresh(self):
         """Redraw the map and the histogram at the slider's cycle."""
-        from IPython.display import display
-
         k = int(self.step.value)
-        ep, r = self.episode, self.replay
         self.status.value = f"drawing cycle {k} ..."
+        self.status.busy = True
         self.output.add_class("robotlib-stale")
+        self.runner.submit({"k": k, "front": self.status.values()})
+
+    def _job(self, request):
+        k = request["k"]
+        ep, r = self.episode, self.replay
         self.figure.clf()
         a = self.figure.add_subplot(1, 2, 1)
         b = self.figure.add_subplot(1, 2, 2, projection="polar")
@@ -303,11 +347,20 @@ class HistogramPanel:
         a.plot(*poses[k, :2], "o", color="k", ms=8)
         a.set_title(f"t = {ep.time[k]:.1f} s")
         plot_polar_histogram(b, r.histograms[k], r.threshold, r.steer[k], r.target[k])
-        self.output.clear_output(wait=True)
-        with self.output:
-            display(self.figure)
+        self.runner.check()
+        return figure_output(self.figure)
+
+    def _done(self, request, result) -> None:
+        k, ep = request["k"], self.episode
+        self.output.outputs = (result,)
         self.output.remove_class("robotlib-stale")
         self.status.value = f"cycle {k} of {len(ep.time) - 1}, t = {ep.time[k]:.1f} s"
+        self.status.answered(request["front"], busy=self.runner.newer_waiting)
+
+    def _failed(self, request, text) -> None:
+        self.status.value = "the drawing failed: " + text.strip().splitlines()[-1]
+        self.status.answered(request["front"], busy=self.runner.newer_waiting)
+        self.output.outputs = (error_output(text),)
 
     def _ipython_display_(self):
         from IPython.display import display

@@ -6,7 +6,11 @@ This one, on every change, first shows that it is working (a status line
 reading "running ...", the old figure greyed), then calls ``f`` with the
 controls' values, shows its figure (``plt.show()`` inside ``f``, or any
 figure ``f`` leaves open) in place of the old one and says how long it took.
-An error in ``f`` shows as its traceback in the figure's place.
+An error in ``f`` shows as its traceback in the figure's place. The status
+line is a `StatusLine`: in the browser it reads "running ..." and greys the
+figure the moment a control moves, even while the kernel still draws the
+previous change (``f`` itself runs on the kernel's main thread, as pyplot
+wants).
 
 Used by the labs' small panels (Lab 1's likelihood exponent, Lab 4's A*
 weight). Imports nothing of robotlib but the panels' shared pieces.
@@ -17,7 +21,7 @@ from __future__ import annotations
 import time
 from collections.abc import Callable
 
-from ._live import STALE_CSS
+from ._live import STALE_CSS, status_line
 
 __all__ = ["InteractPanel", "interact"]
 
@@ -48,8 +52,9 @@ class InteractPanel:
         import ipywidgets as w
 
         self.function, self.controls = function, controls
-        self.status = w.Label()
+        self.status = status_line()
         self.output = w.Output()
+        self.output.add_class("robotlib-figure")
         self.widget = w.VBox(
             [w.HTML(STALE_CSS), *controls.values(), self.status, self.output]
         )
@@ -59,6 +64,7 @@ class InteractPanel:
             if hasattr(c, "description") and not c.description:
                 c.description = name  # as ipywidgets.interact labels it
             c.observe(self.run, names="value")
+        self.status.watch(*controls.values())
         self.run()
 
     def describe(self) -> str:
@@ -70,8 +76,9 @@ class InteractPanel:
 
     def run(self, _change=None) -> None:
         """Say that it is working, grey the old figure, draw the new one."""
-        shown = self.describe()
+        shown, front = self.describe(), self.status.values()
         self.status.value = f"running: {shown} ..."
+        self.status.busy = True
         self.output.add_class("robotlib-stale")
         t0 = time.perf_counter()
         failed = True
@@ -85,6 +92,7 @@ class InteractPanel:
         self.status.value = (
             f"{shown}: failed" if failed else f"{shown} (drawn in {self.seconds:.1f} s)"
         )
+        self.status.answered(front)
 
     def _ipython_display_(self):
         from IPython.display import display

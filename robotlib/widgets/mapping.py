@@ -3,12 +3,14 @@
 `build_map` (plain, tested) maps a recorded drive with the chosen sensor and
 log-odds weights, at the true poses, the odometry's, or FastSLAM's with a
 chosen particle count; `MappingPanel` puts sliders over it and redraws the
-map beside the truth (``continuous_update=False``).
+map beside the truth (``continuous_update=False``). In a kernel the map is
+built on a worker thread (`LiveRunner`: a newer change supersedes it), so the
+panel keeps answering; its `StatusLine` greys it in the browser at once.
 """
 
 from __future__ import annotations
 
-import matplotlib.pyplot as plt
+from matplotlib.figure import Figure
 
 from ..mapping import (
     InverseLaserModel,
@@ -19,7 +21,14 @@ from ..mapping import (
     run_fastslam,
 )
 from ..plotting.mapping import plot_map_vs_truth
-from ._live import STALE_CSS
+from ._live import (
+    STALE_CSS,
+    Cancelled,
+    LiveRunner,
+    error_output,
+    figure_output,
+    status_line,
+)
 
 __all__ = ["build_map", "MappingPanel"]
 
@@ -66,9 +75,12 @@ class MappingPanel:
             options=["true", "odometry", "fastslam"], description="poses"
         )
         self.out = w.Output()
-        self.status = w.Label()
-        for c in (self.l_occ, self.l_free, self.n, self.sensor, self.poses):
+        self.out.add_class("robotlib-figure")
+        self.status = status_line()
+        controls = (self.l_occ, self.l_free, self.n, self.sensor, self.poses)
+        for c in controls:
             c.observe(lambda _: self.redraw(), names="value")
+        self.status.watch(*controls)
         self.widget = w.VBox(
             [
                 w.HTML(STALE_CSS),
@@ -81,30 +93,56 @@ class MappingPanel:
                 self.out,
             ]  # fmt: skip
         )
+        self.widget.add_class("robotlib-panel")
         self.score = None
-        self.redraw()
+        self.runner = LiveRunner(self._job, self._done, self._failed)
+        inline, self.runner.background = self.runner.background, False
+        try:  # the first map is drawn before the cell ends
+            self.redraw()
+        finally:
+            self.runner.background = inline
 
     def redraw(self):
-        """Rebuild the map from the current choices and draw it."""
-        what = f"{self.sensor.value}, {self.poses.value} poses"
-        self.status.value = f"mapping: {what} ..."
+        """Rebuild the map from the current choices and draw it.
+
+        Says at once that it runs; inline (tests, scripts, the first map) the
+        map is drawn on return, in a kernel on a worker thread.
+        """
+        request = {
+            "what": f"{self.sensor.value}, {self.poses.value} poses",
+            "args": (self.sensor.value, self.poses.value, self.l_occ.value,
+                     self.l_free.value, self.n.value),
+            "front": self.status.values(),
+        }  # fmt: skip
+        self.status.value = f"mapping: {request['what']} ..."
+        self.status.busy = True
         self.out.add_class("robotlib-stale")  # the old map greys at once
+        self.runner.submit(request)
+
+    def _job(self, request):
         try:
-            grid, self.score = build_map(
-                self.log, self.sensor.value, self.poses.value, self.l_occ.value,
-                self.l_free.value, self.n.value,
-            )  # fmt: skip
+            grid, score = build_map(self.log, *request["args"])
+        except Cancelled:
+            raise
         except Exception as e:  # say so in the panel, keep the trace
             self.status.value = f"the map failed: {type(e).__name__}: {e}"
+            self.status.answered(request["front"], busy=self.runner.newer_waiting)
             raise
-        with self.out:
-            self.out.clear_output(wait=True)
-            fig, ax = plt.subplots(figsize=(6, 4.5))
-            plot_map_vs_truth(ax, grid, self.log.world,
-                              title=f"F1 {self.score.f1:.2f}")  # fmt: skip
-            plt.show()
+        self.runner.check()
+        fig = Figure(figsize=(6, 4.5))
+        plot_map_vs_truth(fig.add_subplot(), grid, self.log.world,
+                          title=f"F1 {score.f1:.2f}")  # fmt: skip
+        return score, figure_output(fig)
+
+    def _done(self, request, result) -> None:
+        self.score, shown = result
+        self.out.outputs = (shown,)
         self.out.remove_class("robotlib-stale")
-        self.status.value = f"{what}: F1 {self.score.f1:.2f}"
+        self.status.value = f"{request['what']}: F1 {self.score.f1:.2f}"
+        self.status.answered(request["front"], busy=self.runner.newer_waiting)
+
+    def _failed(self, request, text) -> None:
+        self.out.outputs = (error_output(text),)
 
     def _ipython_display_(self):
         from IPython.display import display

@@ -27,7 +27,7 @@ import numpy as np
 
 from ..localization import History
 from ..plotting.mcl import plot_mcl_run, plot_particle_snapshots
-from ._live import LiveRunner
+from ._live import LiveRunner, status_line
 from ._mcl_choices import (
     _DEFAULTS,
     PRESETS,
@@ -167,7 +167,7 @@ class MCLPanel:
             description="Kidnap", tooltip="kidnap the robot halfway through the run"
         )
         self.kidnap_button.on_click(self._kidnap_clicked)
-        self.status = w.Label()
+        self.status = status_line()
         self.progress = w.IntProgress(
             value=0, min=0, max=1, layout=w.Layout(width="200px")
         )
@@ -179,6 +179,10 @@ class MCLPanel:
         self.preset.observe(self._preset_changed, names="value")
         self.world.observe(self._changed, names="value")
         self.kidnap.observe(self._changed, names="value")
+        self.status.watch(
+            self.lam, self.n, self.sensor, self.resampler, self.tracking,
+            self.world, self.kidnap,
+        )  # fmt: skip
         self.widget = w.VBox(
             [
                 w.HTML(_STALE_CSS),
@@ -324,8 +328,10 @@ class MCLPanel:
             "world": self.world.value,
             "kidnap": int(self.kidnap.value),
             "asked": time.perf_counter(),
+            "front": self.status.values(),
         }
         self.status.value = f"running: {self.describe(request['settings'])} ..."
+        self.status.busy = True
         self.progress.value = 0
         self.progress.bar_style = "info"
         self.image.add_class("robotlib-stale")
@@ -386,10 +392,12 @@ class MCLPanel:
             f"{request['world']}, {self.preset.value}: {result}; "
             f"{step_ms:.0f} ms per step"
         )
+        self.status.answered(request["front"], busy=self.runner.newer_waiting)
 
     def _failed(self, request, text) -> None:
         self.progress.bar_style = "danger"
         self.status.value = "the run failed: " + text.strip().splitlines()[-1]
+        self.status.answered(request["front"], busy=self.runner.newer_waiting)
 
     def _ipython_display_(self):
         from IPython.display import display
