@@ -1,7 +1,9 @@
 """Numba options shared by every kernel in robotlib (one place to change them).
 
 Also `serial_and_parallel`, which compiles one kernel body both ways. Only
-kernels import this module; it imports nothing of robotlib.
+kernels import this module; it imports nothing of robotlib's but
+`robotlib._kernel_cache`, which it runs once: cached kernels whose sources
+changed are deleted before any is loaded.
 
 Threads wait passively: unless the environment says otherwise
 (``OMP_WAIT_POLICY`` or ``GOMP_SPINCOUNT`` set), importing this module sets
@@ -19,6 +21,10 @@ if "OMP_WAIT_POLICY" not in os.environ and "GOMP_SPINCOUNT" not in os.environ:
     os.environ["OMP_WAIT_POLICY"] = "PASSIVE"
 
 import numba as nb  # noqa: E402  (after the wait policy: libgomp reads it once)
+
+from . import _kernel_cache  # noqa: E402
+
+_kernel_cache.check()
 
 JIT = {"cache": True, "nogil": True, "fastmath": False, "error_model": "numpy"}
 """Options for ``numba.njit`` on serial kernels."""

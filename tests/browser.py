@@ -561,7 +561,9 @@ def check_panels(
     for k, panel in enumerate(outputs.element_handles()):
         panel.scroll_into_view_if_needed()
         handles = panel.query_selector_all(
-            ".widget-slider:not(.mod-disabled) .noUi-handle"
+            # a disabled slider (greyed: its setting is unused) cannot move
+            ".widget-slider:not(.mod-disabled)"
+            " .noUi-target:not([disabled]) .noUi-handle"
         )
         if not handles:
             continue

@@ -235,10 +235,22 @@ def bilinear_evidence(L, origin, res, px, py):
     )
 
 
-def match_laser(L, origin, res, pose, mount, angles, ranges, max_range, steps, levels):
-    """Hill-climb a pose to fit the scan's end points to the map (the kernel's rule)."""
+def match_laser(
+    L, origin, res, pose, mount, angles, ranges, max_range, steps, levels, prior=(0, 0)
+):
+    """Hill-climb a pose to fit the scan's end points to the map (the kernel's rule).
+
+    ``prior = (w_xy, w_th)``: the score less ``w_xy d^2 + w_th a^2`` from ``pose``.
+    """
 
     def score(p):
+        return (
+            fit(p)
+            - prior[0] * ((p[0] - pose[0]) ** 2 + (p[1] - pose[1]) ** 2)
+            - (prior[1] * (p[2] - pose[2]) ** 2)
+        )
+
+    def fit(p):
         x, y, th = p
         lx = x + math.cos(th) * mount[0] - math.sin(th) * mount[1]
         ly = y + math.sin(th) * mount[0] + math.cos(th) * mount[1]

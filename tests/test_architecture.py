@@ -17,6 +17,7 @@ ROOT = Path(__file__).resolve().parents[1] / "robotlib"
 
 LAYERS = {
     "robotlib._config": 0,
+    "robotlib._kernel_cache": -1,  # below _config, which runs it once
     "robotlib._random": 0,
     "robotlib.p3dx": 0,
     "robotlib.world": 1,

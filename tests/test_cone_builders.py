@@ -19,7 +19,8 @@ from robotlib.localization import _kernels as lk
 from robotlib.localization.cones import _sweep_builds
 from robotlib.sensing import SonarModel
 from robotlib.sensing import _kernels as sk
-from robotlib.world import load_world
+from robotlib.world import World, load_world
+from robotlib.world.index import SegmentIndex
 
 
 def point_grid_map(x0=-4780, y0=-2700, side=3000, step=20) -> str:
@@ -149,16 +150,23 @@ def test_exact_path_heading_sectors_equal_every_wall(grid_map, which):
     np.testing.assert_array_equal(got, ref)
 
 
-@pytest.mark.parametrize("seed", [0, 1, 2])
-def test_sweep_equals_the_every_wall_kernel_on_random_walls(seed):
+def random_walls(seed, n=60):
     """Random walls: short, long, zero-length, through cell centres, repeated."""
     rng = np.random.default_rng(seed)
-    a = rng.uniform(0.0, 4.0, (60, 2))
-    walls = np.column_stack([a, a + rng.normal(0.0, 0.8, (60, 2))])
+    a = rng.uniform(0.0, 4.0, (n, 2))
+    walls = np.column_stack([a, a + rng.normal(0.0, 0.8, (n, 2))])
     walls[:5, 2:] = walls[:5, :2]  # zero length
     walls[5:10] = np.round(walls[5:10] / 0.05) * 0.05 + 0.025  # ends on cell centres
     walls[10:13] = walls[20:23]  # the same wall twice: the lower index wins
     walls[13, :] = [0.025, 0.025, 3.975, 3.975]  # a diagonal through centres
+    walls[14, :] = [1.0, 0.5, 1.0, 3.5]  # axis-aligned, as a map's points' crosses
+    walls[15, :] = [0.5, 2.0, 3.5, 2.0]
+    return walls
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_sweep_equals_the_every_wall_kernel_on_random_walls(seed):
+    walls = random_walls(seed)
     sonar = SonarModel(max_range=3.0)
     shape, origin = (40, 40), (0.0, 0.0)
     ref = every_wall(_World(walls), sonar, 0.1, 1, shape, origin)
@@ -171,6 +179,36 @@ def test_sweep_equals_the_every_wall_kernel_on_random_walls(seed):
 class _World:
     def __init__(self, walls):
         self.obstacles = np.ascontiguousarray(walls)
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_walked_rays_equal_the_every_wall_kernel_on_random_walls(seed):
+    """The indexed builder (`table_rays`), for any bucket side, on 300 walls."""
+    world = World(random_walls(seed, 300), bounds=(0.0, 0.0, 4.0, 4.0))
+    sonar = SonarModel(max_range=3.0)
+    field = world.distance_field(0.1)
+    ref = every_wall(world, sonar, 0.1, 1, field.shape, field.origin)
+    for side in (0.04, 0.1, 0.37, 2.0):
+        index = SegmentIndex.build(world.obstacles, world.bounds, side)
+        out = np.empty(field.shape + (72,), dtype=np.uint16)
+        lk.build_cone_table_indexed(
+            index.segments, *field.origin, *model(sonar, 0.1, 1), *index.args,
+            field.data, out,
+        )  # fmt: skip
+        np.testing.assert_array_equal(out, ref)
+
+
+def test_the_walks_float32_field_never_shows_more_clearance():
+    from robotlib.localization._kernels.tables import _below
+
+    rng = np.random.default_rng(3)
+    field = np.concatenate([rng.uniform(0, 50, 10_000), [0.0, 1e-30, 0.1, np.inf]])
+    low = _below(field.reshape(-1, 2))
+    assert low.dtype == np.float32
+    assert (low.astype(np.float64).ravel() <= field).all()
+    assert (
+        np.nextafter(low, np.float32(np.inf)).astype(np.float64).ravel() >= field
+    ).all()
 
 
 def test_disk_cache_gives_the_same_table_and_rebuilds_when_unsure(

@@ -92,6 +92,25 @@ def test_cone_weight_table_matches_the_gaussian_of_the_angle(sigma):
     np.testing.assert_allclose(got, want, rtol=0, atol=3e-8)
 
 
+@pytest.mark.parametrize(
+    ("half_deg", "sigma", "used"),
+    [(15, 0.15, True), (15, 0.3, True), (5, 0.1, True), (15, 0.1, False),
+     (30, 0.15, False), (15, 0.0, False)],
+)  # fmt: skip
+def test_cone_weight_poly_matches_the_gaussian_where_it_is_used(half_deg, sigma, used):
+    half = math.radians(half_deg)
+    poly = kern.cone_weight_poly(half, sigma)
+    assert (poly[0] > 0) == used
+    if not used:  # the kernels fall back on the table
+        p, table = kern.cone_weights(half, sigma)
+        assert p[0] == 0 and (sigma == 0 or table.shape == (kern.WEIGHT_PIECES, 4))
+        return
+    t = np.linspace(-math.tan(half), math.tan(half), 2001)
+    got = np.polynomial.polynomial.polyval(poly[0] * t * t - 1.0, poly[1:])
+    want = np.exp(-(np.arctan(t) ** 2) / (2 * sigma**2))
+    np.testing.assert_allclose(got, want, rtol=0, atol=1e-8)
+
+
 def test_window_loglik_sums_the_beam_model_over_the_window():
     from robotlib.mapping import _kernels_window as kw
     from robotlib.sensing import SonarModel

@@ -120,7 +120,7 @@ def test_a_backend_without_a_laser_says_so():
 SONAR_ARGS = dict(thickness=0.1, l_occ=0.9, l_free=-0.35, max_weight=0.3)
 
 
-@pytest.mark.parametrize("sigma", [0.0, 0.15])
+@pytest.mark.parametrize("sigma", [0.0, 0.1, 0.15])  # none, table, polynomial
 def test_sonar_cone_kernel_matches_the_reference(sigma):
     rng = np.random.default_rng(1)
     shape, origin, res = (60, 80), (-0.5, -0.3), 0.05
@@ -379,7 +379,7 @@ def test_scan_fitting_kernel_matches_the_reference():
     z[[2, 9]] = 4.0  # no return
     out = np.empty((n, 3))
     kern.match_laser_many(
-        Ls, *origin, res, poses, mount, angles, z, 4.0, 0.05, 0.03, 3, out
+        Ls, *origin, res, poses, mount, angles, z, 4.0, 0.05, 0.03, 3, 0.0, 0.0, out
     )
     for k in range(n):
         want = naive.match_laser(
@@ -387,3 +387,22 @@ def test_scan_fitting_kernel_matches_the_reference():
         )
         np.testing.assert_allclose(out[k], want, atol=1e-9)
         assert not np.allclose(out[k], poses[k])  # it moved
+    # with a prior: the reference's rule
+    held = np.empty((n, 3))
+    kern.match_laser_many(
+        Ls, *origin, res, poses, mount, angles, z, 4.0, 0.05, 0.03, 3, 400.0, 100.0,
+        held,
+    )  # fmt: skip
+    for k in range(n):
+        want = naive.match_laser(
+            Ls[k], origin, res, poses[k], mount, angles, z, 4.0, (0.05, 0.03), 3,
+            prior=(400.0, 100.0),
+        )  # fmt: skip
+        np.testing.assert_allclose(held[k], want, atol=1e-9)
+    assert not np.allclose(held, out)  # the prior changed the fits
+    pinned = np.empty((n, 3))  # a prior no fit outweighs: nothing moves
+    kern.match_laser_many(
+        Ls, *origin, res, poses, mount, angles, z, 4.0, 0.05, 0.03, 3, 1e9, 1e9,
+        pinned,
+    )  # fmt: skip
+    np.testing.assert_array_equal(pinned, poses)

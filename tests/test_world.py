@@ -330,7 +330,15 @@ def test_compose_examples_and_broadcasting():
 # --------------------------------------------------------------------------
 # the shipped worlds
 
-SHIPPED = ["arena", "corridor", "corridor2", "corridor_periodic", "maze", "office"]
+SHIPPED = [
+    "arena",
+    "building",
+    "corridor",
+    "corridor2",
+    "corridor_periodic",
+    "maze",
+    "office",
+]
 
 
 def test_world_names_lists_the_shipped_worlds():

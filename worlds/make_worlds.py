@@ -3,7 +3,8 @@
 Run ``python worlds/make_worlds.py`` from the repository root to rewrite
 ``corridor.wld``, ``corridor_periodic.wld``, ``corridor2.wld``, ``maze.wld``,
 ``arena.wld``, the avoidance worlds (``clutter``, ``doorway``, ``utrap``,
-``alcoves``, each with a ``.pairs.json``), ``loop.wld`` and ``office.map``. The files
+``alcoves``, each with a ``.pairs.json``), ``loop.wld``, ``office.map`` and
+``building.map``. The files
 themselves are committed; this script documents how they were made and
 regenerates them identically (the maze and the clutter use fixed seeds).
 
@@ -51,6 +52,12 @@ All coordinates here are whole millimetres, as in the files.
 - ``office``: a 20 m x 15 m office in MobileSim ``2D-Map`` form: a corridor,
   seven rooms, a table and a shelf as DATA points, a ``Sim.BoxObstacle``, a
   ``Dock`` before the ``RobotHome`` (the home wins) and a ``ForbiddenArea``.
+- ``building``: a 17 m x 31 m office building in MobileSim ``2D-Map`` form,
+  the size and wall count (244 walls, 32 points) of MobileSim's sample
+  ``AMROffice.map`` but our own seeded geometry: offices on two corridors,
+  meeting rooms and an open hall with columns, racks and crates
+  (`building`). The real-building part of the paper's experiment (Lab 3's
+  kidnapping section) runs here, since AMROffice itself is GPL and not ours.
 
 Not shipped, made on demand: ``python worlds/make_worlds.py --large FILE``
 writes `large_map`, a 24 m x 52 m floor drawn as about 60,000 DATA points
@@ -60,6 +67,7 @@ writes `large_map`, a 24 m x 52 m floor drawn as about 60,000 DATA points
 
 from __future__ import annotations
 
+import itertools
 import json
 import math
 import random
@@ -494,6 +502,194 @@ def office_map() -> str:
     return "\n".join(lines) + "\n"
 
 
+def _furnish(rnd: random.Random, room: tuple[int, int, int, int], door: str):
+    """Return a desk against the back wall and a cabinet in a back corner, mm.
+
+    ``room`` is ``(x0, y0, x1, y1)``; ``door`` the side its door is on
+    (``"S"``, ``"N"``, ``"W"``, ``"E"``), so the furniture stands against the
+    opposite wall, 0.1 m off it, and leaves the door's half free.
+    """
+    x0, y0, x1, y1 = room
+    dw, dd = rnd.choice([(1400, 700), (1600, 800), (1200, 600)])  # desk
+    cw, cd = 500, rnd.choice([800, 900, 1000])  # cabinet: depth, length
+    gap = 100
+    boxes = []
+    if door in ("S", "N"):  # furniture along the north / south wall
+        back = y1 - gap - dd if door == "S" else y0 + gap
+        lo = rnd.randrange(x0 + 300, max(x0 + 301, x1 - dw - 300 - cd - 200), 50)
+        boxes.append((lo, back, dw, dd))
+        cy = y1 - gap - cw if door == "S" else y0 + gap
+        boxes.append((x1 - gap - cd, cy, cd, cw))
+    else:  # furniture along the west / east wall
+        back = x1 - gap - dd if door == "W" else x0 + gap
+        lo = rnd.randrange(y0 + 300, max(y0 + 301, y1 - dw - 300 - cd - 200), 50)
+        boxes.append((back, lo, dd, dw))
+        cx = x1 - gap - cw if door == "W" else x0 + gap
+        boxes.append((cx, y1 - gap - cd, cw, cd))
+    return boxes
+
+
+def building(seed: int = 17) -> tuple[list[Segment], list[tuple[int, int]]]:
+    """Return the walls and DATA points (mm) of ``building.map`` (17 m x 31 m).
+
+    An office building of our own drawing, in the spirit of MobileSim's
+    sample ``AMROffice.map`` (a 17 m x 31 m floor of offices beside a large
+    open hall) but none of its geometry:
+
+    - an office wing in the south, y 0-11 m: a 2 m east-west corridor at
+      y 4.5-6.5 m with a row of offices on each side, seeded widths (about 3.4 m)
+      and door places (1 m doors);
+    - a 2 m north-south corridor at x 7.5-9.5 m from there to the hall, with
+      two seeded meeting rooms on each side (doors onto it, and a second door
+      into the hall from the west and east ones next to it);
+    - an open hall in the north, y 17-31 m: pilasters on its outer walls,
+      four columns, shelving racks, seeded crates and two round tables
+      (DATA points), and two small offices in its north-east corner.
+
+    Every office and meeting room has a desk and a cabinet (boxes) against
+    the wall opposite its door.
+    """
+    rnd = random.Random(seed)
+    W, H = 17000, 31000
+    segs: list[Segment] = []
+    furniture: list[tuple[int, int, int, int]] = []
+
+    def partitions(a: int, b: int, n: int) -> list[int]:
+        """Cut ``a``-``b`` into ``n`` rooms: equal widths, cuts moved up to 0.4 m."""
+        inner = [
+            a + (b - a) * k // n + rnd.randrange(-400, 401, 100) for k in range(1, n)
+        ]
+        return [a, *(100 * round(c / 100) for c in inner), b]
+
+    def doors_in(cuts: list[int]) -> list[tuple[int, int]]:
+        """One seeded 1 m door per room, 0.3 m or more from its partitions."""
+        out = []
+        for p, q in itertools.pairwise(cuts):
+            lo = rnd.randrange(p + 300, q - 1300 + 1, 100)
+            out.append((lo, lo + 1000))
+        return out
+
+    # outline, with a 0.6 m entrance recess at corridor A's west end
+    segs += [
+        (0, 0, W, 0),
+        (W, 0, W, H),
+        (W, H, 0, H),
+        (0, H, 0, 6000),
+        (0, 6000, -600, 6000),
+        (-600, 6000, -600, 5000),
+        (-600, 5000, 0, 5000),
+        (0, 5000, 0, 0),
+    ]
+    # the office wing: corridor A at y 4.5-6.5 m
+    south = partitions(0, W, 5)
+    sdoors = doors_in(south)
+    segs += wall_with_doors(0, W, sdoors, 4500, vertical=False)
+    segs += [(x, 0, x, 4500) for x in south[1:-1]]
+    for p, q in itertools.pairwise(south):
+        furniture += _furnish(rnd, (p, 0, q, 4500), "N")
+    west = partitions(0, 7500, 2)
+    east = partitions(9500, W, 2)
+    ndoors = doors_in(west) + doors_in(east)
+    segs += wall_with_doors(0, W, [*ndoors, (7500, 9500)], 6500, vertical=False)
+    segs += [(x, 6500, x, 11000) for x in (*west[1:-1], *east[1:-1])]
+    for cuts in (west, east):
+        for p, q in itertools.pairwise(cuts):
+            furniture += _furnish(rnd, (p, 6500, q, 11000), "S")
+    segs += [(0, 11000, 7500, 11000), (9500, 11000, W, 11000)]
+    # corridor B, x 7.5-9.5 m, y 6.5-17 m, with meeting rooms on both sides
+    mid = {side: rnd.randrange(13300, 14800, 100) for side in "WE"}
+    w0, e0 = 11500 + rnd.randrange(0, 800, 100), 11800 + rnd.randrange(0, 600, 100)
+    wdoors = [(w0, w0 + 1000), (mid["W"] + 500, mid["W"] + 1500)]
+    edoors = [(e0, e0 + 1000), (mid["E"] + 700, mid["E"] + 1700)]
+    segs += wall_with_doors(6500, 17000, wdoors, 7500, vertical=True)
+    segs += wall_with_doors(6500, 17000, edoors, 9500, vertical=True)
+    segs += [(0, mid["W"], 7500, mid["W"]), (9500, mid["E"], W, mid["E"])]
+    furniture += _furnish(rnd, (0, 11000, 7500, mid["W"]), "E")
+    furniture += _furnish(rnd, (0, mid["W"], 7500, 17000), "E")
+    furniture += _furnish(rnd, (9500, 11000, W, mid["E"]), "W")
+    furniture += _furnish(rnd, (9500, mid["E"], W, 17000), "W")
+    # the hall's south wall: corridor B opens into it, and a door from the
+    # north meeting room on each side
+    hall_doors = [(3000, 4000), (7500, 9500), (12500, 13500)]
+    segs += wall_with_doors(0, W, hall_doors, 17000, vertical=False)
+    # two small offices in the hall's north-east corner, doors to the west
+    segs += wall_with_doors(25000, H, [(26000, 27000), (29000, 30000)], 13000, True)
+    segs += [(13000, 25000, W, 25000), (13000, 28200, W, 28200)]
+    furniture += _furnish(rnd, (13000, 25000, W, 28200), "W")
+    furniture += _furnish(rnd, (13000, 28200, W, H), "W")
+    # pilasters (0.4 m x 0.3 m) on the hall's outer walls, three walls each
+    for y in range(19000, H - 1000, 3500):
+        segs += [(0, y, 300, y), (300, y, 300, y + 400), (300, y + 400, 0, y + 400)]
+    for y in range(19000, 24000, 3500):
+        segs += [(W, y, W - 300, y), (W - 300, y, W - 300, y + 400)]
+        segs += [(W - 300, y + 400, W, y + 400)]
+    for x in range(2500, 12000, 4000):
+        segs += [(x, H, x, H - 300), (x, H - 300, x + 400, H - 300)]
+        segs += [(x + 400, H - 300, x + 400, H)]
+    # four 0.4 m columns, and shelving racks along the hall's west side
+    for x, y in ((5000, 21500), (10500, 21500), (5000, 26500), (10500, 26500)):
+        furniture.append((x - 200, y - 200, 400, 400))
+    furniture += [(1500, 19000 + k * 3500, 600, 2500) for k in range(3)]
+    # seeded crates (0.4-1.0 m sides) in the hall, 1.5 m from anything else
+    tables = ((3500, 23500), (9000, 29000))
+    taken = [(x - 1300, y - 1300, 2600, 2600) for x, y in tables]
+    taken += [b for b in furniture if b[1] >= 17000]
+    crates: list[tuple[int, int, int, int]] = []
+    while len(crates) < 6:
+        w, h = rnd.randrange(400, 1001, 100), rnd.randrange(400, 1001, 100)
+        x, y = rnd.randrange(3000, 12000 - w, 50), rnd.randrange(18500, 29500 - h, 50)
+        if all(
+            x > bx + bw + 1500
+            or bx > x + w + 1500
+            or y > by + bh + 1500
+            or by > y + h + 1500
+            for bx, by, bw, bh in taken + crates
+        ):
+            crates.append((x, y, w, h))
+    furniture += crates
+    for b in furniture:
+        segs += box(*b)
+    # two round tables (0.5 m radius) in the hall, as DATA points
+    points = []
+    for cx, cy in tables:
+        for k in range(16):
+            a = 2 * math.pi * k / 16
+            points.append(
+                (cx + round(500 * math.cos(a)), cy + round(500 * math.sin(a)))
+            )
+    return segs, points
+
+
+def building_map(seed: int = 17) -> str:
+    """Return the text of ``building.map`` (`building`, MobileSim ``2D-Map``).
+
+    ``seed`` 17 is the shipped building; another seed draws another.
+    """
+    segs, points = building(seed)
+    xs = [v for s in segs for v in s[0::2]]
+    ys = [v for s in segs for v in s[1::2]]
+    lines = [
+        "2D-Map-Ex2",
+        "Sources: robotlib building",
+        f"MinPos: {min(xs) - 500} {min(ys) - 500}",
+        f"MaxPos: {max(xs) + 500} {max(ys) + 500}",
+        f"NumPoints: {len(points)}",
+        "PointsAreSorted: false",
+        f"LineMinPos: {min(xs)} {min(ys)}",
+        f"LineMaxPos: {max(xs)} {max(ys)}",
+        f"NumLines: {len(segs)}",
+        "LinesAreSorted: false",
+        "Resolution: 100",
+        'Cairn: RobotHome 1000 5500 0.000000 "" ICON "home"',
+        'Cairn: Goal 8500 24000 0.000000 "" ICON "hall"',
+        "LINES",
+        *(" ".join(str(v) for v in s) for s in segs),
+        "DATA",
+        *(f"{x} {y}" for x, y in points),
+    ]
+    return "\n".join(lines) + "\n"
+
+
 def large_map(seed: int = 0, spacing: int = 8) -> str:
     """Return the text of a large scanned-looking map (24 m x 52 m, ~60k points).
 
@@ -581,6 +777,7 @@ def main(argv: list[str] | None = None) -> None:
     for name in PAIRS:
         write_pairs(name)
     (HERE / "office.map").write_text(office_map(), encoding="ascii")
+    (HERE / "building.map").write_text(building_map(), encoding="ascii")
 
 
 if __name__ == "__main__":

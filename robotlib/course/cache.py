@@ -18,17 +18,18 @@ numba_cache``), made here before the reference run:
 The reference run then writes what its checks compile into that folder, and
 each submission gets its own copy (`session`): no sandboxed student process
 ever writes a cache another process reads. Imports nothing of robotlib's but
-the location of the installed package.
+numba's cache folder naming (`robotlib._kernel_cache`).
 """
 
 from __future__ import annotations
 
-import hashlib
 import os
 import shutil
 import subprocess
 import sys
 from pathlib import Path
+
+from .._kernel_cache import cache_subpath
 
 __all__ = ["cache_subpath", "instructor_cache_dirs", "prewarm", "seed"]
 
@@ -41,16 +42,6 @@ _RUN_SETUP = (
     "source = shell.transform_cell(sys.stdin.read())\n"
     "exec(compile(source, '<set-up>', 'exec'), shell.user_ns)\n"
 )
-
-
-def cache_subpath(source_dir: Path) -> str:
-    """Numba's folder name under ``NUMBA_CACHE_DIR`` for kernels of ``source_dir``.
-
-    numba (``_CacheLocator.get_suitable_cache_subpath``) names it after the
-    folder of the source file and the SHA-1 of that folder's absolute path.
-    """
-    path = os.path.abspath(source_dir)
-    return "_".join([os.path.split(path)[-1], hashlib.sha1(path.encode()).hexdigest()])
 
 
 def _package_dirs() -> list[Path]:

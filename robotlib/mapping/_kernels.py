@@ -15,58 +15,16 @@ import numba as nb
 import numpy as np
 
 from .._config import JIT, serial_and_parallel
-
-
-@nb.njit(**JIT)
-def _clamp(v, lo, hi):
-    return lo if v < lo else (hi if v > hi else v)
-
-
-WEIGHT_PIECES = 64
-"""Cubic pieces of the cone's weight table (`cone_weight_table`)."""
-
-
-@nb.njit(**JIT)
-def cone_weight_table(half_cone, sigma):
-    """Cubic pieces (M, 4) of ``w(t) = exp(-atan(t)^2 / (2 sigma^2))``.
-
-    On ``0 <= t <= tan(half_cone)`` (``w`` is even), ``t`` a cell's offset
-    across the cone over its distance along it. Hermite cubics between
-    ``M + 1`` equally spaced nodes (values and slopes exact there); piece
-    ``k`` on ``s`` in [0, 1] is ``c0 + s (c1 + s (c2 + s c3))``. With ``M =
-    64`` and a 15 degree half cone the error is below ``3e-8`` for ``sigma
-    >= 0.1`` rad (one exponential per node instead of one per cell).
-    """
-    m = WEIGHT_PIECES
-    h = math.tan(half_cone) / m
-    out = np.empty((m, 4))
-    inv2s2 = 0.5 / (sigma * sigma)
-    f0 = 0.0
-    d0 = 0.0
-    for k in range(m + 1):
-        t = k * h
-        phi = math.atan(t)
-        f1 = math.exp(-phi * phi * inv2s2)
-        d1 = f1 * (-2.0 * phi * inv2s2) / (1.0 + t * t) * h
-        if k > 0:
-            out[k - 1, 0] = f0
-            out[k - 1, 1] = d0
-            out[k - 1, 2] = 3.0 * (f1 - f0) - 2.0 * d0 - d1
-            out[k - 1, 3] = 2.0 * (f0 - f1) + d0 + d1
-        f0 = f1
-        d0 = d1
-    return out
-
-
-@nb.njit(**JIT)
-def _table_weight(table, tmax, t):
-    """Return the weight at ``t`` (``|t| <= tmax``) from `cone_weight_table`."""
-    m = table.shape[0]
-    u = abs(t) / tmax * m
-    k = int(u)
-    k = m - 1 if k > m - 1 else k
-    s = u - k
-    return table[k, 0] + s * (table[k, 1] + s * (table[k, 2] + s * table[k, 3]))
+from ._kernels_cone import (  # noqa: F401  (re-exported)
+    POLY_DEGREE,
+    WEIGHT_PIECES,
+    _clamp,
+    _cone_update,
+    _table_weight,
+    cone_weight_poly,
+    cone_weight_table,
+    cone_weights,
+)
 
 
 @nb.njit(**JIT)
@@ -76,121 +34,13 @@ def sonar_cone_update(
 ):  # fmt: skip
     """Add one sonar cone's inverse-model log-odds to the grid ``L`` (ny, nx).
 
-    See `_cone_update` (this builds its weight table).
+    See `_cone_update` (this builds its weights, `cone_weights`).
     """
-    table = cone_weight_table(half_cone, sigma) if sigma > 0.0 else np.zeros((1, 4))
+    poly, table = cone_weights(half_cone, sigma)
     _cone_update(
         L, x0, y0, res, sx, sy, sth, z, half_cone, max_range, thickness,
-        l_occ, l_free, sigma, max_weight, l_min, l_max, table,
+        l_occ, l_free, sigma, max_weight, l_min, l_max, poly, table,
     )  # fmt: skip
-
-
-@nb.njit(**JIT)
-def _cone_update(
-    L, x0, y0, res, sx, sy, sth, z, half_cone, max_range, thickness,
-    l_occ, l_free, sigma, max_weight, l_min, l_max, table,
-):  # fmt: skip
-    """Add one sonar cone's inverse-model log-odds to the grid ``L`` (ny, nx).
-
-    The sensor sits at ``(sx, sy)`` facing ``sth``. A cell whose centre lies
-    within ``half_cone`` of the axis gets ``l_free`` when nearer than
-    ``z - thickness / 2``, ``l_occ`` when within ``thickness / 2`` of ``z``,
-    nothing beyond. A reading at ``max_range`` (no echo) frees the cone to
-    ``max_range`` with weight ``max_weight``. With ``sigma > 0`` every
-    increment is weighted by ``exp(-phi^2 / (2 sigma^2))`` (``phi``: angle
-    off the axis, rad), read from ``table`` (`cone_weight_table`'s pieces
-    for this ``half_cone`` and ``sigma``).
-    """
-    ny, nx = L.shape
-    echo = z < max_range
-    half = 0.5 * thickness
-    reach = z + half if echo else max_range
-    w0 = 1.0 if echo else max_weight
-    if reach <= 0.0 or w0 == 0.0:
-        return
-    ux = math.cos(sth)
-    uy = math.sin(sth)
-    tan_half = math.tan(half_cone)
-    # the sector's bounding box: apex, both edge ends, and any axis direction
-    # (E, N, W, S) inside the cone
-    xlo = xhi = sx
-    ylo = yhi = sy
-    for e in range(2):
-        a = sth - half_cone if e == 0 else sth + half_cone
-        ex = sx + reach * math.cos(a)
-        ey = sy + reach * math.sin(a)
-        xlo = min(xlo, ex)
-        xhi = max(xhi, ex)
-        ylo = min(ylo, ey)
-        yhi = max(yhi, ey)
-    for q in range(4):
-        a = 0.5 * math.pi * q
-        d = math.atan2(math.sin(a - sth), math.cos(a - sth))
-        if abs(d) <= half_cone:
-            xlo = min(xlo, sx + reach * math.cos(a))
-            xhi = max(xhi, sx + reach * math.cos(a))
-            ylo = min(ylo, sy + reach * math.sin(a))
-            yhi = max(yhi, sy + reach * math.sin(a))
-    j0 = max(0, int(math.floor((xlo - x0) / res)))
-    j1 = min(nx - 1, int(math.floor((xhi - x0) / res)))
-    i0 = max(0, int(math.floor((ylo - y0) / res)))
-    i1 = min(ny - 1, int(math.floor((yhi - y0) / res)))
-    reach2 = reach * reach
-    inner = z - half
-    inner2 = inner * inner if inner > 0.0 else -1.0
-    weighted = sigma > 0.0
-    # each row's cells between the cone's edges and inside the circle; the
-    # interval is widened by a cell, the exact tests below decide
-    e1x = math.cos(sth - half_cone)
-    e1y = math.sin(sth - half_cone)
-    e2x = math.cos(sth + half_cone)
-    e2y = math.sin(sth + half_cone)
-    for i in range(i0, i1 + 1):
-        cy = y0 + (i + 0.5) * res - sy
-        rr = reach2 - cy * cy
-        if rr < 0.0:
-            continue
-        lo = -math.sqrt(rr)
-        hi = -lo
-        exact = True
-        if half_cone < 0.5 * math.pi:
-            # left of edge 1: -e1y cx >= -e1x cy; right of edge 2: e2y cx >= e2x cy
-            for e in range(2):
-                a = -e1y if e == 0 else e2y
-                b = -e1x * cy if e == 0 else e2x * cy
-                if a > 1e-9:
-                    lo = max(lo, b / a)
-                elif a < -1e-9:
-                    hi = min(hi, b / a)
-                else:
-                    exact = False
-        else:
-            exact = False
-        if lo > hi + res:
-            continue
-        ja = max(j0, int(math.floor((lo + sx - x0) / res - 0.5)) - 1)
-        jb = min(j1, int(math.ceil((hi + sx - x0) / res - 0.5)) + 1)
-        # centres more than 1e-6 cells inside [lo, hi] pass every test below
-        ia = jb + 1
-        ib = jb
-        if exact:
-            ia = int(math.ceil((lo + sx - x0) / res - 0.5 + 1e-6))
-            ib = int(math.floor((hi + sx - x0) / res - 0.5 - 1e-6))
-        for j in range(ja, jb + 1):
-            cx = x0 + (j + 0.5) * res - sx
-            along = cx * ux + cy * uy
-            perp = cy * ux - cx * uy
-            d2 = cx * cx + cy * cy
-            if j < ia or j > ib:
-                if along <= 0.0 or abs(perp) > along * tan_half or d2 > reach2:
-                    continue
-            w = w0
-            if weighted:
-                w *= _table_weight(table, tan_half, perp / along)
-            if echo and d2 >= inner2:
-                L[i, j] = _clamp(L[i, j] + w * l_occ, l_min, l_max)
-            else:
-                L[i, j] = _clamp(L[i, j] + w * l_free, l_min, l_max)
 
 
 @nb.njit(**JIT)
@@ -203,19 +53,19 @@ def sonar_scan_update(
     ``sensors`` (S, 3) are the sonar poses in the robot frame, ``ranges``
     (S,) the readings, m.
     """
-    table = cone_weight_table(half_cone, sigma) if sigma > 0.0 else np.zeros((1, 4))
+    poly, table = cone_weights(half_cone, sigma)
     _scan_update(
         L, x0, y0, res, pose, sensors, ranges, half_cone, max_range, thickness,
-        l_occ, l_free, sigma, max_weight, l_min, l_max, table,
+        l_occ, l_free, sigma, max_weight, l_min, l_max, poly, table,
     )  # fmt: skip
 
 
 @nb.njit(**JIT)
 def _scan_update(
     L, x0, y0, res, pose, sensors, ranges, half_cone, max_range, thickness,
-    l_occ, l_free, sigma, max_weight, l_min, l_max, table,
+    l_occ, l_free, sigma, max_weight, l_min, l_max, poly, table,
 ):  # fmt: skip
-    """`sonar_scan_update` with the cone's weight table given."""
+    """`sonar_scan_update` with the cone's weights (`cone_weights`) given."""
     c = math.cos(pose[2])
     s = math.sin(pose[2])
     for k in range(sensors.shape[0]):
@@ -224,7 +74,7 @@ def _scan_update(
         _cone_update(
             L, x0, y0, res, sx, sy, pose[2] + sensors[k, 2], ranges[k], half_cone,
             max_range, thickness, l_occ, l_free, sigma, max_weight, l_min, l_max,
-            table,
+            poly, table,
         )  # fmt: skip
 
 
@@ -313,11 +163,11 @@ def _sonar_update_many(Ls, x0, y0, res, poses, sensors, ranges, half_cone,
                       max_range, thickness, l_occ, l_free, sigma, max_weight,
                       l_min, l_max):  # fmt: skip
     """`sonar_scan_update` of one ring reading into each ``Ls[n]`` at ``poses[n]``."""
-    table = cone_weight_table(half_cone, sigma) if sigma > 0.0 else np.zeros((1, 4))
+    poly, table = cone_weights(half_cone, sigma)
     for n in nb.prange(Ls.shape[0]):
         _scan_update(
             Ls[n], x0, y0, res, poses[n], sensors, ranges, half_cone, max_range,
-            thickness, l_occ, l_free, sigma, max_weight, l_min, l_max, table,
+            thickness, l_occ, l_free, sigma, max_weight, l_min, l_max, poly, table,
         )  # fmt: skip
 
 

@@ -33,6 +33,15 @@ def _box_of_points(xs, ys, x0, y0, res, ny, nx, out):
 
 
 @nb.njit(**JIT)
+def _box_of_bounds(xlo, xhi, ylo, yhi, x0, y0, res, ny, nx, out):
+    """`_box_of_points` of the points' bounds ``xlo, xhi, ylo, yhi`` (m)."""
+    out[0] = max(0, int(math.floor((ylo - y0) / res)) - 1)
+    out[1] = min(ny - 1, int(math.floor((yhi - y0) / res)) + 1)
+    out[2] = max(0, int(math.floor((xlo - x0) / res)) - 1)
+    out[3] = min(nx - 1, int(math.floor((xhi - x0) / res)) + 1)
+
+
+@nb.njit(**JIT)
 def laser_boxes(x0, y0, res, ny, nx, lposes, angles, ranges, max_range, out):
     """Boxes ``out`` (N, 4) holding every cell a scan from ``lposes[n]`` writes.
 
@@ -41,17 +50,30 @@ def laser_boxes(x0, y0, res, ny, nx, lposes, angles, ranges, max_range, out):
     cell wider all round, holds them.
     """
     nb_ = angles.shape[0]
-    xs = np.empty(nb_ + 1)
-    ys = np.empty(nb_ + 1)
+    # the end points in the laser's frame once; each pose turns and moves them
+    # (one cosine and sine a pose; the box is a cell wider than the points, so
+    # the last bits of the turn do not matter)
+    fx = np.empty(nb_)
+    fy = np.empty(nb_)
+    for r in range(nb_):
+        z = ranges[r] if ranges[r] < max_range else max_range
+        fx[r] = z * math.cos(angles[r])
+        fy[r] = z * math.sin(angles[r])
     for n in range(lposes.shape[0]):
-        xs[nb_] = lposes[n, 0]
-        ys[nb_] = lposes[n, 1]
+        lx = lposes[n, 0]
+        ly = lposes[n, 1]
+        c = math.cos(lposes[n, 2])
+        s = math.sin(lposes[n, 2])
+        xlo = xhi = lx
+        ylo = yhi = ly
         for r in range(nb_):
-            z = ranges[r] if ranges[r] < max_range else max_range
-            a = lposes[n, 2] + angles[r]
-            xs[r] = lposes[n, 0] + z * math.cos(a)
-            ys[r] = lposes[n, 1] + z * math.sin(a)
-        _box_of_points(xs, ys, x0, y0, res, ny, nx, out[n])
+            px = lx + c * fx[r] - s * fy[r]
+            py = ly + s * fx[r] + c * fy[r]
+            xlo = min(xlo, px)
+            xhi = max(xhi, px)
+            ylo = min(ylo, py)
+            yhi = max(yhi, py)
+        _box_of_bounds(xlo, xhi, ylo, yhi, x0, y0, res, ny, nx, out[n])
 
 
 @nb.njit(**JIT)

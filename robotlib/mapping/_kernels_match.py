@@ -82,13 +82,16 @@ def scan_points(mount, angles, ranges, max_range):
 
 
 def _match_laser_many(Ls, x0, y0, res, poses, mount, angles, ranges, max_range,
-                     step_xy, step_th, levels, out):  # fmt: skip
+                     step_xy, step_th, levels, w_xy, w_th, out):  # fmt: skip
     """Hill-climb each robot pose ``poses[n]`` to fit the scan to map ``Ls[n]``.
 
     From each pose, try moves of ``step_xy`` (m) along x and y and
-    ``step_th`` (rad) in heading, both ways; take the best that raises
-    `_match_score`; when none does, halve the steps, ``levels`` times.
-    Writes the fitted poses to ``out`` (N, 3).
+    ``step_th`` (rad) in heading, both ways; take the best that raises the
+    score; when none does, halve the steps, ``levels`` times. The score is
+    `_match_score` less the prior ``w_xy d^2 + w_th a^2`` (``d``: distance
+    from the start pose, m; ``a``: turn from it, rad; 0 and 0: no prior),
+    so a scan that does not pin the pose (a corridor's walls) leaves it
+    where the motion put it. Writes the fitted poses to ``out`` (N, 3).
     """
     pts = scan_points(mount, angles, ranges, max_range)
     bx = np.ascontiguousarray(pts[:, 0])
@@ -98,6 +101,9 @@ def _match_laser_many(Ls, x0, y0, res, poses, mount, angles, ranges, max_range,
         py = poses[n, 1]
         pth = poses[n, 2]
         best = _match_score(Ls[n], x0, y0, res, px, py, pth, bx, by)
+        x_0 = px
+        y_0 = py
+        t_0 = pth
         sxy = step_xy
         sth = step_th
         for _ in range(levels):
@@ -111,6 +117,9 @@ def _match_laser_many(Ls, x0, y0, res, poses, mount, angles, ranges, max_range,
                     qy = py + (sxy if k == 2 else (-sxy if k == 3 else 0.0))
                     qt = pth + (sth if k == 4 else (-sth if k == 5 else 0.0))
                     v = _match_score(Ls[n], x0, y0, res, qx, qy, qt, bx, by)
+                    if w_xy > 0.0 or w_th > 0.0:
+                        v -= w_xy * ((qx - x_0) ** 2 + (qy - y_0) ** 2)
+                        v -= w_th * (qt - t_0) ** 2
                     if v > best:
                         best = v
                         bi = k

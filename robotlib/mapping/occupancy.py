@@ -20,6 +20,7 @@ Imports the world, the sensing models and the kernels; never plots.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 
@@ -173,6 +174,20 @@ def inverse_sonar_model(
     return np.where(inside, out, 0.0)
 
 
+_SONAR = SonarModel()
+_SONAR_MODEL = InverseSonarModel()
+
+
+@lru_cache(maxsize=64)
+def cone_weights(half_cone: float, sigma: float) -> tuple[np.ndarray, np.ndarray]:
+    """Return the sonar cone's weights for the kernels, kept per cone and sigma.
+
+    Returns ``(poly, table)`` of `robotlib.mapping._kernels.cone_weights`
+    (shared between calls: not to be written); ``sigma`` rad, 0 for none.
+    """
+    return _kernels.cone_weights(float(half_cone), float(sigma))
+
+
 class OccupancyGrid:
     """A log-odds occupancy grid (float32), updated reading by reading.
 
@@ -241,17 +256,19 @@ class OccupancyGrid:
         ``ranges`` (S,) are the readings, m; ``sonar`` gives the sensor poses
         and cone (default: a Pioneer 3-DX's eight front sonars).
         """
-        sonar = SonarModel() if sonar is None else sonar
-        model = InverseSonarModel() if model is None else model
+        sonar = _SONAR if sonar is None else sonar
+        model = _SONAR_MODEL if model is None else model
         p = np.ascontiguousarray(pose, dtype=np.float64).reshape(3)
         z = np.ascontiguousarray(ranges, dtype=np.float64).reshape(-1)
         if len(z) != len(sonar.sensors):
             raise ValueError(f"expected {len(sonar.sensors)} ranges, got {len(z)}")
-        _kernels.sonar_scan_update(
+        half = sonar.cone / 2
+        sigma = model.sigma or 0.0
+        _kernels._scan_update(
             self.logodds, *self.origin, self.resolution, p, sonar.sensors, z,
-            sonar.cone / 2, sonar.max_range, model.thickness, model.l_occ,
-            model.l_free, model.sigma or 0.0, model.max_weight, model.l_min,
-            model.l_max,
+            half, sonar.max_range, model.thickness, model.l_occ, model.l_free,
+            sigma, model.max_weight, model.l_min, model.l_max,
+            *cone_weights(half, sigma),
         )  # fmt: skip
 
     def update_laser(

@@ -110,7 +110,9 @@ def plot_mcl_run(
     """Draw the paper's Figs. 2-4 for one run: trajectories in time, error, particles.
 
     Fig. 2 shows time: the estimate's points are coloured by step (colour
-    bar), and the true path is marked every 10 steps.
+    bar), and the true path is marked every 10 steps. The map spans the top
+    row, or, for a world more than 1.2 times as tall as it is wide (a
+    building), the left column beside the other two.
 
     Parameters
     ----------
@@ -137,10 +139,20 @@ def plot_mcl_run(
 
         fig = plt.figure(figsize=(WIDTH, 5.4))
     fig.clear()
-    grid = fig.add_gridspec(2, 2, height_ratios=(1.1, 1))
-    ax_map = fig.add_subplot(grid[0, :])
-    ax_err = fig.add_subplot(grid[1, 0])
-    ax_n = fig.add_subplot(grid[1, 1])
+    w, h = world.size
+    tall = h > 1.2 * w  # a building: the map beside the plots, not above them
+    if tall:
+        grid = fig.add_gridspec(
+            2, 2, width_ratios=(1, 1.6), wspace=0.45, hspace=0.5, top=0.8
+        )
+        ax_map = fig.add_subplot(grid[:, 0])
+        ax_err = fig.add_subplot(grid[0, 1])
+        ax_n = fig.add_subplot(grid[1, 1])
+    else:
+        grid = fig.add_gridspec(2, 2, height_ratios=(1.1, 1))
+        ax_map = fig.add_subplot(grid[0, :])
+        ax_err = fig.add_subplot(grid[1, 0])
+        ax_n = fig.add_subplot(grid[1, 1])
     a = history.arrays()
     steps, truth, est = a["step"], a["true_pose"], a["estimate"]
     plot_world(ax_map, world, color=COLORS["walls"], linewidth=1)
@@ -158,8 +170,12 @@ def plot_mcl_run(
         label="estimate (colour: step)",
     )  # fmt: skip
     fig.colorbar(dots, ax=ax_map, label="step", pad=0.01, fraction=0.03)
-    legend_outside(ax_map, "top")
-    ax_map.set_title("true and estimated trajectory (Fig. 2)", loc="right")
+    if tall:
+        legend_outside(ax_map, "top", ncols=1)
+        ax_map.set_title("trajectories (Fig. 2)", loc="left", pad=38)
+    else:
+        legend_outside(ax_map, "top")
+        ax_map.set_title("true and estimated trajectory (Fig. 2)", loc="right")
     ax_err.plot(steps, a["error"], color=COLORS["estimate"])
     ax_err.axhline(tolerance, color=COLORS["reference"], ls=":", lw=1)
     ax_err.set_xlabel("step")
@@ -167,6 +183,8 @@ def plot_mcl_run(
     loc = history.localized_step(tolerance)
     ax_err.set_title(f"error per step (Fig. 3); localized from {loc or '-'}")
     ax_n.plot(steps, a["n_particles"], color=COLORS["odometry"])
+    if tall:
+        ax_err.set_xlabel("")
     ax_n.set_xlabel("step")
     ax_n.set_ylabel("particles")
     ax_n.set_ylim(0, None)

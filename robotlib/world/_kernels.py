@@ -102,25 +102,26 @@ def rasterise_segments(segments, x0, y0, resolution, occupied):
 
 @nb.njit(**JIT)
 def flood_fill(free, i0, j0, out):
-    """Set ``out`` True on the cells of ``free`` 4-connected to ``(i0, j0)``."""
+    """Set ``out`` True on the cells of ``free`` 4-connected to ``(i0, j0)``.
+
+    The cells waiting are kept as flat int32 indices (a grid of fewer than
+    2**31 cells), 4 bytes each.
+    """
     ny, nx = free.shape
-    stack = np.empty((ny * nx, 2), dtype=np.int64)
-    top = 0
-    stack[0, 0] = i0
-    stack[0, 1] = j0
+    stack = np.empty(ny * nx, dtype=np.int32)
+    stack[0] = i0 * nx + j0
     top = 1
     out[i0, j0] = True
     while top > 0:
         top -= 1
-        i = stack[top, 0]
-        j = stack[top, 1]
+        i = stack[top] // nx
+        j = stack[top] - i * nx
         for di, dj in ((1, 0), (-1, 0), (0, 1), (0, -1)):
             a = i + di
             b = j + dj
             if 0 <= a < ny and 0 <= b < nx and free[a, b] and not out[a, b]:
                 out[a, b] = True
-                stack[top, 0] = a
-                stack[top, 1] = b
+                stack[top] = a * nx + b
                 top += 1
 
 

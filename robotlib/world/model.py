@@ -296,18 +296,16 @@ class World:
         key = ("free", float(resolution), float(radius))
         if key not in self._cache:
             dist = self.distance_field(resolution)
-            # is_free at the centres, with the distances already measured
-            xy = dist.centres()
+            # is_free at the centres, with the distances already measured (the
+            # centres' rows and columns, not a (ny, nx, 2) array of them)
+            ny, nx = dist.shape
+            xs = dist.origin[0] + (np.arange(nx) + 0.5) * dist.resolution
+            ys = dist.origin[1] + (np.arange(ny) + 0.5) * dist.resolution
             xmin, ymin, xmax, ymax = self.bounds
-            free = (
-                (xy[..., 0] - radius >= xmin)
-                & (xy[..., 0] + radius <= xmax)
-                & (xy[..., 1] - radius >= ymin)
-                & (xy[..., 1] + radius <= ymax)
-                & (dist.data > radius)
-            )
+            free = dist.data > radius
+            free &= ((ys - radius >= ymin) & (ys + radius <= ymax))[:, None]
+            free &= ((xs - radius >= xmin) & (xs + radius <= xmax))[None, :]
             i, j = dist.cell_of(np.array(self.start[:2]))
-            ny, nx = free.shape
             if 0 <= i < ny and 0 <= j < nx and free[i, j]:
                 free = _flood_fill(free, int(i), int(j))
             free.setflags(write=False)
@@ -340,7 +338,14 @@ class World:
         """
         rng = as_rng(rng)
         grid = self.free_space(resolution, radius)
-        cells = np.flatnonzero(grid.data)
+        key = ("free cells", float(resolution), float(radius))
+        if key not in self._cache:  # found once (filters draw every step), int32
+            flat = np.flatnonzero(grid.data)
+            self._cache[key] = flat.astype(
+                np.int32 if grid.data.size < 2**31 else flat.dtype
+            )
+            self._cache[key].setflags(write=False)
+        cells = self._cache[key]
         if len(cells) == 0:
             raise ValueError(f"world {self.name!r} has no free space for r={radius}")
         out = np.empty((n, 3))

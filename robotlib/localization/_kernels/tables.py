@@ -10,9 +10,10 @@ import numba as nb
 import numpy as np
 
 from ..._config import JIT, JIT_PARALLEL, serial_and_parallel
-from ...sensing._kernels import _EPS, cone_echo, indexed_cone_echo, indexed_ray
+from ...sensing._kernels import _EPS, cone_echo, indexed_cone_echo
 from ...world._kernels import point_segment_distance
 from .common import _TWO_PI
+from .table_rays import bucket_walls, walked_sweep_table
 
 
 @nb.njit(**JIT)
@@ -316,55 +317,6 @@ def build_cone_table(
 
 
 @nb.njit(**JIT_PARALLEL)
-def indexed_sweep_table(
-    segments, x0, y0, resolution, n_bins, ray_step, n_rays, max_range, min_range,
-    cos_specular, bx0, by0, bsize, nbx, nby, start, items, field, table,
-):  # fmt: skip
-    """`build_cone_table_indexed` for shared rays (``ray_step > 0``).
-
-    Each cell's ray along each bin is cast once through the index
-    (`robotlib.sensing._kernels.indexed_ray`, the nearest hit), kept when
-    the wall echoes (the specular test of `cone_echo`, with the walls'
-    `_unit_normals`), and each cone is the nearest echo of its rays, read
-    from a padded ring. Rows in parallel.
-    """
-    ny, nx, _ = table.shape
-    half = (n_rays - 1) // 2 if n_rays > 1 else 0
-    pad = half * ray_step
-    normals = _unit_normals(segments)
-    dirs = np.empty((n_bins, 2))
-    for b in range(n_bins):  # as `cone_echo` computes each ray's direction
-        dirs[b, 0] = math.cos(b * _TWO_PI / n_bins)
-        dirs[b, 1] = math.sin(b * _TWO_PI / n_bins)
-    for i in nb.prange(ny):
-        rays = np.empty(n_bins + 2 * pad)
-        cy = y0 + (i + 0.5) * resolution
-        for j in range(nx):
-            cx = x0 + (j + 0.5) * resolution
-            for b in range(n_bins):
-                dx = dirs[b, 0]
-                dy = dirs[b, 1]
-                t, m = indexed_ray(
-                    cx, cy, dx, dy, segments, bx0, by0, bsize, nbx, nby, start,
-                    items, max_range, field, x0, y0, resolution,
-                )  # fmt: skip
-                r = np.inf
-                if m >= 0 and t < max_range:
-                    if abs(dx * normals[m, 0] + dy * normals[m, 1]) >= cos_specular:
-                        r = t
-                rays[pad + b] = r
-            for b in range(pad):
-                rays[b] = rays[n_bins + b]
-                rays[pad + n_bins + b] = rays[pad + b]
-            for b in range(n_bins):
-                echo = np.inf
-                for k in range(b, b + 2 * pad + 1, ray_step):
-                    if rays[k] < echo:
-                        echo = rays[k]
-                table[i, j, b] = _table_entry(echo, max_range, min_range)
-
-
-@nb.njit(**JIT_PARALLEL)
 def indexed_cone_table(
     segments, x0, y0, resolution, n_bins, n_rays, cone, max_range, min_range,
     cos_specular, bx0, by0, bsize, nbx, nby, start, items, field, table,
@@ -384,6 +336,23 @@ def indexed_cone_table(
                 table[i, j, b] = _table_entry(echo, max_range, min_range)
 
 
+def _below(field):
+    """``field`` in float32, each value rounded down: half the memory to walk over.
+
+    A ray jumps over no more clear space than the float64 field shows, so
+    it finds the same walls.
+    """
+    low = field.astype(np.float32)
+    over = low.astype(np.float64) > field
+    low[over] = np.nextafter(low[over], np.float32(-np.inf))
+    return low
+
+
+def _compact(start):
+    """Bucket offsets as int32 when they fit (half the memory), else as given."""
+    return start.astype(np.int32) if start[-1] < 2**31 - 1 else start
+
+
 def build_cone_table_indexed(
     segments, x0, y0, resolution, n_bins, ray_step, n_rays, cone, max_range,
     min_range, cos_specular, bx0, by0, bsize, nbx, nby, start, items, field,
@@ -396,18 +365,23 @@ def build_cone_table_indexed(
     walls near each ray rather than with all of them: for maps of many
     walls or points. ``field`` is the distance field on the table's own
     cells (rays jump over clear space with it). Rows are filled in parallel
-    (`indexed_sweep_table` for shared rays, `indexed_cone_table` otherwise).
+    (`table_rays.walked_sweep_table` for shared rays, on the index's walls
+    copied in bucket order, the field in float32 rounded down and the
+    offsets in int32: less to read from memory, which bounds the walks;
+    `indexed_cone_table` otherwise).
     """
-    index = (bx0, by0, bsize, nbx, nby, start, items, field, table)
     if ray_step > 0:
-        indexed_sweep_table(
-            segments, x0, y0, resolution, n_bins, ray_step, n_rays, max_range,
-            min_range, cos_specular, *index,
+        walls, ids = bucket_walls(segments, items)
+        walked_sweep_table(
+            segments, _unit_normals(segments), walls, ids, x0, y0, resolution,
+            n_bins, ray_step, n_rays, max_range, min_range, cos_specular, bx0,
+            by0, bsize, nbx, nby, _compact(start), _below(field), table,
         )  # fmt: skip
     else:
         indexed_cone_table(
             segments, x0, y0, resolution, n_bins, n_rays, cone, max_range,
-            min_range, cos_specular, *index,
+            min_range, cos_specular, bx0, by0, bsize, nbx, nby, start, items,
+            field, table,
         )  # fmt: skip
 
 
