@@ -269,3 +269,25 @@ def test_step_accepts_particles_set_from_outside(world):
         results.append(mcl.particles.copy())
     np.testing.assert_array_equal(results[0], results[2])
     np.testing.assert_array_equal(results[1], results[3])
+
+
+@pytest.mark.parametrize(
+    "make",
+    [
+        lambda w: MCL.paper(w, n=300, fast=True, rng=3),
+        lambda w: MCL.paper(w, n=300, fast=False, rng=3),
+        lambda w: MCL(w, _models(w)["beam"], n=300, rng=3),
+    ],
+    ids=["paper-fast", "paper-exact", "beam"],
+)
+def test_a_refused_scan_changes_nothing(world, make):
+    """A NaN or misshapen scan raises before any draw or move: the next step is
+    the one the filter would have taken without it."""
+    mcl, twin = make(world), make(world)
+    odo0, odo1 = np.zeros(3), np.array([0.2, 0.0, 0.05])
+    z = np.full(8, 2.0)
+    for bad in (np.r_[z[:7], np.nan], z[:7], -z):
+        with pytest.raises(ValueError):
+            mcl.step(odo0, odo1, bad)
+    np.testing.assert_array_equal(mcl.step(odo0, odo1, z), twin.step(odo0, odo1, z))
+    np.testing.assert_array_equal(mcl.particles, twin.particles)

@@ -423,6 +423,9 @@ class MCL:
         numpy.ndarray, shape (3,)
             The estimate after the update (before resampling).
         """
+        check = getattr(self.sensor, "checked_scan", None)
+        if check is not None:  # before any draw or move: a refused scan changes nothing
+            z = check(z)
         n = len(self.particles)
         done = self._fused_step(odo_prev, odo_now, z)
         fused = done is not False

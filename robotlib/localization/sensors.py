@@ -111,6 +111,10 @@ class _ExpectedModel:
         """Return expected readings (N, S) of particles (N, 3), m."""
         return expected_readings(self.world, particles, self.sonar, self.table)
 
+    def checked_scan(self, z) -> np.ndarray:
+        """Return ``z`` as a float array of shape (S,), or raise ``ValueError``."""
+        return _scan(z, len(self.sonar.sensors))
+
     def _where(self):
         t = self.table
         return t.table, (t.origin[0], t.origin[1], 1.0 / t.resolution)
@@ -446,6 +450,10 @@ class LikelihoodFieldSensorModel:
             self._origin = (0.0, 0.0)
             self._inv_res = 1.0
             self._segments = np.ascontiguousarray(world.obstacles)
+
+    def checked_scan(self, z) -> np.ndarray:
+        """Return ``z`` as a float array of shape (S,), or raise ``ValueError``."""
+        return _scan(z, len(self.sonar.sensors))
 
     def log_likelihood(self, particles, z) -> np.ndarray:
         """Per-particle ``sum_i log p(z_i | x_j)`` for readings ``z`` (S,), m."""
