@@ -9,6 +9,7 @@ import os
 import pytest
 
 from robotlib.course import sandbox as sb
+from robotlib.course.session import _descendants
 
 
 def need_sandbox() -> None:
@@ -21,10 +22,15 @@ def need_sandbox() -> None:
     pytest.skip(f"no sandbox here: {why}")
 
 
-def procs_with(needle: bytes) -> list[int]:
-    """Pids of this machine's processes whose command line contains ``needle``."""
+def procs_with(needle: bytes, below: int | None = None) -> list[int]:
+    """Pids of this machine's processes whose command line contains ``needle``.
+
+    With ``below``, only the processes under that pid (another grading run on
+    the same machine has workers of its own).
+    """
     out = []
-    for entry in os.listdir("/proc"):
+    entries = os.listdir("/proc") if below is None else map(str, _descendants(below))
+    for entry in entries:
         if entry.isdigit():
             try:
                 with open(f"/proc/{entry}/cmdline", "rb") as f:

@@ -387,7 +387,8 @@ def test_interrupt_leaves_no_process(tmp_path, sig):
     proc = subprocess.Popen(cmd, stderr=subprocess.PIPE, text=True)
     deadline = time.monotonic() + 120
     while (
-        time.monotonic() < deadline and len(procs_with(b"robotlib.course.worker")) < 3
+        time.monotonic() < deadline
+        and len(procs_with(b"robotlib.course.worker", below=proc.pid)) < 3
     ):
         time.sleep(0.2)
     time.sleep(1.0)
