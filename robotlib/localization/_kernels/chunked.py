@@ -36,6 +36,7 @@ from .fused import (
     _weigh_estimate,
     move_and_read,
 )
+from .resample import systematic_gather
 from .weights import _finish_weights, _pose_mean
 
 
@@ -147,25 +148,9 @@ def finish(weights, top, out_w, out_p, cs, u, new_p, new_w):
 
 @nb.njit(**JIT, inline="always")
 def _gather_into(particles, weights, u, new_p, new_w):
-    """`resample.systematic_gather` (the same arithmetic), and uniform weights."""
-    n_cum = weights.shape[0]
-    cum = np.empty(n_cum)
-    total = 0.0
-    for j in range(n_cum):
-        total += weights[j]
-        cum[j] = total
-    for j in range(n_cum):
-        cum[j] /= total
-    cum[n_cum - 1] = 1.0
+    """`resample.systematic_gather` into ``new_p``, and uniform weights."""
+    systematic_gather(particles, weights, u, new_p)
     n = new_p.shape[0]
-    j = 0
-    for k in range(n):
-        position = (k + u) / n
-        while j < n_cum - 1 and cum[j] <= position:
-            j += 1
-        new_p[k, 0] = particles[j, 0]
-        new_p[k, 1] = particles[j, 1]
-        new_p[k, 2] = particles[j, 2]
     for k in range(n):
         new_w[k] = 1.0 / n
 
