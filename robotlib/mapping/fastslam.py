@@ -36,7 +36,7 @@ from ..sensing import SonarModel
 from ..sensing.laser import LaserModel, laser_poses
 from ..sim import OdometryNoise
 from ..world import World
-from . import _kernels, _kernels_copy, _kernels_window
+from . import _kernels, _kernels_cone_ll, _kernels_copy, _kernels_window
 from .metrics import MapScore, map_score, trajectory_rms
 from .motion import sample_arc_motion
 from .occupancy import InverseLaserModel, InverseSonarModel, OccupancyGrid
@@ -167,6 +167,10 @@ class GridFastSLAM:
         sonar_sigma: float = 0.15,
         sonar_occ: float = 2.0,
         sonar_unknown: float = 0.5,
+        sonar_known: float = 0.3,
+        sonar_l_unknown: float = -0.5,
+        sonar_offset: float = 0.0,
+        sonar_rays: int = 5,
         window: int = 0,
         window_weigh: str = "window",
         rng: np.random.Generator | int | None = None,
@@ -175,13 +179,17 @@ class GridFastSLAM:
             raise ValueError(f"sensor must be 'laser' or 'sonar', got {sensor!r}")
         if n_particles < 1:
             raise ValueError("n_particles must be at least 1")
-        if sonar_likelihood not in ("beam", "endpoint"):
-            raise ValueError("sonar_likelihood must be 'beam' or 'endpoint'")
+        if sonar_likelihood not in ("beam", "endpoint", "cone"):
+            raise ValueError("sonar_likelihood must be 'beam', 'endpoint' or 'cone'")
         self.sensor = sensor
         self.sonar_likelihood = sonar_likelihood
         self.sonar_sigma = float(sonar_sigma)
         self.sonar_occ = float(sonar_occ)
         self.sonar_unknown = float(sonar_unknown)
+        self.sonar_known = float(sonar_known)
+        self.sonar_l_unknown = float(sonar_l_unknown)
+        self.sonar_offset = float(sonar_offset)
+        self.sonar_rays = int(sonar_rays)
         self.laser = LaserModel() if laser is None else laser
         self.sonar = SonarModel() if sonar is None else sonar
         self.laser_model = InverseLaserModel() if laser_model is None else laser_model
@@ -259,12 +267,24 @@ class GridFastSLAM:
     def weigh_sonar(self, poses, ranges) -> np.ndarray:
         """Log-likelihood (N,) of a sonar ring reading in each particle's map."""
         out = np.empty(len(poses))
+        if self.sonar_likelihood == "cone":
+            kern = _kernels_cone_ll.sonar_cone_loglik_many
+            if self.n >= PARALLEL_MIN:
+                kern = _kernels_cone_ll.sonar_cone_loglik_many_parallel
+            kern(
+                self.maps, *self._geometry(), np.ascontiguousarray(poses, dtype=float),
+                self.sonar.sensors, np.ascontiguousarray(ranges, dtype=float),
+                self.sonar.cone / 2, self.sonar.max_range, self.sonar_rays,
+                self.sonar_sigma, self.p_rand, self.sonar_occ, self.sonar_known,
+                self.sonar_l_unknown, self.sonar_offset, out,
+            )  # fmt: skip
+            return out
         if self.sonar_likelihood == "beam":
             self._kernel("sonar_beam_loglik_many")(
                 self.maps, *self._geometry(), np.ascontiguousarray(poses, dtype=float),
                 self.sonar.sensors, np.ascontiguousarray(ranges, dtype=float),
-                self.sonar.cone / 2, self.sonar.max_range, 5, self.sonar_sigma,
-                self.p_rand, self.sonar_occ, self.sonar_unknown, out,
+                self.sonar.cone / 2, self.sonar.max_range, self.sonar_rays,
+                self.sonar_sigma, self.p_rand, self.sonar_occ, self.sonar_unknown, out,
             )  # fmt: skip
             return out
         self._kernel("sonar_loglik_many")(
