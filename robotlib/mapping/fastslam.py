@@ -36,7 +36,7 @@ from ..sensing import SonarModel
 from ..sensing.laser import LaserModel, laser_poses
 from ..sim import OdometryNoise
 from ..world import World
-from . import _kernels, _kernels_cone_ll, _kernels_copy, _kernels_window
+from . import _kernels, _kernels_copy, _kernels_window
 from .metrics import MapScore, map_score, trajectory_rms
 from .motion import sample_arc_motion
 from .occupancy import InverseLaserModel, InverseSonarModel, OccupancyGrid
@@ -62,9 +62,16 @@ position RMS 0.47 m against the odometry's 1.32 m, map error 0.27 m against
 0.41 m for mapping with the odometry's poses; seeds 10-19: 0.55 m against
 1.22 m, 0.285 m against 0.381 m)."""
 
+SONAR_WALL_SENSORS = (0, 3, 4, 7)
+"""The P3-DX ring's sonars at +-90 and +-10 degrees: along a corridor or a
+wall they meet the side walls and the walls ahead near their normal, where
+the echo comes from the cone's axis (the +-30 and +-50 degree ones meet the
+side walls 40-60 degrees off their normal, and echo from the cone's edge)."""
+
 __all__ = [
     "PARALLEL_MIN",
     "SONAR_DEFAULTS",
+    "SONAR_WALL_SENSORS",
     "GridFastSLAM",
     "FastSLAMResult",
     "run_fastslam",
@@ -72,6 +79,16 @@ __all__ = [
     "resample_maps",
     "resample_parents",
 ]
+
+
+def _sonar_groups(n_sensors: int, walls) -> list:
+    """``[(indexes or None, marks_walls)]``: the sonars per map-update call."""
+    if walls is None:
+        return [(None, True)]
+    mark = np.zeros(n_sensors, dtype=bool)
+    mark[np.asarray(walls, dtype=np.int64)] = True
+    groups = [(np.flatnonzero(mark), True), (np.flatnonzero(~mark), False)]
+    return [(np.ascontiguousarray(k), m) for k, m in groups if len(k)]
 
 
 class GridFastSLAM:
@@ -129,6 +146,15 @@ class GridFastSLAM:
         several echoes, so the arcs' stray cells do not count).
     sonar_unknown : float
         Beam model: weight of an echo from cells the map has not seen.
+    sonar_walls : sequence of int, optional
+        Sonar only: the sonars (indexes into ``sonar.sensors``) whose echoes
+        mark the arc occupied in the particles' maps; the others' readings
+        free their cones only. None: all. A cone that meets a wall obliquely
+        echoes from its edge nearest the wall's normal, so its arc puts
+        occupied cells in free space (a P3-DX in a corridor: the 30 and 50
+        degree sonars, 0.1-0.3 m inside the corridor);
+        `SONAR_WALL_SENSORS` are the ones that meet the walls it drives
+        along or towards near their normal.
     window : int
         Sonar only: keep each particle's last ``window`` records out of its
         map (0: none) and weigh by them (``window_weigh``) in the map of the
@@ -167,10 +193,7 @@ class GridFastSLAM:
         sonar_sigma: float = 0.15,
         sonar_occ: float = 2.0,
         sonar_unknown: float = 0.5,
-        sonar_known: float = 0.3,
-        sonar_l_unknown: float = -0.5,
-        sonar_offset: float = 0.0,
-        sonar_rays: int = 5,
+        sonar_walls=None,
         window: int = 0,
         window_weigh: str = "window",
         rng: np.random.Generator | int | None = None,
@@ -179,22 +202,19 @@ class GridFastSLAM:
             raise ValueError(f"sensor must be 'laser' or 'sonar', got {sensor!r}")
         if n_particles < 1:
             raise ValueError("n_particles must be at least 1")
-        if sonar_likelihood not in ("beam", "endpoint", "cone"):
-            raise ValueError("sonar_likelihood must be 'beam', 'endpoint' or 'cone'")
+        if sonar_likelihood not in ("beam", "endpoint"):
+            raise ValueError("sonar_likelihood must be 'beam' or 'endpoint'")
         self.sensor = sensor
         self.sonar_likelihood = sonar_likelihood
         self.sonar_sigma = float(sonar_sigma)
         self.sonar_occ = float(sonar_occ)
         self.sonar_unknown = float(sonar_unknown)
-        self.sonar_known = float(sonar_known)
-        self.sonar_l_unknown = float(sonar_l_unknown)
-        self.sonar_offset = float(sonar_offset)
-        self.sonar_rays = int(sonar_rays)
         self.laser = LaserModel() if laser is None else laser
         self.sonar = SonarModel() if sonar is None else sonar
         self.laser_model = InverseLaserModel() if laser_model is None else laser_model
         self.sonar_model = InverseSonarModel() if sonar_model is None else sonar_model
         self.motion = OdometryNoise() if motion is None else motion
+        self._wall_groups = _sonar_groups(len(self.sonar.sensors), sonar_walls)
         self.inflate = float(inflate)
         self.beam_step = int(beam_step)
         self.p_rand = float(p_rand)
@@ -267,24 +287,12 @@ class GridFastSLAM:
     def weigh_sonar(self, poses, ranges) -> np.ndarray:
         """Log-likelihood (N,) of a sonar ring reading in each particle's map."""
         out = np.empty(len(poses))
-        if self.sonar_likelihood == "cone":
-            kern = _kernels_cone_ll.sonar_cone_loglik_many
-            if self.n >= PARALLEL_MIN:
-                kern = _kernels_cone_ll.sonar_cone_loglik_many_parallel
-            kern(
-                self.maps, *self._geometry(), np.ascontiguousarray(poses, dtype=float),
-                self.sonar.sensors, np.ascontiguousarray(ranges, dtype=float),
-                self.sonar.cone / 2, self.sonar.max_range, self.sonar_rays,
-                self.sonar_sigma, self.p_rand, self.sonar_occ, self.sonar_known,
-                self.sonar_l_unknown, self.sonar_offset, out,
-            )  # fmt: skip
-            return out
         if self.sonar_likelihood == "beam":
             self._kernel("sonar_beam_loglik_many")(
                 self.maps, *self._geometry(), np.ascontiguousarray(poses, dtype=float),
                 self.sonar.sensors, np.ascontiguousarray(ranges, dtype=float),
-                self.sonar.cone / 2, self.sonar.max_range, self.sonar_rays,
-                self.sonar_sigma, self.p_rand, self.sonar_occ, self.sonar_unknown, out,
+                self.sonar.cone / 2, self.sonar.max_range, 5, self.sonar_sigma,
+                self.p_rand, self.sonar_occ, self.sonar_unknown, out,
             )  # fmt: skip
             return out
         self._kernel("sonar_loglik_many")(
@@ -330,11 +338,15 @@ class GridFastSLAM:
             )  # fmt: skip
         else:
             m = self.sonar_model
-            self._kernel("sonar_update_many")(
-                maps, *self._geometry(), poses, self.sonar.sensors, z,
-                self.sonar.cone / 2, self.sonar.max_range, m.thickness, m.l_occ,
-                m.l_free, m.sigma or 0.0, m.max_weight, m.l_min, m.l_max,
-            )  # fmt: skip
+            for k, marks in self._wall_groups:
+                self._kernel("sonar_update_many")(
+                    maps, *self._geometry(), poses,
+                    self.sonar.sensors if k is None else self.sonar.sensors[k],
+                    z if k is None else np.ascontiguousarray(z[k]),
+                    self.sonar.cone / 2, self.sonar.max_range, m.thickness,
+                    m.l_occ if marks else 0.0, m.l_free, m.sigma or 0.0,
+                    m.max_weight, m.l_min, m.l_max,
+                )  # fmt: skip
 
     def _tracked_diff(self) -> MapDiff:
         """Return the maps' `MapDiff` (whole-grid boxes if ``maps`` was replaced)."""
