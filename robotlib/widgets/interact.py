@@ -81,6 +81,7 @@ class InteractPanel:
             [w.HTML(STALE_CSS), *controls.values(), self.status, self.output]
         )
         self.widget.add_class("robotlib-panel")
+        self.widget.add_class(f"robotlib-kind-{type(self).__name__}")  # for the test
         self.runs, self.seconds = 0, 0.0
         self.returns_figure: bool | None = None
         self.runner = LiveRunner(self._job, self._done)
