@@ -5,12 +5,16 @@ writes into the repository) with settings that render every cell and fetch
 no news; `Browser` opens Debian's chromium through playwright (its
 executable path set: no browser download) with every non-loopback request
 blocked. `run_notebook` opens a notebook, runs all cells from the menu,
-saves it and returns what happened; `check_panels` moves the first slider
-of each panel and times its first feedback (polled, and in the page) and
-its redraw (a change of the pixels of its image, read through a canvas, so a
-greyed-out old figure does not count), and its answer to a second move made
-while the kernel runs the first; `check_animations` presses each player's
-play button and reads its frame slider.
+saves it and returns what happened; `run_notebooks` runs several, two at a
+time, and loads JupyterLab in a page once: a page whose notebook was checked
+opens the next one itself (``window.jupyterapp``), which takes a few
+seconds where a new page took 20-40 on a loaded machine. `check_panels`
+moves the first slider of each panel and times its first feedback (polled,
+and in the page) and its redraw (a change of the pixels of its image, read
+through a canvas, so a greyed-out old figure does not count), and, for one
+panel of each class, its answer to a second move made while the kernel runs
+the first; `check_animations` presses each player's play button and reads
+its frame slider.
 """
 
 from __future__ import annotations
@@ -124,6 +128,9 @@ class Lab:
             "--ip", "127.0.0.1", f"--port={self.port}",
             f"--ServerApp.token={self.token}", f"--ServerApp.root_dir={self.root}",
             "--LabApp.news_url=", "--ServerApp.open_browser=False",
+            # window.jupyterapp: a page that has loaded JupyterLab opens the
+            # next notebook itself (no second load of the whole application)
+            "--LabApp.expose_app_in_browser=True",
         ]  # fmt: skip
         self.log = open(Path(tmp) / "jupyterlab.log", "w")  # noqa: SIM115
         self.proc = subprocess.Popen(
@@ -253,27 +260,36 @@ class Browser:
         )  # fmt: skip
 
     def page(self, run: Run):
-        """A new page that records console errors and the external requests it tried."""
+        """A new page that records console errors and the external requests it tried.
+
+        They go to ``run``, or to the run `attach` gave the page since.
+        """
         # A context of its own: two JupyterLab pages of one context opening
         # at once fight over their window name (a page error).
         context = self.browser.new_context(viewport={"width": 1280, "height": 900})
         page = context.new_page()
         page.set_default_timeout(120_000)  # a loaded 2-core machine renders slowly
+        now = self._runs = getattr(self, "_runs", {})
+        now[page] = run
 
         def request(r):
             if not r.url.startswith(_LOCAL):
-                run.blocked.append(r.url)  # it fails: see the proxy in __init__
+                now[page].blocked.append(r.url)  # it fails: see the proxy in __init__
 
         page.on("request", request)
 
         def console(m):
             if m.type == "error":  # with the address, so a failed request says which
                 url = (m.location or {}).get("url", "")
-                run.console.append(f"{m.text} ({url})" if url else m.text)
+                now[page].console.append(f"{m.text} ({url})" if url else m.text)
 
         page.on("console", console)
-        page.on("pageerror", lambda e: run.console.append(f"page error: {e}"))
+        page.on("pageerror", lambda e: now[page].console.append(f"page error: {e}"))
         return page
+
+    def attach(self, page, run: Run) -> None:
+        """Record ``page``'s console errors and requests in ``run`` from now on."""
+        self._runs[page] = run
 
     def close(self) -> None:
         """Close the browser and playwright's driver."""
@@ -346,6 +362,16 @@ _READY = """() => !!document.querySelector('.jp-Notebook .jp-CodeCell')
 """The notebook is shown and its kernel has started and answers."""
 
 
+_OPEN = """(path) => {
+  window.jupyterapp.commands.execute('docmanager:open', { path });
+}"""
+"""Open a notebook in a page that has JupyterLab loaded (not waiting for it)."""
+_CLOSE = """() => {
+  for (const w of [...window.jupyterapp.shell.widgets('main')]) w.dispose();
+}"""
+"""Close every document of the page, without asking (the notebook is saved)."""
+
+
 class _Session:
     """One notebook open in its own page, from Run All to its saved file.
 
@@ -357,7 +383,7 @@ class _Session:
 
     OPEN_LIMIT = 150.0  # s for JupyterLab's page and a kernel, on a loaded machine
 
-    def __init__(self, lab: Lab, browser: Browser, path: str):
+    def __init__(self, lab: Lab, browser: Browser, path: str, page=None):
         self.lab, self.browser, self.path = lab, browser, path
         self.run = Run(path)
         self.opened = time.monotonic()
@@ -365,9 +391,14 @@ class _Session:
         self._asked = 0.0  # the last time Run All was asked
         self._attempts = 0
         self._running = False
-        self.page = browser.page(self.run)
         self.shutdown: threading.Thread | None = None  # the kernel's, once checked
-        self.page.goto(lab.url(path), wait_until="commit")
+        if page is None:
+            self.page = browser.page(self.run)
+            self.page.goto(lab.url(path), wait_until="commit")
+        else:  # a page whose last notebook was checked and closed
+            self.page = page
+            browser.attach(page, self.run)
+            page.evaluate(_OPEN, path)
 
     def ready(self) -> bool:
         """Return True once the notebook shows and its kernel is idle."""
@@ -464,7 +495,7 @@ class _Session:
                 if out.get("output_type") == "error":
                     text = "\n".join(out.get("traceback", []))
                     run.errors.append((i, out.get("ename"), text))
-        page.context.close()
+        page.evaluate(_CLOSE)  # the page opens the next notebook
         self.shutdown = threading.Thread(  # the next notebooks get the cores
             target=self.lab.shutdown_kernels, args=(self.path,), daemon=True
         )
@@ -494,6 +525,7 @@ def run_notebooks(
     """
     runs: dict[str, Run] = {}
     todo, opening, running, done = list(paths), [], [], []
+    free = []  # pages whose notebook was checked and closed
     busy_done: set = set()  # panel classes whose second move was made
 
     def start_ready():
@@ -505,7 +537,8 @@ def run_notebooks(
 
     while todo or opening or running:
         if todo and len(opening) + len(running) < at_once + 1:
-            opening.append(_Session(lab, browser, todo.pop(0)))  # one opens ahead
+            page = free.pop() if free else None  # one opens ahead
+            opening.append(_Session(lab, browser, todo.pop(0), page))
         start_ready()
         for session in list(running):
             late = time.monotonic() - session.t0 > timeout
@@ -516,7 +549,10 @@ def run_notebooks(
                     panel_bound, feedback_bound, busy_done
                 )
                 done.append(session)
+                free.append(session.page)
         time.sleep(0.25)
+    for page in free:
+        page.context.close()
     for session in done:
         session.shutdown.join(30)
     return [runs[p] for p in paths]
