@@ -530,7 +530,7 @@ def run_notebooks(
 
     def start_ready():
         for session in list(opening):
-            if len(running) < at_once and session.ready():
+            if session.ready() and len(running) < at_once:  # (ready: times the open)
                 opening.remove(session)
                 session.start()
                 running.append(session)
