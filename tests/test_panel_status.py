@@ -53,27 +53,30 @@ def _line(k):
     return fig
 
 
-def test_interact_panel_drops_a_superseded_change_and_coalesces_the_waiting_ones():
+def test_interact_panel_drops_a_superseded_change_and_coalesces_the_waiting_ones(
+    monkeypatch,
+):
     """On the worker, a change made while an older one runs is the only one drawn."""
     import threading
 
+    from robotlib.widgets import _live
     from robotlib.widgets._live import figure_output
     from robotlib.widgets.interact import InteractPanel
 
+    monkeypatch.setattr(_live, "in_kernel", lambda: True)  # changes go to the worker
     calls, started, gate = [], threading.Event(), threading.Event()
 
     def show(k=1.0):
         calls.append(k)
         if k == 2.0:  # the first change: still running when the next ones come
             started.set()
-            assert gate.wait(30)
+            assert gate.wait(5), "the change ran on the thread that made it"
         return _line(k)
 
     slider = w.FloatSlider(value=1.0, min=0.0, max=3.0, step=0.5)
     panel = InteractPanel(show, k=slider)  # the first figure: drawn inline
-    assert panel.returns_figure and panel.runs == 1 and calls == [1.0]
-    panel.runner.background = True  # as in a kernel
-    slider.value = 2.0
+    assert panel.runs == 1 and calls == [1.0]
+    slider.value = 2.0  # returns at once: k = 2 runs on the worker
     assert started.wait(30) and panel.status.value == "running: k = 2 ..."
     slider.value = 2.5  # both while k = 2 runs: coalesced into one run of 3
     slider.value = 3.0
@@ -89,8 +92,13 @@ def test_interact_panel_drops_a_superseded_change_and_coalesces_the_waiting_ones
     assert "robotlib-stale" not in panel.output._dom_classes
 
 
-def test_interact_panel_on_the_worker_shows_an_error_in_the_figures_place():
+def test_interact_panel_on_the_worker_shows_an_error_in_the_figures_place(
+    monkeypatch,
+):
+    from robotlib.widgets import _live
     from robotlib.widgets.interact import InteractPanel
+
+    monkeypatch.setattr(_live, "in_kernel", lambda: True)
 
     def show(k=1.0):
         if k > 2.0:
@@ -99,7 +107,7 @@ def test_interact_panel_on_the_worker_shows_an_error_in_the_figures_place():
 
     slider = w.FloatSlider(value=1.0, min=0.0, max=3.0, step=0.5)
     panel = InteractPanel(show, k=slider)
-    panel.runner.background = True
+    assert panel.runner.background and panel.returns_figure
     slider.value = 2.5
     assert panel.runner.wait(30)
     (shown,) = panel.output.outputs
