@@ -303,6 +303,23 @@ def _cell_seconds(cell) -> float | None:
     ).total_seconds()
 
 
+def _read_saved(page, saved: Path, limit: float = 30.0) -> dict:
+    """Read a notebook the server is writing: once it is whole JSON.
+
+    jupyter_server's "atomic" save keeps a backup copy and writes the file
+    in place, so a large notebook (Lab 4's player is megabytes) can be read
+    half-written on a loaded machine; read again until it parses.
+    """
+    t0 = time.monotonic()
+    while True:
+        page.wait_for_timeout(200)
+        try:
+            return json.loads(saved.read_text())
+        except ValueError:
+            if time.monotonic() - t0 > limit:
+                raise
+
+
 _READY = """() => !!document.querySelector('.jp-Notebook .jp-CodeCell')
   && !!document.querySelector('.jp-Notebook-ExecutionIndicator')
   && /\\|\\s*Idle/.test(
@@ -431,9 +448,8 @@ class _Session:
         waited = time.monotonic()
         while saved.stat().st_mtime_ns == before and time.monotonic() - waited < 15:
             page.wait_for_timeout(50)  # (playwright's calls keep the page served)
-        page.wait_for_timeout(200)  # the write is done (JupyterLab writes at once)
+        run.notebook = _read_saved(page, saved)
         part("save")
-        run.notebook = json.loads(saved.read_text())
         code = [c for c in run.notebook["cells"] if c["cell_type"] == "code"]
         run.cells_s = [_cell_seconds(c) for c in code]
         if run.cells_s and run.cells_s[0] is not None:
