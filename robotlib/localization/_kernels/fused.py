@@ -166,8 +166,10 @@ def _beam_mm_row(
             p = hit[k] * math.exp(-0.5 * u * u) + p_rand
         else:
             p = p_rand
-        if z[i] <= zhat:
-            p += short[k] * e_short[i]
+        # a select, not a branch (about half the readings are short); p >= +0
+        # and the short term finite, so adding 0.0 leaves p's bits
+        sh = short[k] * e_short[i]
+        p += sh if z[i] <= zhat else 0.0
         prod *= p
     out[j] = (ll + math.log(prod)) * exponent
 
