@@ -176,6 +176,5 @@ def _openmp_step(kind, particles, weights, prm, noise, key, sensors, skip, table
             weights, out_p, out_w, cs, mm,
         )  # fmt: skip
     if u >= 0.0:
-        _kernels.systematic_gather(out_p, out_w, u, new_p)
-        new_w.fill(1.0 / n)
+        chunked.gather_into(out_p, out_w, u, new_p, new_w)
     return res

@@ -27,15 +27,8 @@ import numba as nb
 import numpy as np
 
 from ..._config import JIT
-from .fused import (
-    _beam_mm_row,
-    _buffers,
-    _paper_mm,
-    _weigh_estimate,
-    move_and_read,
-)
-from .resample import systematic_gather
-from .weights import _finish_weights, _pose_mean
+from .fused import _beam_mm_row, _buffers, _paper_mm, move_and_read
+from .weights import _finish_estimate
 
 
 @nb.njit(**JIT)
@@ -137,17 +130,58 @@ def finish(weights, top, out_w, out_p, cs, u, new_p, new_w):
     resampled into ``new_p`` (`resample.systematic_gather` with that draw)
     and ``new_w`` set to ``1 / n``. Returns ``(log_mean, ess, estimate)``.
     """
-    log_mean, ess = _finish_weights(weights, top, out_w)
-    est = _pose_mean(out_p, out_w, cs)
-    if u >= 0.0:
-        _gather_into(out_p, out_w, u, new_p, new_w)
+    est = np.empty(3)
+    log_mean, ess = _finish_into(weights, top, out_w, out_p, cs, u, new_p, new_w, est)
     return log_mean, ess, est
 
 
 @nb.njit(**JIT, inline="always")
-def _gather_into(particles, weights, u, new_p, new_w):
-    """`resample.systematic_gather` into ``new_p``, and uniform weights."""
-    systematic_gather(particles, weights, u, new_p)
+def _finish_into(weights, top, out_w, out_p, cs, u, new_p, new_w, est):
+    """`finish`, the estimate written into ``est``; returns ``(log_mean, ess)``.
+
+    One pass normalises, estimates and (``u >= 0``) keeps the cumulative
+    weights in ``new_w`` for the resampling, which then overwrites them.
+    """
+    cum = new_w if u >= 0.0 else new_w[:0]
+    log_mean, ess, total = _finish_estimate(weights, top, out_w, out_p, cs, est, cum)
+    if u >= 0.0:
+        _gather_cum(out_p, cum, total, u, new_p)
+        n = new_p.shape[0]
+        for k in range(n):
+            new_w[k] = 1.0 / n
+    return log_mean, ess
+
+
+@nb.njit(**JIT, inline="always")
+def _gather_cum(particles, cum, total, u, out):
+    """`resample.systematic_gather` from the running sums ``cum`` (N,) of the weights.
+
+    ``total`` is the last; ``cum[j] / total`` is `resample.cumulative`'s
+    entry (its last, forced to 1, is never read), so the rows are the same.
+    """
+    n_cum = cum.shape[0]
+    n = out.shape[0]
+    j = 0
+    for k in range(n):
+        position = (k + u) / n
+        while j < n_cum - 1 and cum[j] / total <= position:
+            j += 1
+        out[k, 0] = particles[j, 0]
+        out[k, 1] = particles[j, 1]
+        out[k, 2] = particles[j, 2]
+
+
+@nb.njit(**JIT)
+def gather_into(particles, weights, u, new_p, new_w):
+    """`resample.systematic_gather` into ``new_p``, and ``new_w`` set to ``1 / n``.
+
+    The cumulative weights are kept in ``new_w`` (no array made).
+    """
+    total = 0.0
+    for j in range(weights.shape[0]):
+        total += weights[j]
+        new_w[j] = total
+    _gather_cum(particles, new_w, total, u, new_p)
     n = new_p.shape[0]
     for k in range(n):
         new_w[k] = 1.0 / n
@@ -161,13 +195,15 @@ _paper_row = nb.njit(**JIT, inline="always")(_paper_mm.py_func)
 
 
 @nb.njit(**JIT, inline="always")
-def _weigh_into(weights, out_p, cs, out_w, est):
-    """`fused._weigh_estimate`, the estimate written into ``est`` (3,)."""
-    log_mean, ess, e = _weigh_estimate(weights, out_p, cs, out_w)
-    est[0] = e[0]
-    est[1] = e[1]
-    est[2] = e[2]
-    return log_mean, ess
+def _weigh_into(weights, out_p, cs, out_w, u, new_p, new_w, est):
+    """`fused._weigh_estimate` then (``u >= 0``) `finish`'s resampling, into ``est``."""
+    top = -np.inf
+    for j in range(out_w.shape[0]):
+        if out_w[j] > top:
+            top = out_w[j]
+    for j in range(out_w.shape[0]):
+        out_w[j] = weights[j] * math.exp(out_w[j] - top)
+    return _finish_into(weights, top, out_w, out_p, cs, u, new_p, new_w, est)
 
 
 @nb.njit(**JIT)
@@ -201,10 +237,7 @@ def beam_small(particles, weights, noise, sensors, table, z, e_short, hit, short
             j, mm, z, e_short, is_max, hit, short, z_max, p_rand, inv_sigma,
             exponent, u2_skip, out_w,
         )  # fmt: skip
-    log_mean, ess = _weigh_into(weights, out_p, cs, out_w, est)
-    if u >= 0.0:
-        _gather_into(out_p, out_w, u, new_p, new_w)
-    return log_mean, ess
+    return _weigh_into(weights, out_p, cs, out_w, u, new_p, new_w, est)
 
 
 @nb.njit(**JIT)
@@ -221,7 +254,4 @@ def paper_small(particles, weights, noise, sensors, table, z, rot1, trans, rot2,
     )  # fmt: skip
     for j in range(n):
         _paper_row(j, mm, z, inv_n, out_w)
-    log_mean, ess = _weigh_into(weights, out_p, cs, out_w, est)
-    if u >= 0.0:
-        _gather_into(out_p, out_w, u, new_p, new_w)
-    return log_mean, ess
+    return _weigh_into(weights, out_p, cs, out_w, u, new_p, new_w, est)
