@@ -69,14 +69,6 @@ def main() -> int:
         )
         os.symlink(os.path.join(old, "worlds"), os.path.join(tmp, "worlds"))
     sys.path.insert(0, tmp)
-    shutil.copytree(
-        os.path.join(args.old, "robotlib"), os.path.join(tmp, "robotlib_old")
-    )
-    os.symlink(
-        os.path.abspath(os.path.join(args.old, "worlds")),
-        os.path.join(tmp, "worlds"),
-    )
-    sys.path.insert(0, tmp)
     for spec in args.specs:
         parts = spec.split(":")
         n, reps = int(parts[0]), int(parts[1])
