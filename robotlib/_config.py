@@ -26,8 +26,19 @@ from . import _kernel_cache  # noqa: E402
 
 _kernel_cache.check()
 
-JIT = {"cache": True, "nogil": True, "fastmath": False, "error_model": "numpy"}
-"""Options for ``numba.njit`` on serial kernels."""
+JIT = {
+    "cache": True,
+    "nogil": True,
+    "fastmath": False,
+    "error_model": "numpy",
+    "no_cfunc_wrapper": True,
+}
+"""Options for ``numba.njit`` on serial kernels.
+
+``no_cfunc_wrapper``: numba otherwise builds, for every function it
+compiles, a C-callable wrapper robotlib never calls (no kernel is passed as
+a function pointer), about a tenth of a small kernel's compile time.
+"""
 
 JIT_PARALLEL = {**JIT, "parallel": True}
 """Options for ``numba.njit`` on kernels that loop with ``prange``."""
