@@ -3,7 +3,8 @@
 Also `serial_and_parallel`, which compiles one kernel body both ways. Only
 kernels import this module; it imports nothing of robotlib's but
 `robotlib._kernel_cache`, which it runs once: cached kernels whose sources
-changed are deleted before any is loaded.
+changed are deleted before any is loaded, and the others load without
+numba's full context refresh (`robotlib._kernel_cache.quick_loads`).
 
 Threads wait passively: unless the environment says otherwise
 (``OMP_WAIT_POLICY`` or ``GOMP_SPINCOUNT`` set), importing this module sets
@@ -25,6 +26,7 @@ import numba as nb  # noqa: E402  (after the wait policy: libgomp reads it once)
 from . import _kernel_cache  # noqa: E402
 
 _kernel_cache.check()
+_kernel_cache.quick_loads()
 
 JIT = {
     "cache": True,
