@@ -27,7 +27,12 @@ tree, world_name = sys.argv[1:3]
 sys.meta_path[:] = [f for f in sys.meta_path if "editable" not in repr(f).lower()]
 sys.path.insert(0, tree)
 c0, t0 = time.process_time(), time.perf_counter()
-from numba.core import event
+import numpy as np
+from robotlib.localization import MCL, expected_readings
+from robotlib.world import load_world
+import robotlib
+assert robotlib.__file__.startswith(os.path.abspath(tree)), robotlib.__file__
+from numba.core import event  # after robotlib's imports, as numba comes in there
 compiled = []
 class _Count(event.Listener):
     def on_start(self, ev):
@@ -35,11 +40,6 @@ class _Count(event.Listener):
     def on_end(self, ev):
         compiled.append(1)
 event.register("numba:compile", _Count())
-import numpy as np
-from robotlib.localization import MCL, expected_readings
-from robotlib.world import load_world
-import robotlib
-assert robotlib.__file__.startswith(os.path.abspath(tree)), robotlib.__file__
 world = load_world(world_name)
 c1, t1 = time.process_time(), time.perf_counter()
 mcl = MCL.best(world, rng=0)
