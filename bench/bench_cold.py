@@ -10,6 +10,14 @@ median CPU time (all threads) and wall time of each part (import, filter,
 first step), the total, the ratios old / new, the number of kernels numba
 compiled, and the load average. The scan the step weighs is computed
 before the timer of the step starts (outside the totals). Asserts nothing.
+
+Python's own bytecode cache is treated like numba's: each round runs a
+fresh copy of the tree's ``robotlib/`` and ``worlds/`` (no ``__pycache__``)
+with ``PYTHONDONTWRITEBYTECODE`` unset, so the cold process compiles
+robotlib's sources and the warm one reads them compiled, as after an
+install (``--bytecode off`` keeps the environment's setting: with it set,
+every process compiles robotlib's sources, about 0.1 s). numpy's and
+numba's bytecode is whatever their install left, the same for both trees.
 """
 
 import argparse
@@ -27,7 +35,12 @@ tree, world_name = sys.argv[1:3]
 sys.meta_path[:] = [f for f in sys.meta_path if "editable" not in repr(f).lower()]
 sys.path.insert(0, tree)
 c0, t0 = time.process_time(), time.perf_counter()
-from numba.core import event
+import numpy as np
+from robotlib.localization import MCL, expected_readings
+from robotlib.world import load_world
+import robotlib
+assert robotlib.__file__.startswith(os.path.abspath(tree)), robotlib.__file__
+from numba.core import event  # after robotlib's imports, as numba comes in there
 compiled = []
 class _Count(event.Listener):
     def on_start(self, ev):
@@ -35,11 +48,6 @@ class _Count(event.Listener):
     def on_end(self, ev):
         compiled.append(1)
 event.register("numba:compile", _Count())
-import numpy as np
-from robotlib.localization import MCL, expected_readings
-from robotlib.world import load_world
-import robotlib
-assert robotlib.__file__.startswith(os.path.abspath(tree)), robotlib.__file__
 world = load_world(world_name)
 c1, t1 = time.process_time(), time.perf_counter()
 mcl = MCL.best(world, rng=0)
@@ -60,9 +68,20 @@ print(json.dumps({"import": [c1 - c0, t1 - t0], "filter": [c2 - c1, t2 - t1],
 _PARTS = ("import", "filter", "step", "total")
 
 
-def _run(tree: str, cache: str, world: str) -> dict:
+def _copy(tree: str, into: str) -> str:
+    """A copy of ``tree``'s ``robotlib/`` and ``worlds/`` in ``into``, no caches."""
+    src = os.path.join(into, "src")
+    skip = shutil.ignore_patterns("__pycache__")
+    for part in ("robotlib", "worlds"):
+        shutil.copytree(os.path.join(tree, part), os.path.join(src, part), ignore=skip)
+    return src
+
+
+def _run(tree: str, cache: str, world: str, bytecode: bool = True) -> dict:
     env = dict(os.environ, NUMBA_CACHE_DIR=cache)
     env.pop("ROBOTLIB_TABLE_CACHE", None)
+    if bytecode:
+        env.pop("PYTHONDONTWRITEBYTECODE", None)
     cmd = [sys.executable, "-c", _CHILD, tree, world]
     done = subprocess.run(cmd, capture_output=True, text=True, env=env, check=True)
     return json.loads(done.stdout.strip().splitlines()[-1])
@@ -75,15 +94,19 @@ def main() -> int:
     parser.add_argument("new")
     parser.add_argument("--rounds", type=int, default=1)
     parser.add_argument("--world", default="corridor")
+    parser.add_argument("--bytecode", choices=("on", "off"), default="on")
     args = parser.parse_args()
+    bytecode = args.bytecode == "on"
     runs = {(t, k): [] for t in ("old", "new") for k in ("cold", "warm")}
     for r in range(args.rounds):
         for name in ("old", "new") if r % 2 == 0 else ("new", "old"):
             cache = tempfile.mkdtemp(prefix="robotlib-cold-")
             try:
                 tree = getattr(args, name)
+                if bytecode:
+                    tree = _copy(tree, cache)
                 for kind in ("cold", "warm"):
-                    runs[name, kind].append(_run(tree, cache, args.world))
+                    runs[name, kind].append(_run(tree, cache, args.world, bytecode))
             finally:
                 shutil.rmtree(cache, ignore_errors=True)
     for kind in ("cold", "warm"):

@@ -5,6 +5,7 @@ The paper's robot API is importable from the top level::
     from robotlib import robot, move, ismovedone, readsonar, disconnect
 """
 
+from . import _config  # noqa: F401  (first: numba imported lean, `robotlib._config`)
 from .robot import (
     Robot,
     RobotState,

@@ -1,9 +1,11 @@
 """Numba options shared by every kernel in robotlib (one place to change them).
 
 Also `serial_and_parallel`, which compiles one kernel body both ways. Only
-kernels import this module; it imports nothing of robotlib's but
+kernels import this module, and the package's ``__init__`` (first, so that
+numba is imported lean: `_import_numba`); it imports nothing of robotlib's but
 `robotlib._kernel_cache`, which it runs once: cached kernels whose sources
-changed are deleted before any is loaded.
+changed are deleted before any is loaded, and the others load without
+numba's full context refresh (`robotlib._kernel_cache.quick_loads`).
 
 Threads wait passively: unless the environment says otherwise
 (``OMP_WAIT_POLICY`` or ``GOMP_SPINCOUNT`` set), importing this module sets
@@ -15,19 +17,60 @@ layers and policies.
 """
 
 import os
+import sys
 import types
 
 if "OMP_WAIT_POLICY" not in os.environ and "GOMP_SPINCOUNT" not in os.environ:
     os.environ["OMP_WAIT_POLICY"] = "PASSIVE"
 
-import numba as nb  # noqa: E402  (after the wait policy: libgomp reads it once)
 
-from . import _kernel_cache  # noqa: E402
+def _import_numba():
+    """Import numba without the two optional packages it has no use for here.
+
+    When installed, numba imports ``coverage`` (to report lines of compiled
+    code to a measurement already running: none is when coverage is not
+    imported yet) and ``yaml`` (to read a ``.numba_config.yaml`` in the
+    working folder: none there). Skipping them saves a tenth of the warm
+    start's imports. Either is imported as usual when already imported or
+    needed; once numba is in, both import normally again.
+    """
+    skipped = []
+    if "numba" not in sys.modules:
+        if "coverage" not in sys.modules:
+            skipped.append("coverage")
+        if "yaml" not in sys.modules and not os.path.exists(".numba_config.yaml"):
+            skipped.append("yaml")
+    for name in skipped:
+        sys.modules[name] = None  # makes `import name` raise ImportError
+    try:
+        import numba
+    finally:
+        for name in skipped:
+            if name in sys.modules and sys.modules[name] is None:
+                del sys.modules[name]
+    return numba
+
+
+nb = _import_numba()  # after the wait policy: libgomp reads it once
+
+from . import _kernel_cache  # noqa: E402  (numba first)
 
 _kernel_cache.check()
+_kernel_cache.quick_loads()
 
-JIT = {"cache": True, "nogil": True, "fastmath": False, "error_model": "numpy"}
-"""Options for ``numba.njit`` on serial kernels."""
+JIT = {
+    "cache": True,
+    "nogil": True,
+    "fastmath": False,
+    "error_model": "numpy",
+    "no_cfunc_wrapper": True,
+}
+"""Options for ``numba.njit`` on serial kernels.
+
+``no_cfunc_wrapper``: numba otherwise builds, for every function it
+compiles, a C-callable wrapper robotlib never calls (no kernel is passed as
+a function pointer), about a tenth of a small kernel's compile time.
+"""
 
 JIT_PARALLEL = {**JIT, "parallel": True}
 """Options for ``numba.njit`` on kernels that loop with ``prange``."""

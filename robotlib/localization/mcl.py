@@ -252,7 +252,10 @@ class MCL:
         self.weights = _uniform(n)
         self.ess = float(n)
         self._log_mean = float("nan")
-        self.last_estimate = _kernels.weighted_pose_mean(self.particles, self.weights)
+        # the set's estimate, computed when first asked for (a step sets its own):
+        # a fresh filter does not compile `weighted_pose_mean` before its first step
+        self._estimate_of = (self.particles.copy(), self.weights.copy())
+        self._last_estimate = None
         self.info = None
         if self.injection is not None:
             self.injection.reset()
@@ -462,6 +465,19 @@ class MCL:
     @info.setter
     def info(self, value: StepInfo | None) -> None:
         self._info = value
+
+    @property
+    def last_estimate(self) -> np.ndarray:
+        """The estimate (3,) of the last step, or of the set `reset` drew."""
+        if self._last_estimate is None:
+            self._last_estimate = _kernels.weighted_pose_mean(*self._estimate_of)
+            self._estimate_of = None
+        return self._last_estimate
+
+    @last_estimate.setter
+    def last_estimate(self, value) -> None:
+        self._last_estimate = value
+        self._estimate_of = None
 
     @property
     def n(self) -> int:

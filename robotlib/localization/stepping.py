@@ -150,7 +150,11 @@ def run_step(kind, particles, weights, prm, noise, key, sensors, skip, table, lu
         chunked.exp_chunk(lo, hi, weights, top, out_w)
 
     _run(exp, spans(n, _threads()))
-    return chunked.finish(weights, top, out_w, out_p, cs, u, new_p, new_w)
+    res = chunked.finish(weights, top, out_w, out_p, cs)
+    if u >= 0.0:  # a kernel of its own: compiled only for filters that need it
+        _kernels.systematic_gather(out_p, out_w, u, new_p)
+        new_w.fill(1.0 / len(new_p))
+    return res
 
 
 def _openmp_step(kind, particles, weights, prm, noise, key, sensors, skip, table, lut,

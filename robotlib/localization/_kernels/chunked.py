@@ -121,17 +121,17 @@ def lut_part(lo, hi, z, e_short, is_max, hit, short, z_max, p_rand, inv_sigma, l
 
 
 @nb.njit(**JIT)
-def finish(weights, top, out_w, out_p, cs, u, new_p, new_w):
-    """Normalise, estimate and (``u >= 0``) resample: the serial end of a step.
+def finish(weights, top, out_w, out_p, cs):
+    """Normalise and estimate: the serial end of a step.
 
     ``out_w`` holds the updated, unnormalised weights (`exp_chunk`); they
     are normalised in place (`update_weights`) and the pose estimated
-    (`weighted_pose_mean`). With ``u`` in [0, 1) the moved particles are
-    resampled into ``new_p`` (`resample.systematic_gather` with that draw)
-    and ``new_w`` set to ``1 / n``. Returns ``(log_mean, ess, estimate)``.
+    (`weighted_pose_mean`). Returns ``(log_mean, ess, estimate)``. The
+    resampling a step may end with is the caller's (`resample.systematic_gather`
+    then): a filter that does not resample every step compiles no gathering.
     """
     est = np.empty(3)
-    log_mean, ess = _finish_into(weights, top, out_w, out_p, cs, u, new_p, new_w, est)
+    log_mean, ess, _ = _finish_estimate(weights, top, out_w, out_p, cs, est, out_w[:0])
     return log_mean, ess, est
 
 
