@@ -19,6 +19,7 @@ from hypothesis import strategies as st
 from robotlib.localization import expected_readings
 from robotlib.localization._kernels.exact import (
     SECTORS,
+    _lanes,
     _offsets,
     cone_echo_pruned,
     wall_blocks,
@@ -35,9 +36,8 @@ from . import naive
 def _echoes_both(cones, walls, counts, n_rays, cone, max_range, cos_specular):
     out = np.empty((cones.shape[0], 2))
     offs = _offsets(n_rays, cone)
-    ray = np.empty((3, max(n_rays, 1)))
-    cand = np.empty((max(n_rays, 1), walls.shape[1]), dtype=np.int64)
-    n_cand = np.empty(max(n_rays, 1), dtype=np.int64)
+    ray = np.empty((3, _lanes(n_rays)))
+    cand = np.empty(((walls.shape[1] + 63) // 64, _lanes(n_rays)), dtype=np.uint64)
     items = np.empty(0, dtype=np.int32)
     for k in range(cones.shape[0]):
         w = walls[k, : counts[k]]
@@ -48,7 +48,7 @@ def _echoes_both(cones, walls, counts, n_rays, cone, max_range, cos_specular):
         table = wall_table(w)
         out[k, 1] = cone_echo_pruned(
             sx, sy, sth, math.cos(sth), math.sin(sth), table, items, True, 0,
-            counts[k], n_rays, cone, max_range, cos_specular, offs, ray, cand, n_cand,
+            counts[k], n_rays, cone, max_range, cos_specular, offs, ray, cand,
         )  # fmt: skip
     return out
 

@@ -87,7 +87,7 @@ _TOL_T = 1e-9
 @nb.njit(**JIT, inline="always")
 def cone_echo_pruned(
     sx, sy, sth, ux, uy, walls, items, every, lo, hi, n_rays, cone, max_range,
-    cos_specular, offs, ray, cand, n_cand,
+    cos_specular, offs, ray, cand,
 ):  # fmt: skip
     """`robotlib.sensing._kernels.cone_echo` on some walls, casting few rays.
 
@@ -106,21 +106,27 @@ def cone_echo_pruned(
     least range of the rays that echo, whatever their order: the rays are
     cast exactly (their own cosine and sine, `ray_segments`' tests against
     their walls in order) from the lowest bound up, until the next bound
-    reaches the least echo so far or ``max_range``. ``ray`` (3, R) float64,
-    ``cand`` (R, M) int64 and ``n_cand`` (R,) int64 are scratch.
+    reaches the least echo so far or ``max_range``. ``ray`` (3, `_lanes`)
+    float64 and ``cand`` (ceil(M / 64), `_lanes`) uint64 (per ray, a bit per
+    wall of the list it may cross) are scratch; the first pass is written as
+    selects over whole vectors of rays (the last ray repeated).
     """
-    for r in range(n_rays):
-        ray[0, r] = ux * offs[0, r] - uy * offs[1, r]
-        ray[1, r] = uy * offs[0, r] + ux * offs[1, r]
+    lanes = ray.shape[1]  # n_rays rounded up to whole vectors
+    for r in range(lanes):
+        o = min(r, n_rays - 1)
+        ray[0, r] = ux * offs[0, o] - uy * offs[1, o]
+        ray[1, r] = uy * offs[0, o] + ux * offs[1, o]
         ray[2, r] = np.inf
-        n_cand[r] = 0
+    for c in range((hi - lo + 63) // 64):
+        for r in range(lanes):
+            cand[c, r] = 0
     last = max(n_rays - 1, 0)
     d0x = ray[0, 0]
     d0y = ray[1, 0]
     d1x = ray[0, last]
     d1y = ray[1, last]
     for q in range(lo, hi):
-        m = q if every else items[q]
+        m = np.uint64(q if every else items[np.uint64(q)])
         ax = walls[m, 0] - sx
         ay = walls[m, 1] - sy
         bx = walls[m, 2] - sx
@@ -140,27 +146,29 @@ def cone_echo_pruned(
         nxn = walls[m, 6]
         nyn = walls[m, 7]
         flat = 1e-3 * (abs(ex) + abs(ey))
-        for r in range(n_rays):
+        num = ax * ey - ay * ex
+        word = np.uint64(q - lo) >> np.uint64(6)
+        bit = np.uint64(1) << (np.uint64(q - lo) & np.uint64(63))
+        for r in range(lanes):  # as selects: several rays per instruction
             dxa = ray[0, r]
             dya = ray[1, r]
             ca = dxa * ay - dya * ax
             cb = dxa * by - dya * bx
-            if (ca > tol and cb > tol) or (ca < -tol and cb < -tol):
-                continue  # the exact test cannot hit it
-            cand[r, n_cand[r]] = m
-            n_cand[r] += 1
-            if abs(dxa * nxn + dya * nyn) < cos_specular - 1e-9:
-                continue  # it cannot echo from it
+            # the exact test cannot hit it (both ends beyond one side)
+            miss = ((ca > tol) & (cb > tol)) | ((ca < -tol) & (cb < -tol))
+            cand[word, r] |= np.uint64(0) if miss else bit
             den = dxa * ey - dya * ex
-            lb = -np.inf  # almost parallel: no bound
-            if abs(den) >= flat:
-                ta = (ax * ey - ay * ex) / den
-                margin = _TOL_T * abs(ta) + _TOL
-                if ta + margin < 0.0:
-                    continue  # behind the sensor
-                lb = ta - margin
-            if lb < ray[2, r]:
-                ray[2, r] = lb
+            bounded = (abs(den) >= flat) & (den != 0.0)  # else almost parallel
+            ta = num / (den if bounded else 1.0)
+            margin = _TOL_T * abs(ta) + _TOL
+            lb = (ta - margin) if bounded else -np.inf
+            take = (
+                (not miss)
+                & (abs(dxa * nxn + dya * nyn) >= cos_specular - 1e-9)  # may echo
+                & (not (bounded & (ta + margin < 0.0)))  # not behind the sensor
+                & (lb < ray[2, r])
+            )
+            ray[2, r] = lb if take else ray[2, r]
     echo = np.inf
     while True:
         first = -1
@@ -179,24 +187,29 @@ def cone_echo_pruned(
         dx = math.cos(a)
         dy = math.sin(a)
         best = np.inf
-        best_m = -1
-        for q in range(n_cand[first]):
-            m = cand[first, q]
-            ex = walls[m, 4]
-            ey = walls[m, 5]
-            denom = dx * ey - dy * ex
-            if abs(denom) < _EPS:
-                continue
-            wx = walls[m, 0] - sx
-            wy = walls[m, 1] - sy
-            t = (wx * ey - wy * ex) / denom
-            if t < 0.0 or t >= best:
-                continue
-            s = (wx * dy - wy * dx) / denom
-            if 0.0 <= s <= 1.0:
-                best = t
-                best_m = m
-        if best_m < 0 or best >= max_range or best >= echo:
+        best_m = np.uint64(0)
+        found = False
+        for c in range((hi - lo + 63) // 64):
+            bits = cand[c, first]
+            q = lo + 64 * c
+            while bits:
+                if bits & np.uint64(1):  # `ray_segments`' test, in order
+                    m = np.uint64(q if every else items[np.uint64(q)])
+                    ex = walls[m, 4]
+                    ey = walls[m, 5]
+                    denom = dx * ey - dy * ex
+                    if not abs(denom) < _EPS:
+                        wx = walls[m, 0] - sx
+                        wy = walls[m, 1] - sy
+                        t = (wx * ey - wy * ex) / denom
+                        s = (wx * dy - wy * dx) / denom
+                        if not (t < 0.0 or t >= best) and 0.0 <= s <= 1.0:
+                            best = t
+                            best_m = m
+                            found = True
+                bits >>= np.uint64(1)
+                q += 1
+        if not found or best >= max_range or best >= echo:
             continue
         if abs(dx * walls[best_m, 6] + dy * walls[best_m, 7]) >= cos_specular:
             echo = best
@@ -224,6 +237,12 @@ def wall_table(segments):
 
 
 @nb.njit(**JIT)
+def _lanes(n_rays):
+    """Scratch columns for ``n_rays`` rays: a whole number of 8-wide vectors."""
+    return 8 * ((max(n_rays, 1) + 7) // 8)
+
+
+@nb.njit(**JIT)
 def _offsets(n_rays, cone):
     """Cosine and sine of each ray's offset from its cone's axis, (2, R)."""
     offs = np.empty((2, max(n_rays, 1)))
@@ -239,7 +258,7 @@ def _offsets(n_rays, cone):
 @nb.njit(**JIT)
 def _expected_pose_blocks(
     k, poses, sensors, turns, walls, start, items, grid, n_rays, cone,
-    max_range, min_range, cos_specular, offs, ray, cand, n_cand, out,
+    max_range, min_range, cos_specular, offs, ray, cand, out,
 ):  # fmt: skip
     x0, y0, inv_block, nbx, nby, n_sectors = grid
     inv_sector = n_sectors / _TWO_PI
@@ -265,7 +284,7 @@ def _expected_pose_blocks(
         echo = cone_echo_pruned(
             sx, sy, poses[k, 2] + sensors[i, 2], c * ci - s * si, s * ci + c * si,
             walls, items, every, lo, hi, n_rays, cone, max_range, cos_specular, offs,
-            ray, cand, n_cand,
+            ray, cand,
         )  # fmt: skip
         z = echo if echo < max_range else max_range
         out[k, i] = min(max(z, min_range), max_range)
@@ -298,13 +317,12 @@ def expected_scan_blocks(
     """
     turns = _turns(sensors)
     offs = _offsets(n_rays, cone)
-    ray = np.empty((3, max(n_rays, 1)))
-    cand = np.empty((max(n_rays, 1), walls.shape[0]), dtype=np.int64)
-    n_cand = np.empty(max(n_rays, 1), dtype=np.int64)
+    ray = np.empty((3, _lanes(n_rays)))
+    cand = np.empty(((walls.shape[0] + 63) // 64, _lanes(n_rays)), dtype=np.uint64)
     for k in range(poses.shape[0]):
         _expected_pose_blocks(
             k, poses, sensors, turns, walls, start, items, grid, n_rays, cone,
-            max_range, min_range, cos_specular, offs, ray, cand, n_cand, out,
+            max_range, min_range, cos_specular, offs, ray, cand, out,
         )  # fmt: skip
 
 
@@ -322,13 +340,12 @@ def expected_scan_blocks_parallel(
     offs = _offsets(n_rays, cone)
     n = poses.shape[0]
     for q in nb.prange((n + _EXACT_CHUNK - 1) // _EXACT_CHUNK):
-        ray = np.empty((3, max(n_rays, 1)))
-        cand = np.empty((max(n_rays, 1), walls.shape[0]), dtype=np.int64)
-        n_cand = np.empty(max(n_rays, 1), dtype=np.int64)
+        ray = np.empty((3, _lanes(n_rays)))
+        cand = np.empty(((walls.shape[0] + 63) // 64, _lanes(n_rays)), dtype=np.uint64)
         for k in range(q * _EXACT_CHUNK, min(n, (q + 1) * _EXACT_CHUNK)):
             _expected_pose_blocks(
                 k, poses, sensors, turns, walls, start, items, grid, n_rays, cone,
-                max_range, min_range, cos_specular, offs, ray, cand, n_cand, out,
+                max_range, min_range, cos_specular, offs, ray, cand, out,
             )  # fmt: skip
 
 
