@@ -145,8 +145,7 @@ _GRID_CHUNK = 32
 
 
 _RAY = 8
-"""Values per ray in `_cast_grid_pose`'s scratch row: direction, inverses,
-boundary offsets, distance so far, one unused (a row is 64 bytes)."""
+"""Values per ray in `_cast_grid_pose`'s scratch (a 64-byte row; one unused)."""
 
 
 @nb.njit(**JIT, inline="always")
