@@ -136,3 +136,73 @@ def test_chi2_band_is_near_the_tables():
     assert chi2_band(3)[1] == pytest.approx(9.35, abs=0.1)
     lo, hi = chi2_band(60)
     assert lo == pytest.approx(40.48, abs=0.1) and hi == pytest.approx(83.30, abs=0.1)
+
+
+def test_sonar_walls_mark_arcs_of_the_chosen_sonars_only():
+    from . import naive_mapping as naive
+
+    f = GridFastSLAM(
+        (50, 70), (0.0, 0.0), 0.1, (2.0, 2.5, 0.3), n_particles=3, sensor="sonar",
+        sonar_walls=(0, 3, 4, 7),
+    )  # fmt: skip
+    f.particles = f.particles + np.array([[0.0, 0.0, 0.0], [0.3, -0.2, 0.1],
+                                          [-0.1, 0.4, -0.2]])  # fmt: skip
+    rng = np.random.default_rng(3)
+    z = rng.uniform(0.4, 3.0, 8)
+    z[5] = f.sonar.max_range
+    for _ in range(2):
+        f.update_maps(z)
+    m, s = f.sonar_model, f.sonar
+    walls, others = [0, 3, 4, 7], [1, 2, 5, 6]
+    for n in range(3):
+        want = np.zeros((50, 70))
+        for _ in range(2):
+            for k, l_occ in ((walls, m.l_occ), (others, 0.0)):
+                want = naive.sonar_scan(
+                    want, f.origin, 0.1, f.particles[n], s.sensors[k], z[k],
+                    s.cone / 2, s.max_range, m.thickness, l_occ, m.l_free,
+                    m.sigma, m.max_weight, m.l_min, m.l_max,
+                )  # fmt: skip
+        np.testing.assert_allclose(f.maps[n], want, atol=1e-5)
+    # the other sonars only free their cones: with every sonar marking walls,
+    # more cells are occupied
+    g = GridFastSLAM((50, 70), (0.0, 0.0), 0.1, (2.0, 2.5, 0.3), n_particles=1,
+                     sensor="sonar")  # fmt: skip
+    g.update_maps(z)
+    assert (g.maps[0] > 0).sum() > (f.maps[0] > 0).sum() > 0
+
+
+def test_sonar_fastslam_with_wall_sonars_is_seeded(leg_log):
+    log = leg_log.every(2)
+    a = run_fastslam(log, 8, "sonar", rng=1, sonar_walls=(0, 3, 4, 7))
+    b = run_fastslam(log, 8, "sonar", rng=1, sonar_walls=(0, 3, 4, 7))
+    np.testing.assert_array_equal(a.path, b.path)
+    np.testing.assert_array_equal(a.map.logodds, b.map.logodds)
+    c = run_fastslam(log, 8, "sonar", rng=1, sonar_walls=None)
+    assert not np.array_equal(a.map.logodds, c.map.logodds)
+
+
+def test_map_sonar_with_wall_sonars_matches_the_reference():
+    from robotlib.mapping import map_sonar
+    from robotlib.world import World
+
+    from . import naive_mapping as naive
+
+    room = World([[0, 0, 6, 0], [6, 0, 6, 4], [6, 4, 0, 4], [0, 4, 0, 0]],
+                 bounds=(-0.5, -0.5, 6.5, 4.5), start=(1, 2, 0))  # fmt: skip
+    rng = np.random.default_rng(5)
+    poses = np.column_stack([rng.uniform(1, 5, 4), rng.uniform(1, 3, 4),
+                             rng.uniform(-3, 3, 4)])  # fmt: skip
+    scans = rng.uniform(0.3, 5.0, (4, 8))
+    g = map_sonar(room, poses, scans, 0.1, walls=[1, 6])
+    f = GridFastSLAM((1, 1), (0, 0), 0.1, (0, 0, 0), n_particles=1, sensor="sonar")
+    m, s = f.sonar_model, f.sonar
+    want = np.zeros(g.shape)
+    for p, z in zip(poses, scans, strict=True):
+        for k, l_occ in (([1, 6], m.l_occ), ([0, 2, 3, 4, 5, 7], 0.0)):
+            want = naive.sonar_scan(
+                want, g.origin, 0.1, p, s.sensors[k], z[k], s.cone / 2, s.max_range,
+                m.thickness, l_occ, m.l_free, m.sigma, m.max_weight, m.l_min,
+                m.l_max,
+            )  # fmt: skip
+    np.testing.assert_allclose(g.logodds, want, atol=1e-5)

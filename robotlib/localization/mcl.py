@@ -249,11 +249,11 @@ class MCL:
             p = pose + self.rng.standard_normal((n, 3)) * np.array(self.init_std)
             p[:, 2] = (p[:, 2] + np.pi) % (2 * np.pi) - np.pi
             self.particles = p
-        self.weights = np.full(n, 1.0 / n)
+        self.weights = _uniform(n)
         self.ess = float(n)
         self._log_mean = float("nan")
         self.last_estimate = _kernels.weighted_pose_mean(self.particles, self.weights)
-        self.info: StepInfo | None = None
+        self.info = None
         if self.injection is not None:
             self.injection.reset()
 
@@ -282,7 +282,7 @@ class MCL:
         if self.injection is not None:
             self.injection.update(self._log_mean)
 
-    def _fused_step(self, odo_prev, odo_now, z):
+    def _fused_step(self, odo_prev, odo_now, z, checked=False):
         """Predict, update, estimate (and resample) in one call when the models allow.
 
         The same numbers as `predict`, `update`, `estimate` in turn (the same
@@ -290,7 +290,8 @@ class MCL:
         low variance, `resample`'s gathering too (its draw taken after the
         noise, as `resample` would). Returns False (nothing done) for other
         models, None when the set is still to be resampled, else the
-        resampled ``(particles, weights)``.
+        resampled ``(particles, weights)``. ``checked``: ``z`` is the
+        sensor's `checked_scan` already.
         """
         sensor = self.sensor
         if not (
@@ -326,7 +327,7 @@ class MCL:
         ):
             u = self.rng.random()  # `ThresholdResampling._resample`'s draw
         moved, weights, log_mean, ess, self.last_estimate, new_p, new_w = sensor._run(
-            p, w, motion, noise, key, z, scratch, u
+            p, w, motion, noise, key, z, scratch, u, checked
         )
         self.particles = moved
         self._weighed(weights, log_mean, ess)
@@ -363,7 +364,7 @@ class MCL:
         if new is not None:
             n = len(new)
             self.particles = new
-            self.weights = np.full(n, 1.0 / n) if weights is None else weights
+            self.weights = _uniform(n) if weights is None else weights
             inj = self.injection
             if inj is not None and inj.probability > 0 and inj.grow is not None:
                 prob = inj.probability
@@ -427,7 +428,7 @@ class MCL:
         if check is not None:  # before any draw or move: a refused scan changes nothing
             z = check(z)
         n = len(self.particles)
-        done = self._fused_step(odo_prev, odo_now, z)
+        done = self._fused_step(odo_prev, odo_now, z, check is not None)
         fused = done is not False
         if not fused:
             self.predict(odo_prev, odo_now)
@@ -445,10 +446,22 @@ class MCL:
                 if not own or a is self.particles or a is self.weights:
                     self._scratch.drop(a)
         self._mine = (self.particles, self.weights)
-        self.info = StepInfo(
+        self._info = (  # made a `StepInfo` when read (`info`)
             n, self.ess, resampled, len(self.particles), injected, regenerated, log_mean
-        )
+        )  # fmt: skip
         return est
+
+    @property
+    def info(self) -> StepInfo | None:
+        """What the last `step` did (None before the first)."""
+        i = self._info
+        if type(i) is tuple:
+            i = self._info = StepInfo(*i)
+        return i
+
+    @info.setter
+    def info(self, value: StepInfo | None) -> None:
+        self._info = value
 
     @property
     def n(self) -> int:
@@ -459,13 +472,20 @@ class MCL:
         """Replace the particle set (weights default to uniform)."""
         p = _particles(particles).copy()
         w = (
-            np.full(len(p), 1.0 / len(p))
+            _uniform(len(p))
             if weights is None
             else np.asarray(weights, dtype=float) / np.sum(weights)
         )
         if w.shape != (len(p),):
             raise ValueError("weights must have shape (N,)")
         self.particles, self.weights = p, w
+
+
+def _uniform(n: int) -> np.ndarray:
+    """``np.full(n, 1.0 / n)``, the same numbers (a fill is quicker to call)."""
+    w = np.empty(n)
+    w.fill(1.0 / n)
+    return w
 
 
 _OWN_POLICIES = (ThresholdResampling, KLDResampling, PaperResampling)

@@ -27,6 +27,7 @@ import numpy as np
 
 from ..sensing import SonarModel
 from . import _kernels, stepping
+from ._kernels import chunked
 from .cones import cone_table, expected_readings
 from .motion import PARALLEL_MIN, _particles
 
@@ -39,12 +40,16 @@ __all__ = [
 
 
 def _scan(z, n_sensors: int) -> np.ndarray:
-    z = np.ascontiguousarray(z, dtype=np.float64)
+    if not (type(z) is np.ndarray and z.dtype == np.float64 and z.flags.c_contiguous):
+        z = np.ascontiguousarray(z, dtype=np.float64)
     if z.shape != (n_sensors,):
         raise ValueError(f"z must have shape ({n_sensors},), got {z.shape}")
-    if z.size and not z.min() > 0:  # NaN too; quicker than np.all for a few
+    if not all(map(_ZERO.__lt__, z.tolist())):  # NaN too; quicker than NumPy for a few
         raise ValueError("sonar readings must be positive")
     return z
+
+
+_ZERO = 0.0
 
 
 def innovation_loglik(z, zhat, n: int | None = None) -> np.ndarray:
@@ -106,6 +111,7 @@ class _ExpectedModel:
         self.sonar = SonarModel() if sonar is None else sonar
         self.fast = bool(fast)
         self.table = cone_table(world, self.sonar, resolution, n_bins) if fast else None
+        self._const = None
 
     def expected(self, particles) -> np.ndarray:
         """Return expected readings (N, S) of particles (N, 3), m."""
@@ -119,41 +125,65 @@ class _ExpectedModel:
         t = self.table
         return t.table, (t.origin[0], t.origin[1], 1.0 / t.resolution)
 
-    def _run(self, particles, weights, motion, noise, key, z, scratch, u):
+    def _run(self, particles, weights, motion, noise, key, z, scratch, u,
+             checked=False):  # fmt: skip
         """Move, weigh, estimate and (``u >= 0``) resample: `MCL.step`'s fused call.
 
         ``noise`` (N, 3) holds the motion noise, or with ``key`` receives it
         (`stepping.run_step`); ``u`` is the systematic resampling's draw or
-        -1. Returns ``(out_p, out_w, log_mean, ess, est, new_p, new_w)``:
-        moved particles and their weights, and the resampled set (None
-        without ``u``).
+        -1; ``checked``: ``z`` is `checked_scan`'s already. Returns
+        ``(out_p, out_w, log_mean, ess, est, new_p, new_w)``: moved
+        particles and their weights, and the resampled set (None without
+        ``u``).
         """
-        z = _scan(z, len(self.sonar.sensors))
+        if not checked:
+            z = _scan(z, len(self.sonar.sensors))
         n = len(particles)
-        large = n >= PARALLEL_MIN
-        out_p, out_w, cs, mm = _outputs(scratch, n, len(z) if large else 0)
         if u >= 0.0:
             new = (np.empty((n, 3)), np.empty(n))
         else:
             new = (_NONE_P, _NONE_W)
-        out = (out_p, out_w, cs, mm, *new)
-        t = self.table
-        where = (float(t.origin[0]), float(t.origin[1]), 1.0 / t.resolution)
-        sensors = self.sonar.sensors
-        if large:
+        if n < PARALLEL_MIN:  # one serial call, its scalars one by one
+            if scratch is None:
+                out_p, out_w = np.empty((n, 3)), np.empty(n)
+            else:
+                out_p = scratch.take("particles", (n, 3))
+                out_w = scratch.take("weights", (n,))
+            est = np.empty(3)
+            log_mean, ess = self._small(particles, weights, motion, noise, z, u,
+                                        out_p, out_w, *new, est)  # fmt: skip
+        else:
+            out_p, out_w, cs, mm = _outputs(scratch, n, len(z))
+            out = (out_p, out_w, cs, mm, *new)
+            t = self.table
+            where = (float(t.origin[0]), float(t.origin[1]), 1.0 / t.resolution)
             prm, skip, lut = self._large(z, motion, where, n)
             log_mean, ess, est = stepping.run_step(
-                self.name, particles, weights, prm, noise, key, sensors, skip,
-                t.table, lut, out, u,
-            )  # fmt: skip
-        else:
-            prm, model = self._small(z, motion, where, n)
-            log_mean, ess, est = stepping.small_step(
-                self.name, particles, weights, prm, noise, sensors, self.table.table,
-                model, out, u,
+                self.name, particles, weights, prm, noise, key, self.sonar.sensors,
+                skip, t.table, lut, out, u,
             )  # fmt: skip
         got = (None, None) if u < 0.0 else new
         return (out_p, out_w, log_mean, ess, est, *got)
+
+    def _consts(self, key=None) -> tuple:
+        """``(sensors, table, where, extra)`` of the fused step, kept while the same.
+
+        ``where``: the table's ``(x0, y0, 1 / resolution)``; ``extra``: the
+        model's scalars (`_extra`) for ``key`` (its parameters object).
+        """
+        t, sonar = self.table, self.sonar
+        c = self._const
+        if (
+            c is None or c[0] is not t or c[1] is not sonar or c[2] is not key
+            or c[3] is not sonar.sensors
+        ):  # fmt: skip
+            where = (float(t.origin[0]), float(t.origin[1]), 1.0 / t.resolution)
+            c = self._const = (t, sonar, key, sonar.sensors, t.table, where,
+                               self._extra(key))  # fmt: skip
+        return c[3:]
+
+    def _extra(self, key) -> tuple:
+        return ()
 
 
 class PaperSensorModel(_ExpectedModel):
@@ -215,8 +245,13 @@ class PaperSensorModel(_ExpectedModel):
             :5
         ]
 
-    def _small(self, z, motion, where, n):
-        return np.array([*motion, *where, 1.0 / n]), (z,)
+    def _small(self, particles, weights, motion, noise, z, u, out_p, out_w, new_p,
+               new_w, est):  # fmt: skip
+        sensors, table, where, _ = self._consts()
+        return chunked.paper_small(
+            particles, weights, noise, sensors, table, z, *motion, *where,
+            1.0 / len(particles), u, out_p, out_w, new_p, new_w, est,
+        )  # fmt: skip
 
     def _large(self, z, motion, where, n):
         k = getattr(self, "_mm", None)
@@ -367,12 +402,22 @@ class BeamSensorModel(_ExpectedModel):
             :5
         ]
 
-    def _small(self, z, motion, where, n):
-        model = self._model(z)
-        prm = np.array(
-            [*motion, *where, float(self.params.exponent), *model[5:], self._u2_skip]
-        )
-        return prm, model[:5]
+    def _small(self, particles, weights, motion, noise, z, u, out_p, out_w, new_p,
+               new_w, est):  # fmt: skip
+        q = self.params
+        sensors, table, where, beam = self._consts(q)
+        return chunked.beam_small(
+            particles, weights, noise, sensors, table, z,
+            np.exp(-q.lambda_short * z), *self._norms, *motion, *where, *beam, u,
+            out_p, out_w, new_p, new_w, est,
+        )  # fmt: skip
+
+    def _extra(self, q) -> tuple:
+        max_range = float(self.sonar.max_range)
+        return (
+            float(q.exponent), max_range - 1e-3, float(q.z_max), q.z_rand / max_range,
+            1.0 / q.sigma_hit, self._u2_skip,
+        )  # fmt: skip
 
     def _large(self, z, motion, where, n):
         model = self._model(z)

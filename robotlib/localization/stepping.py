@@ -2,10 +2,10 @@
 
 The sensor models' fused step (``_run``, which `MCL.step` calls when its
 models allow: the odometry motion model, a ``fast`` paper or beam model)
-runs here: below `PARALLEL_MIN` particles `small_step`, one serial kernel
-that moves, weighs, estimates and (when the caller passes the resampling
-draw) resamples; from `PARALLEL_MIN` on `run_step`, in chunks on a pool of
-Python threads
+runs here from `PARALLEL_MIN` particles on (below, the models call one
+serial kernel, `chunked.beam_small` or `chunked.paper_small`, that moves,
+weighs, estimates and, when the caller passes the resampling draw,
+resamples): `run_step`, in chunks on a pool of Python threads
 (`robotlib.localization._kernels.chunked`): each chunk draws its own rows
 of motion noise (`robotlib.localization.motion.standard_normals`' streams,
 so the numbers do not depend on the threads) and then moves and weighs
@@ -26,7 +26,7 @@ from . import _kernels
 from ._kernels import chunked
 from .motion import NORMALS_CHUNK, PARALLEL_MIN, _executor, _fill
 
-__all__ = ["PARALLEL_MIN", "beam_lut", "run_step", "small_step", "spans"]
+__all__ = ["PARALLEL_MIN", "beam_lut", "run_step", "spans"]
 
 LUT_CHUNKS = 2
 """Column ranges `beam_lut` splits a scan's model table into."""
@@ -176,22 +176,5 @@ def _openmp_step(kind, particles, weights, prm, noise, key, sensors, skip, table
             weights, out_p, out_w, cs, mm,
         )  # fmt: skip
     if u >= 0.0:
-        _kernels.systematic_gather(out_p, out_w, u, new_p)
-        new_w.fill(1.0 / n)
+        chunked.gather_into(out_p, out_w, u, new_p, new_w)
     return res
-
-
-def small_step(kind, particles, weights, prm, noise, sensors, table, model, out, u):
-    """`run_step` in one serial kernel call (below `PARALLEL_MIN` particles).
-
-    ``model``: the beam model's per-scan arrays and scalars (``(z, e_short,
-    is_max, hit, short)``, then ``prm`` carries ``z_max, p_rand, inv_sigma,
-    u2_skip`` from index 10) or, for the paper's, ``(z,)``; ``table`` the
-    cone table (ny, nx, n_bins).
-    """
-    out_p, out_w, _, _, new_p, new_w = out
-    if kind == "beam":
-        return chunked.beam_small(particles, noise, prm, sensors, table, *model,
-                                  weights, out_p, out_w, u, new_p, new_w)  # fmt: skip
-    return chunked.paper_small(particles, noise, prm, sensors, table, model[0],
-                               weights, out_p, out_w, u, new_p, new_w)  # fmt: skip

@@ -48,23 +48,38 @@ PARALLEL_MIN = 64
 a thread pool's wake-up costs more than it saves, the more so on a busy
 machine)."""
 
+SONAR_WALL_SENSORS = (0, 3, 4, 7)
+"""The P3-DX ring's sonars at +-90 and +-10 degrees: along a corridor or a
+wall they meet the side walls and the walls ahead near their normal, where
+the echo comes from the cone's axis (the +-30 and +-50 degree ones meet the
+side walls 40-60 degrees off their normal, and echo from the cone's edge)."""
+
 SONAR_DEFAULTS = {
     "temperature": 0.03,
     "inflate": 1.0,
     "resample_below": 0.5,
     "p_rand": 0.2,
-    "sonar_sigma": 0.25,
+    "sonar_sigma": 0.1,
+    "sonar_walls": SONAR_WALL_SENSORS,
 }
 """`run_fastslam`'s defaults for the sonar (measured on the loop world: eight
-wide cones tell little per record, so each weighs little; an echo's range
-is trusted to 0.25 m about the map's. 30 particles, the bench's 10 seeds:
-position RMS 0.47 m against the odometry's 1.32 m, map error 0.27 m against
-0.41 m for mapping with the odometry's poses; seeds 10-19: 0.55 m against
-1.22 m, 0.285 m against 0.381 m)."""
+wide cones tell little per record, so each weighs little; only the sonars
+that meet walls near their normal mark walls, which leaves the known-pose
+map's error at 0.067 m instead of 0.12 m, and an echo's range is then
+trusted to 0.1 m about the map's). The outcome depends much on the
+filter's own draws: see the note of session 5 (``bench slam --streams``)."""
+
+SONAR_PARTICLES = 100
+"""Particles the bench gives sonar FastSLAM. With `SONAR_DEFAULTS`, the loop
+world's seeds 0-9, mean position RMS over filter seeds ``seed + 1000 k``:
+30 particles 0.61-0.77 m (k = 0-2), 100 particles 0.45-0.58 m (k = 0-1);
+held-out seeds 10-19, k = 0: 0.69 m and 0.37 m."""
 
 __all__ = [
     "PARALLEL_MIN",
     "SONAR_DEFAULTS",
+    "SONAR_PARTICLES",
+    "SONAR_WALL_SENSORS",
     "GridFastSLAM",
     "FastSLAMResult",
     "run_fastslam",
@@ -72,6 +87,16 @@ __all__ = [
     "resample_maps",
     "resample_parents",
 ]
+
+
+def _sonar_groups(n_sensors: int, walls) -> list:
+    """``[(indexes or None, marks_walls)]``: the sonars per map-update call."""
+    if walls is None:
+        return [(None, True)]
+    mark = np.zeros(n_sensors, dtype=bool)
+    mark[np.asarray(walls, dtype=np.int64)] = True
+    groups = [(np.flatnonzero(mark), True), (np.flatnonzero(~mark), False)]
+    return [(np.ascontiguousarray(k), m) for k, m in groups if len(k)]
 
 
 class GridFastSLAM:
@@ -129,6 +154,15 @@ class GridFastSLAM:
         several echoes, so the arcs' stray cells do not count).
     sonar_unknown : float
         Beam model: weight of an echo from cells the map has not seen.
+    sonar_walls : sequence of int, optional
+        Sonar only: the sonars (indexes into ``sonar.sensors``) whose echoes
+        mark the arc occupied in the particles' maps; the others' readings
+        free their cones only. None: all. A cone that meets a wall obliquely
+        echoes from its edge nearest the wall's normal, so its arc puts
+        occupied cells in free space (a P3-DX in a corridor: the 30 and 50
+        degree sonars, 0.1-0.3 m inside the corridor);
+        `SONAR_WALL_SENSORS` are the ones that meet the walls it drives
+        along or towards near their normal.
     window : int
         Sonar only: keep each particle's last ``window`` records out of its
         map (0: none) and weigh by them (``window_weigh``) in the map of the
@@ -167,6 +201,7 @@ class GridFastSLAM:
         sonar_sigma: float = 0.15,
         sonar_occ: float = 2.0,
         sonar_unknown: float = 0.5,
+        sonar_walls=None,
         window: int = 0,
         window_weigh: str = "window",
         rng: np.random.Generator | int | None = None,
@@ -187,6 +222,7 @@ class GridFastSLAM:
         self.laser_model = InverseLaserModel() if laser_model is None else laser_model
         self.sonar_model = InverseSonarModel() if sonar_model is None else sonar_model
         self.motion = OdometryNoise() if motion is None else motion
+        self._wall_groups = _sonar_groups(len(self.sonar.sensors), sonar_walls)
         self.inflate = float(inflate)
         self.beam_step = int(beam_step)
         self.p_rand = float(p_rand)
@@ -310,11 +346,15 @@ class GridFastSLAM:
             )  # fmt: skip
         else:
             m = self.sonar_model
-            self._kernel("sonar_update_many")(
-                maps, *self._geometry(), poses, self.sonar.sensors, z,
-                self.sonar.cone / 2, self.sonar.max_range, m.thickness, m.l_occ,
-                m.l_free, m.sigma or 0.0, m.max_weight, m.l_min, m.l_max,
-            )  # fmt: skip
+            for k, marks in self._wall_groups:
+                self._kernel("sonar_update_many")(
+                    maps, *self._geometry(), poses,
+                    self.sonar.sensors if k is None else self.sonar.sensors[k],
+                    z if k is None else np.ascontiguousarray(z[k]),
+                    self.sonar.cone / 2, self.sonar.max_range, m.thickness,
+                    m.l_occ if marks else 0.0, m.l_free, m.sigma or 0.0,
+                    m.max_weight, m.l_min, m.l_max,
+                )  # fmt: skip
 
     def _tracked_diff(self) -> MapDiff:
         """Return the maps' `MapDiff` (whole-grid boxes if ``maps`` was replaced)."""
@@ -510,7 +550,10 @@ def run_fastslam(
     """
     res = (0.05 if sensor == "laser" else 0.1) if resolution is None else resolution
     if sensor == "sonar":
+        walls_given = "sonar_walls" in kw
         kw = {**SONAR_DEFAULTS, **kw}
+        if not walls_given and len(log.sonar_model.sensors) != 8:
+            kw["sonar_walls"] = None  # (the default names a P3-DX ring's sonars)
     f = GridFastSLAM.for_world(
         log.world, res, start=log.odometry[0], n_particles=n_particles,
         sensor=sensor, laser=log.laser_model, sonar=log.sonar_model, rng=rng, **kw,

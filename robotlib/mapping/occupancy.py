@@ -19,7 +19,7 @@ Imports the world, the sensing models and the kernels; never plots.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import lru_cache
 
 import numpy as np
@@ -307,17 +307,37 @@ def map_sonar(
     resolution: float = 0.1,
     sonar: SonarModel | None = None,
     model: InverseSonarModel | None = None,
+    walls=None,
 ) -> OccupancyGrid:
     """Build a sonar map from poses (T, 3) and their ring readings (T, S).
 
     ``world`` only gives the grid's cells (its bounds); the poses may be the
-    true ones or odometry's.
+    true ones or odometry's. ``walls`` (sonar indexes, optional): only these
+    sonars' echoes mark their arcs occupied, the others' readings free their
+    cones only (as `robotlib.mapping.GridFastSLAM`'s ``sonar_walls``; None:
+    all mark).
     """
     sonar = SonarModel() if sonar is None else sonar
+    model = _SONAR_MODEL if model is None else model
     p, z = _check_log(poses, scans, len(sonar.sensors))
     grid = OccupancyGrid.for_world(world, resolution)
+    if walls is None:
+        groups = [(slice(None), sonar, model)]
+    else:
+        mark = np.zeros(len(sonar.sensors), dtype=bool)
+        mark[np.asarray(walls, dtype=np.int64)] = True
+        free_only = replace(model, l_occ=0.0)
+        groups = [
+            (k, replace(sonar, sensors=sonar.sensors[k]), m)
+            for k, m in (
+                (np.flatnonzero(mark), model),
+                (np.flatnonzero(~mark), free_only),
+            )
+            if len(k)
+        ]
     for t in range(len(p)):
-        grid.update_sonar(p[t], z[t], sonar, model)
+        for k, s, m in groups:
+            grid.update_sonar(p[t], z[t][k], s, m)
     return grid
 
 

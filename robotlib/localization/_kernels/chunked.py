@@ -14,10 +14,8 @@ each particle's arithmetic is the same in the same order, the largest
 log-likelihood is the same whichever way the chunks split (the first of
 equal values wins, NaN never), and every sum runs serially in `finish`.
 
-``prm`` packs a step's scalars into one float64 array (one argument is
-cheaper to pass than a dozen tuples): ``(rot1, trans, rot2, sd1, sdt, sd2,
-x0, y0, inv_res, c)`` with ``c`` the beam model's exponent or the paper's
-``1/N``, then for `beam_small` ``(z_max, p_rand, inv_sigma, u2_skip)``.
+`beam_small` and `paper_small` take their scalars one by one: numba unboxes
+a float argument faster than NumPy builds an array of them.
 
 Numba kernels: contiguous arrays and scalars in, no Python objects; they
 import nothing of robotlib but the JIT options and other kernels.
@@ -29,15 +27,8 @@ import numba as nb
 import numpy as np
 
 from ..._config import JIT
-from .fused import (
-    _beam_mm_row,
-    _buffers,
-    _paper_mm,
-    _weigh_estimate,
-    move_and_read,
-)
-from .resample import systematic_gather
-from .weights import _finish_weights, _pose_mean
+from .fused import _beam_mm_row, _buffers, _paper_mm, move_and_read
+from .weights import _finish_estimate
 
 
 @nb.njit(**JIT)
@@ -139,17 +130,58 @@ def finish(weights, top, out_w, out_p, cs, u, new_p, new_w):
     resampled into ``new_p`` (`resample.systematic_gather` with that draw)
     and ``new_w`` set to ``1 / n``. Returns ``(log_mean, ess, estimate)``.
     """
-    log_mean, ess = _finish_weights(weights, top, out_w)
-    est = _pose_mean(out_p, out_w, cs)
-    if u >= 0.0:
-        _gather_into(out_p, out_w, u, new_p, new_w)
+    est = np.empty(3)
+    log_mean, ess = _finish_into(weights, top, out_w, out_p, cs, u, new_p, new_w, est)
     return log_mean, ess, est
 
 
 @nb.njit(**JIT, inline="always")
-def _gather_into(particles, weights, u, new_p, new_w):
-    """`resample.systematic_gather` into ``new_p``, and uniform weights."""
-    systematic_gather(particles, weights, u, new_p)
+def _finish_into(weights, top, out_w, out_p, cs, u, new_p, new_w, est):
+    """`finish`, the estimate written into ``est``; returns ``(log_mean, ess)``.
+
+    One pass normalises, estimates and (``u >= 0``) keeps the cumulative
+    weights in ``new_w`` for the resampling, which then overwrites them.
+    """
+    cum = new_w if u >= 0.0 else new_w[:0]
+    log_mean, ess, total = _finish_estimate(weights, top, out_w, out_p, cs, est, cum)
+    if u >= 0.0:
+        _gather_cum(out_p, cum, total, u, new_p)
+        n = new_p.shape[0]
+        for k in range(n):
+            new_w[k] = 1.0 / n
+    return log_mean, ess
+
+
+@nb.njit(**JIT, inline="always")
+def _gather_cum(particles, cum, total, u, out):
+    """`resample.systematic_gather` from the running sums ``cum`` (N,) of the weights.
+
+    ``total`` is the last; ``cum[j] / total`` is `resample.cumulative`'s
+    entry (its last, forced to 1, is never read), so the rows are the same.
+    """
+    n_cum = cum.shape[0]
+    n = out.shape[0]
+    j = 0
+    for k in range(n):
+        position = (k + u) / n
+        while j < n_cum - 1 and cum[j] / total <= position:
+            j += 1
+        out[k, 0] = particles[j, 0]
+        out[k, 1] = particles[j, 1]
+        out[k, 2] = particles[j, 2]
+
+
+@nb.njit(**JIT)
+def gather_into(particles, weights, u, new_p, new_w):
+    """`resample.systematic_gather` into ``new_p``, and ``new_w`` set to ``1 / n``.
+
+    The cumulative weights are kept in ``new_w`` (no array made).
+    """
+    total = 0.0
+    for j in range(weights.shape[0]):
+        total += weights[j]
+        new_w[j] = total
+    _gather_cum(particles, new_w, total, u, new_p)
     n = new_p.shape[0]
     for k in range(n):
         new_w[k] = 1.0 / n
@@ -162,54 +194,64 @@ _beam_row = nb.njit(**JIT, inline="always")(_beam_mm_row.py_func)
 _paper_row = nb.njit(**JIT, inline="always")(_paper_mm.py_func)
 
 
+@nb.njit(**JIT, inline="always")
+def _weigh_into(weights, out_p, cs, out_w, u, new_p, new_w, est):
+    """`fused._weigh_estimate` then (``u >= 0``) `finish`'s resampling, into ``est``."""
+    top = -np.inf
+    for j in range(out_w.shape[0]):
+        if out_w[j] > top:
+            top = out_w[j]
+    for j in range(out_w.shape[0]):
+        out_w[j] = weights[j] * math.exp(out_w[j] - top)
+    return _finish_into(weights, top, out_w, out_p, cs, u, new_p, new_w, est)
+
+
 @nb.njit(**JIT)
-def beam_small(particles, normals, prm, sensors, table, z, e_short, is_max, hit, short,
-               weights, out_p, out_w, u, new_p, new_w):  # fmt: skip
+def beam_small(particles, weights, noise, sensors, table, z, e_short, hit, short,
+               rot1, trans, rot2, sd1, sdt, sd2, x0, y0, inv_res, exponent, max_read,
+               z_max, p_rand, inv_sigma, u2_skip, u, out_p, out_w, new_p, new_w,
+               est):  # fmt: skip
     """`fused.beam_table_step`, then (``u >= 0``) resampling as in `finish`.
 
     The same passes, with the per-particle model written in (a call per
-    particle costs about as much as its arithmetic). ``prm[10:14]`` is
-    ``(z_max, p_rand, inv_sigma, u2_skip)``.
+    particle costs about as much as its arithmetic). The scalars come one
+    by one (cheaper to pass than an array built per step): the motion
+    ``(rot1 .. sd2)``, the table's ``(x0, y0, inv_res)``, the beam model's
+    ``exponent``, ``max_read`` (readings from it on are max readings, as
+    `BeamSensorModel._model`'s ``is_max``), ``z_max, p_rand, inv_sigma,
+    u2_skip``, and the resampling draw ``u``. The estimate goes to ``est``
+    (3,); returns ``(log_mean, ess)``.
     """
     n = particles.shape[0]
-    cs, mm = _buffers(n, sensors.shape[0])
+    s_count = sensors.shape[0]
+    is_max = np.empty(s_count, dtype=np.bool_)
+    for i in range(s_count):
+        is_max[i] = z[i] >= max_read
+    cs, mm = _buffers(n, s_count)
     move_and_read(
-        particles, normals, (prm[0], prm[1], prm[2], prm[3], prm[4], prm[5]), sensors,
-        table, (prm[6], prm[7], prm[8]), is_max, out_p, cs, mm,
+        particles, noise, (rot1, trans, rot2, sd1, sdt, sd2), sensors, table,
+        (x0, y0, inv_res), is_max, out_p, cs, mm,
     )  # fmt: skip
-    z_max, p_rand, inv_sigma, exponent, u2_skip = (
-        prm[10],
-        prm[11],
-        prm[12],
-        prm[9],
-        prm[13],
-    )
     for j in range(n):
         _beam_row(
             j, mm, z, e_short, is_max, hit, short, z_max, p_rand, inv_sigma,
             exponent, u2_skip, out_w,
         )  # fmt: skip
-    log_mean, ess, est = _weigh_estimate(weights, out_p, cs, out_w)
-    if u >= 0.0:
-        _gather_into(out_p, out_w, u, new_p, new_w)
-    return log_mean, ess, est
+    return _weigh_into(weights, out_p, cs, out_w, u, new_p, new_w, est)
 
 
 @nb.njit(**JIT)
-def paper_small(particles, normals, prm, sensors, table, z, weights, out_p, out_w, u,
-                new_p, new_w):  # fmt: skip
-    """`fused.paper_table_step`, then (``u >= 0``) resampling as in `finish`."""
+def paper_small(particles, weights, noise, sensors, table, z, rot1, trans, rot2, sd1,
+                sdt, sd2, x0, y0, inv_res, inv_n, u, out_p, out_w, new_p, new_w,
+                est):  # fmt: skip
+    """`fused.paper_table_step`, then (``u >= 0``) resampling, as `beam_small`."""
     n = particles.shape[0]
     skip = np.zeros(sensors.shape[0], dtype=np.bool_)
     cs, mm = _buffers(n, sensors.shape[0])
     move_and_read(
-        particles, normals, (prm[0], prm[1], prm[2], prm[3], prm[4], prm[5]), sensors,
-        table, (prm[6], prm[7], prm[8]), skip, out_p, cs, mm,
+        particles, noise, (rot1, trans, rot2, sd1, sdt, sd2), sensors, table,
+        (x0, y0, inv_res), skip, out_p, cs, mm,
     )  # fmt: skip
-    inv_n = prm[9]
     for j in range(n):
         _paper_row(j, mm, z, inv_n, out_w)
-    log_mean, ess, est = _weigh_estimate(weights, out_p, cs, out_w)
-    if u >= 0.0:
-        _gather_into(out_p, out_w, u, new_p, new_w)
-    return log_mean, ess, est
+    return _weigh_into(weights, out_p, cs, out_w, u, new_p, new_w, est)

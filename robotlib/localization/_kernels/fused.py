@@ -12,7 +12,7 @@ import numpy as np
 from ..._config import JIT, JIT_PARALLEL, serial_and_parallel
 from .common import _TWO_PI
 from .motion import _odometry_one
-from .weights import _finish_weights, _pose_mean
+from .weights import _finish_estimate
 
 
 @nb.njit(**JIT, inline="always")
@@ -68,8 +68,10 @@ def _weigh_estimate(weights, particles, cs, out_w):
     top = _top(out_w)
     for j in nb.prange(out_w.shape[0]):
         out_w[j] = weights[j] * math.exp(out_w[j] - top)
-    log_mean, ess = _finish_weights(weights, top, out_w)
-    return log_mean, ess, _pose_mean(particles, out_w, cs)
+    est = np.empty(3)
+    no_cum = np.empty(0)
+    log_mean, ess, _ = _finish_estimate(weights, top, out_w, particles, cs, est, no_cum)
+    return log_mean, ess, est
 
 
 _weigh_estimate, _weigh_estimate_parallel = serial_and_parallel(_weigh_estimate)
@@ -166,8 +168,10 @@ def _beam_mm_row(
             p = hit[k] * math.exp(-0.5 * u * u) + p_rand
         else:
             p = p_rand
-        if z[i] <= zhat:
-            p += short[k] * e_short[i]
+        # a select, not a branch (about half the readings are short); p >= +0
+        # and the short term finite, so adding 0.0 leaves p's bits
+        sh = short[k] * e_short[i]
+        p += sh if z[i] <= zhat else 0.0
         prod *= p
     out[j] = (ll + math.log(prod)) * exponent
 

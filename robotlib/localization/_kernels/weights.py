@@ -28,6 +28,45 @@ def _finish_weights(weights, top, out):
     return top + math.log(total / wsum), 1.0 / sq
 
 
+@nb.njit(**JIT)
+def _finish_estimate(weights, top, out, particles, cs, est, cum):
+    """`_finish_weights`, then `_pose_mean` into ``est`` (3,): one pass after the sums.
+
+    With ``cum`` of ``N`` rows, also `resample.cumulative`'s running sums of
+    the normalised weights before its division (their total is returned).
+    Each sum adds the same terms in the same order as those kernels, so the
+    numbers are theirs. Returns ``(log_mean, ess, total)``.
+    """
+    n = weights.shape[0]
+    total = 0.0
+    wsum = 0.0
+    for j in range(n):
+        total += out[j]
+        wsum += weights[j]
+    keep = cum.shape[0] == n
+    sq = 0.0
+    sx = 0.0
+    sy = 0.0
+    sc = 0.0
+    ss = 0.0
+    sw = 0.0
+    for j in range(n):
+        w = out[j] / total
+        out[j] = w
+        sq += w * w
+        sx += w * particles[j, 0]
+        sy += w * particles[j, 1]
+        sc += w * cs[j, 0]
+        ss += w * cs[j, 1]
+        sw += w
+        if keep:
+            cum[j] = sw
+    est[0] = sx / sw
+    est[1] = sy / sw
+    est[2] = math.atan2(ss, sc)
+    return top + math.log(total / wsum), 1.0 / sq, sw
+
+
 def _update_weights(weights, loglik, out):
     """Bayes update ``out ∝ weights * exp(loglik)``, normalised in place.
 
