@@ -459,8 +459,6 @@ def _wall_blocks(world: World, max_range: float, cone: float | None = None) -> t
     if entry is not None and entry[0]() is world:
         return entry[1]
     segments = np.ascontiguousarray(world.obstacles, dtype=np.float64).reshape(-1, 4)
-    blocks = (
-        segments, *_kernels.wall_blocks(segments, world.bounds, max_range, cone=cone)
-    )  # fmt: skip
+    blocks = _kernels.wall_blocks(segments, world.bounds, max_range, cone=cone)
     _BLOCKS[key] = (weakref.ref(world, lambda _: _BLOCKS.pop(key, None)), blocks)
     return blocks

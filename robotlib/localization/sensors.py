@@ -7,8 +7,8 @@ compute them in one of two ways:
 
 - exact (``fast=False``): every particle casts its sonar cones against the
   walls as `robotlib.sensing._kernels.sonar_cone` does, the simulator's own model
-  (the same numbers; each cone is cast only against the walls it may reach,
-  see `robotlib.sensing._kernels.cone_walls`);
+  (the same numbers; each cone casts only the rays that can lower its echo,
+  against the walls they may reach: `_kernels.exact.cone_echo_pruned`);
 - fast (``fast=True``): a `ConeTable` precomputed once per world holds, per
   grid cell and per direction bin, the cone range from the cell's centre, in
   millimetres; a particle's reading is looked up at its sensor's cell and

@@ -144,6 +144,10 @@ _GRID_CHUNK = 32
 """Poses one thread casts with one set of scratch arrays (`cast_grid`)."""
 
 
+_RAY = 8
+"""Values per ray in `_cast_grid_pose`'s scratch (a 64-byte row; one unused)."""
+
+
 @nb.njit(**JIT, inline="always")
 def _cast_grid_pose(
     k, poses, ca, sa, max_range, field, x0, y0, resolution, out, ray, active
@@ -155,10 +159,12 @@ def _cast_grid_pose(
     one cell, to the next cell boundary; it stops on entering an occupied
     cell (0 if it starts in one or outside the grid, the grid's edge counting
     as a wall) or past ``max_range``. The rays of a pose advance together, one
-    step each per round, so that their reads of ``field`` overlap in memory.
-    ``ray`` (7, R) float64 and ``active`` (R,) int64 are scratch: per ray its
-    direction, the inverse of each component, its distance so far (cells)
-    and the offsets to the cell boundary ahead (1 or 0 in x and y).
+    step each per round, so that their reads of ``field`` overlap in memory;
+    both steps are computed and one selected (no branch to mispredict).
+    ``ray`` (`_RAY` * R,) float64 and ``active`` (R,) uint64 are scratch: per
+    ray its direction, the inverse of each component, the offsets to the
+    cell boundary ahead (1 or 0 in x and y) and its distance so far (cells).
+    Indexes are unsigned (no negative-index wrap tests).
     """
     n_rays = ca.shape[0]
     gx = (poses[k, 0] - x0) / resolution + 1.0
@@ -169,50 +175,48 @@ def _cast_grid_pose(
     limit = max_range / resolution
     c0 = math.cos(poses[k, 2])
     s0 = math.sin(poses[k, 2])
-    dx = ray[0]
-    dy = ray[1]
-    inv_dx = ray[2]
-    inv_dy = ray[3]
-    t = ray[4]
-    ox = ray[5]
-    oy = ray[6]
     for r in range(n_rays):
-        dx[r] = c0 * ca[r] - s0 * sa[r]
-        dy[r] = s0 * ca[r] + c0 * sa[r]
-        inv_dx[r] = 1.0 / dx[r] if dx[r] != 0.0 else np.inf
-        inv_dy[r] = 1.0 / dy[r] if dy[r] != 0.0 else np.inf
-        ox[r] = 1.0 if dx[r] >= 0 else 0.0
-        oy[r] = 1.0 if dy[r] >= 0 else 0.0
-        t[r] = 0.0
+        dx = c0 * ca[r] - s0 * sa[r]
+        dy = s0 * ca[r] + c0 * sa[r]
+        b = _RAY * r
+        ray[b] = dx
+        ray[b + 1] = dy
+        ray[b + 2] = 1.0 / dx if dx != 0.0 else np.inf
+        ray[b + 3] = 1.0 / dy if dy != 0.0 else np.inf
+        ray[b + 4] = 1.0 if dx >= 0 else 0.0
+        ray[b + 5] = 1.0 if dy >= 0 else 0.0
+        ray[b + 6] = 0.0
         active[r] = r
-    stride = field.shape[1]
+    stride = np.uint64(field.shape[1])
     flat = field.reshape(field.size)
+    row = out[k]
+    one = np.uint64(1)
     n = n_rays
     while n > 0:
         still = 0
         for q in range(n):
-            r = active[q]
-            tr = t[r]
-            px = gx + tr * dx[r]
-            py = gy + tr * dy[r]
+            r = active[np.uint64(q)]
+            b = r * np.uint64(_RAY)
+            tr = ray[b + np.uint64(6)]
+            px = gx + tr * ray[b]
+            py = gy + tr * ray[b + one]
             # px, py >= 1 (the ring of the field is occupied): int() floors,
             # and the flat index is never negative (read unsigned: no wrap test)
             j = int(px)
             i = int(py)
-            c = flat[np.uint64(i * stride + j)]
+            c = flat[np.uint64(i) * stride + np.uint64(j)]
             if c < 0.0:
-                out[k, r] = tr * resolution
+                row[r] = tr * resolution
                 continue
-            if c < 1.0:
-                bx = (float(j) + ox[r] - px) * inv_dx[r]
-                by = (float(i) + oy[r] - py) * inv_dy[r]
-                c = min(bx, by) + 1e-9
-            tr += c
-            t[r] = tr
+            bx = (float(j) + ray[b + np.uint64(4)] - px) * ray[b + np.uint64(2)]
+            by = (float(i) + ray[b + np.uint64(5)] - py) * ray[b + np.uint64(3)]
+            edge = min(bx, by) + 1e-9
+            tr += c if c >= 1.0 else edge
+            ray[b + np.uint64(6)] = tr
             if tr >= limit:
-                out[k, r] = max_range
+                row[r] = max_range
                 continue
-            active[still] = r
+            active[np.uint64(still)] = r
             still += 1
         n = still
 
@@ -229,8 +233,8 @@ def cast_grid(poses, angles, max_range, field, x0, y0, resolution, out):
     n_rays = angles.shape[0]
     n = poses.shape[0]
     for q in nb.prange((n + _GRID_CHUNK - 1) // _GRID_CHUNK):
-        ray = np.empty((7, n_rays))
-        active = np.empty(n_rays, dtype=np.int64)
+        ray = np.empty(_RAY * n_rays)
+        active = np.empty(n_rays, dtype=np.uint64)
         for k in range(q * _GRID_CHUNK, min(n, (q + 1) * _GRID_CHUNK)):
             _cast_grid_pose(
                 k, poses, ca, sa, max_range, field, x0, y0, resolution, out, ray,

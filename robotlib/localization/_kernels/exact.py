@@ -10,11 +10,8 @@ import numba as nb
 import numpy as np
 
 from ..._config import JIT, JIT_PARALLEL
-from ...sensing._kernels import _EPS, _cone_walls_range
+from ...sensing._kernels import _EPS
 from .common import _TWO_PI
-
-_CULL_MARGIN = 1e-6
-"""Widening of each cone for `robotlib.sensing._kernels.cone_walls`, rad."""
 
 
 @nb.njit(**JIT, inline="always")
@@ -80,16 +77,191 @@ def cone_echo_rays(
     return echo
 
 
+_TOL = 1e-12
+"""Margin of the pruning tests, relative to the coordinates' size (m)."""
+
+_TOL_T = 1e-9
+"""Relative margin of a ray's lower bound on its range."""
+
+
+@nb.njit(**JIT, inline="always")
+def cone_echo_pruned(
+    sx, sy, sth, ux, uy, walls, items, every, lo, hi, n_rays, cone, max_range,
+    cos_specular, offs, ray, cand,
+):  # fmt: skip
+    """`robotlib.sensing._kernels.cone_echo` on some walls, casting few rays.
+
+    The walls are rows ``items[lo:hi]`` of the `wall_table` ``walls`` (rows
+    ``lo:hi`` if ``every``). The same number as
+    `cone_echo` on those walls. A first pass, with each ray's direction
+    approximated by turning the axis ``(ux, uy)`` (within 1e-14 of the
+    cone's heading ``sth``) by the ray's offset (``offs`` (2, R): its cosine
+    and sine), finds per ray the walls its line may cross (it cannot hit a
+    wall whose end points both lie beyond one side of its line by more than
+    `_TOL` times the coordinates' size, whatever the rounding of the exact
+    test), and a lower bound on the range of any echo it can give: over the
+    walls it may cross and may echo from (incidence within the specular
+    angle, less 1e-9), the range to the wall's line less `_TOL_T` of it (no
+    bound where the wall is almost parallel to the ray). The echo is the
+    least range of the rays that echo, whatever their order: the rays are
+    cast exactly (their own cosine and sine, `ray_segments`' tests against
+    their walls in order) from the lowest bound up, until the next bound
+    reaches the least echo so far or ``max_range``. ``ray`` (3, `_lanes`)
+    float64 and ``cand`` (ceil(M / 64), `_lanes`) uint64 (per ray, a bit per
+    wall of the list it may cross) are scratch; the first pass is written as
+    selects over whole vectors of rays (the last ray repeated).
+    """
+    lanes = ray.shape[1]  # n_rays rounded up to whole vectors
+    for r in range(lanes):
+        o = min(r, n_rays - 1)
+        ray[0, r] = ux * offs[0, o] - uy * offs[1, o]
+        ray[1, r] = uy * offs[0, o] + ux * offs[1, o]
+        ray[2, r] = np.inf
+    for c in range((hi - lo + 63) // 64):
+        for r in range(lanes):
+            cand[c, r] = 0
+    last = max(n_rays - 1, 0)
+    d0x = ray[0, 0]
+    d0y = ray[1, 0]
+    d1x = ray[0, last]
+    d1y = ray[1, last]
+    for q in range(lo, hi):
+        m = np.uint64(q if every else items[np.uint64(q)])
+        ax = walls[m, 0] - sx
+        ay = walls[m, 1] - sy
+        bx = walls[m, 2] - sx
+        by = walls[m, 3] - sy
+        tol = _TOL * (1.0 + abs(ax) + abs(ay) + abs(bx) + abs(by))
+        # beside every ray's line when beside the two outermost rays' lines
+        c0 = d0x * ay - d0y * ax
+        c1 = d0x * by - d0y * bx
+        c2 = d1x * ay - d1y * ax
+        c3 = d1x * by - d1y * bx
+        if min(min(c0, c1), min(c2, c3)) > 2.0 * tol:
+            continue
+        if max(max(c0, c1), max(c2, c3)) < -2.0 * tol:
+            continue
+        ex = walls[m, 4]
+        ey = walls[m, 5]
+        nxn = walls[m, 6]
+        nyn = walls[m, 7]
+        flat = 1e-3 * (abs(ex) + abs(ey))
+        num = ax * ey - ay * ex
+        word = np.uint64(q - lo) >> np.uint64(6)
+        bit = np.uint64(1) << (np.uint64(q - lo) & np.uint64(63))
+        for r in range(lanes):  # as selects: several rays per instruction
+            dxa = ray[0, r]
+            dya = ray[1, r]
+            ca = dxa * ay - dya * ax
+            cb = dxa * by - dya * bx
+            # the exact test cannot hit it (both ends beyond one side)
+            miss = ((ca > tol) & (cb > tol)) | ((ca < -tol) & (cb < -tol))
+            cand[word, r] |= np.uint64(0) if miss else bit
+            den = dxa * ey - dya * ex
+            bounded = (abs(den) >= flat) & (den != 0.0)  # else almost parallel
+            ta = num / (den if bounded else 1.0)
+            margin = _TOL_T * abs(ta) + _TOL
+            lb = (ta - margin) if bounded else -np.inf
+            take = (
+                (not miss)
+                & (abs(dxa * nxn + dya * nyn) >= cos_specular - 1e-9)  # may echo
+                & (not (bounded & (ta + margin < 0.0)))  # not behind the sensor
+                & (lb < ray[2, r])
+            )
+            ray[2, r] = lb if take else ray[2, r]
+    echo = np.inf
+    while True:
+        first = -1
+        low = min(echo, max_range)
+        for r in range(n_rays):
+            if ray[2, r] < low:
+                low = ray[2, r]
+                first = r
+        if first < 0:
+            return echo
+        ray[2, first] = np.inf
+        if n_rays == 1:
+            a = sth
+        else:
+            a = sth - 0.5 * cone + cone * first / (n_rays - 1)
+        dx = math.cos(a)
+        dy = math.sin(a)
+        best = np.inf
+        best_m = np.uint64(0)
+        found = False
+        for c in range((hi - lo + 63) // 64):
+            bits = cand[c, first]
+            q = lo + 64 * c
+            while bits:
+                if bits & np.uint64(1):  # `ray_segments`' test, in order
+                    m = np.uint64(q if every else items[np.uint64(q)])
+                    ex = walls[m, 4]
+                    ey = walls[m, 5]
+                    denom = dx * ey - dy * ex
+                    if not abs(denom) < _EPS:
+                        wx = walls[m, 0] - sx
+                        wy = walls[m, 1] - sy
+                        t = (wx * ey - wy * ex) / denom
+                        s = (wx * dy - wy * dx) / denom
+                        if not (t < 0.0 or t >= best) and 0.0 <= s <= 1.0:
+                            best = t
+                            best_m = m
+                            found = True
+                bits >>= np.uint64(1)
+                q += 1
+        if not found or best >= max_range or best >= echo:
+            continue
+        if abs(dx * walls[best_m, 6] + dy * walls[best_m, 7]) >= cos_specular:
+            echo = best
+
+
+@nb.njit(**JIT)
+def wall_table(segments):
+    """Per wall ``x1, y1, x2, y2, ex, ey, nx, ny``, (M, 8): `cone_echo_pruned`'s.
+
+    ``(ex, ey)`` the wall's vector and ``(nx, ny)`` its unit normal, each
+    computed as `robotlib.sensing._kernels.cone_echo` computes them.
+    """
+    walls = np.empty((segments.shape[0], 8))
+    for m in range(segments.shape[0]):
+        ex = segments[m, 2] - segments[m, 0]
+        ey = segments[m, 3] - segments[m, 1]
+        length = math.sqrt(ex * ex + ey * ey)
+        for t in range(4):
+            walls[m, t] = segments[m, t]
+        walls[m, 4] = ex
+        walls[m, 5] = ey
+        walls[m, 6] = -ey / length
+        walls[m, 7] = ex / length
+    return walls
+
+
+@nb.njit(**JIT)
+def _lanes(n_rays):
+    """Scratch columns for ``n_rays`` rays: a whole number of 8-wide vectors."""
+    return 8 * ((max(n_rays, 1) + 7) // 8)
+
+
+@nb.njit(**JIT)
+def _offsets(n_rays, cone):
+    """Cosine and sine of each ray's offset from its cone's axis, (2, R)."""
+    offs = np.empty((2, max(n_rays, 1)))
+    offs[0, 0] = 1.0
+    offs[1, 0] = 0.0
+    for r in range(n_rays if n_rays > 1 else 0):
+        off = -0.5 * cone + cone * r / (n_rays - 1)
+        offs[0, r] = math.cos(off)
+        offs[1, r] = math.sin(off)
+    return offs
+
+
 @nb.njit(**JIT)
 def _expected_pose_blocks(
-    k, poses, sensors, turns, segments, start, block_segs, grid, n_rays, cone,
-    max_range, min_range, cos_specular, near, ray, out,
+    k, poses, sensors, turns, walls, start, items, grid, n_rays, cone,
+    max_range, min_range, cos_specular, offs, ray, cand, out,
 ):  # fmt: skip
     x0, y0, inv_block, nbx, nby, n_sectors = grid
     inv_sector = n_sectors / _TWO_PI
-    half = 0.5 * cone + _CULL_MARGIN
-    ch = math.cos(half) if half < 0.5 * math.pi else 0.0
-    sh = math.sin(half)
     c = math.cos(poses[k, 2])
     s = math.sin(poses[k, 2])
     for i in range(sensors.shape[0]):
@@ -99,23 +271,20 @@ def _expected_pose_blocks(
         sy = poses[k, 1] + s * sensors[i, 0] + c * sensors[i, 1]
         bx = math.floor((sx - x0) * inv_block)
         by = math.floor((sy - y0) * inv_block)
-        walls = segments
+        every = True
         lo = 0
-        hi = segments.shape[0]
+        hi = walls.shape[0]
         if 0 <= bx < nbx and 0 <= by < nby:
             a = poses[k, 2] + sensors[i, 2]
             sector = int((a - _TWO_PI * math.floor(a / _TWO_PI)) * inv_sector)
             b = (int(by) * int(nbx) + int(bx)) * n_sectors + min(sector, n_sectors - 1)
-            walls = block_segs
+            every = False
             lo = start[b]
             hi = start[b + 1]
-        count = _cone_walls_range(
-            sx, sy, c * ci - s * si, s * ci + c * si, ch, sh, walls, lo, hi,
-            max_range, near,
-        )  # fmt: skip
-        echo = cone_echo_rays(
-            sx, sy, poses[k, 2] + sensors[i, 2], near, count, n_rays, cone,
-            max_range, cos_specular, ray,
+        echo = cone_echo_pruned(
+            sx, sy, poses[k, 2] + sensors[i, 2], c * ci - s * si, s * ci + c * si,
+            walls, items, every, lo, hi, n_rays, cone, max_range, cos_specular, offs,
+            ray, cand,
         )  # fmt: skip
         z = echo if echo < max_range else max_range
         out[k, i] = min(max(z, min_range), max_range)
@@ -133,27 +302,27 @@ def _turns(sensors):
 
 @nb.njit(**JIT)
 def expected_scan_blocks(
-    poses, sensors, segments, start, block_segs, grid, n_rays, cone, max_range,
-    min_range, cos_specular, out,
+    poses, sensors, walls, start, items, grid, n_rays, cone, max_range, min_range,
+    cos_specular, out,
 ):  # fmt: skip
     """`expected_scan` (of `robotlib.sensing._kernels`), each cone against nearby walls.
 
-    ``grid`` ``(x0, y0, 1 / side, nbx, nby, n_sectors)`` cuts the plane into
-    square blocks and the sensor headings into sectors; the walls a sensor in
-    block ``b`` heading into sector ``q`` may reach within ``max_range`` are
-    ``block_segs[start[b * n_sectors + q]:start[b * n_sectors + q + 1]]``
-    (`wall_blocks`), and of those
-    the ones in its cone (`robotlib.sensing._kernels.cone_walls`). A sensor outside
-    the blocks tests all ``segments``. The same readings as `expected_scan`
-    (each cone's rays tested together, `cone_echo_rays`).
+    ``walls`` is the `wall_table` of the segments. ``grid`` ``(x0, y0, 1 /
+    side, nbx, nby, n_sectors)`` cuts the plane into square blocks and the
+    sensor headings into sectors; the walls a sensor in block ``b`` heading
+    into sector ``q`` may reach within ``max_range`` are the rows
+    ``items[start[b * n_sectors + q]:start[b * n_sectors + q + 1]]`` of
+    ``walls`` (`wall_blocks`). A sensor outside the blocks tests every wall.
+    The same readings as `expected_scan` (`cone_echo_pruned`).
     """
-    near = np.empty_like(segments)
-    ray = np.empty((4, max(n_rays, 1)))
     turns = _turns(sensors)
+    offs = _offsets(n_rays, cone)
+    ray = np.empty((3, _lanes(n_rays)))
+    cand = np.empty(((walls.shape[0] + 63) // 64, _lanes(n_rays)), dtype=np.uint64)
     for k in range(poses.shape[0]):
         _expected_pose_blocks(
-            k, poses, sensors, turns, segments, start, block_segs, grid, n_rays,
-            cone, max_range, min_range, cos_specular, near, ray, out,
+            k, poses, sensors, turns, walls, start, items, grid, n_rays, cone,
+            max_range, min_range, cos_specular, offs, ray, cand, out,
         )  # fmt: skip
 
 
@@ -163,19 +332,20 @@ _EXACT_CHUNK = 16
 
 @nb.njit(**JIT_PARALLEL)
 def expected_scan_blocks_parallel(
-    poses, sensors, segments, start, block_segs, grid, n_rays, cone, max_range,
-    min_range, cos_specular, out,
+    poses, sensors, walls, start, items, grid, n_rays, cone, max_range, min_range,
+    cos_specular, out,
 ):  # fmt: skip
     """`expected_scan_blocks` with the poses spread over threads."""
     turns = _turns(sensors)
+    offs = _offsets(n_rays, cone)
     n = poses.shape[0]
     for q in nb.prange((n + _EXACT_CHUNK - 1) // _EXACT_CHUNK):
-        near = np.empty_like(segments)
-        ray = np.empty((4, max(n_rays, 1)))
+        ray = np.empty((3, _lanes(n_rays)))
+        cand = np.empty(((walls.shape[0] + 63) // 64, _lanes(n_rays)), dtype=np.uint64)
         for k in range(q * _EXACT_CHUNK, min(n, (q + 1) * _EXACT_CHUNK)):
             _expected_pose_blocks(
-                k, poses, sensors, turns, segments, start, block_segs, grid,
-                n_rays, cone, max_range, min_range, cos_specular, near, ray, out,
+                k, poses, sensors, turns, walls, start, items, grid, n_rays, cone,
+                max_range, min_range, cos_specular, offs, ray, cand, out,
             )  # fmt: skip
 
 
@@ -242,7 +412,7 @@ def _wall_blocks(seg, xmin, ymin, side, nbx, nby, grow, n_sectors, half):
     counts = np.zeros(nby * nbx * n_sectors + 1, dtype=np.int64)
     start = np.empty_like(counts)
     fill = np.empty(nby * nbx * n_sectors, dtype=np.int64)
-    block_segs = np.empty((0, 4))
+    items = np.empty(0, dtype=np.int32)
     for fill_pass in range(2):
         if fill_pass == 1:
             total = 0
@@ -251,7 +421,7 @@ def _wall_blocks(seg, xmin, ymin, side, nbx, nby, grow, n_sectors, half):
                 start[b] = total
             for b in range(fill.shape[0]):  # a loop: a slice copy compiles slowly
                 fill[b] = start[b]
-            block_segs = np.empty((total, 4))
+            items = np.empty(total, dtype=np.int32)
         for k in range(m):  # walls in order: each list keeps it
             if fill_pass == 0:
                 bx0, bx1 = _block_span(
@@ -274,10 +444,9 @@ def _wall_blocks(seg, xmin, ymin, side, nbx, nby, grow, n_sectors, half):
                         if fill_pass == 0:
                             counts[b + 1] += 1
                         else:
-                            for t in range(4):
-                                block_segs[fill[b], t] = seg[k, t]
+                            items[fill[b]] = k
                             fill[b] += 1
-    return start, block_segs
+    return start, items
 
 
 SECTORS = 16
@@ -295,14 +464,15 @@ def wall_blocks(segments, bounds, max_range, side=1.0, cone=None):
     list when no ray of a cone from the block heading into the sector (its
     width widened by 1e-6 rad) can meet it; a cone of half a turn or more
     (or none given) gets one sector. Walls keep their order. Memory: the
-    lists themselves (no block by wall table).
+    lists themselves, 4 bytes an entry (no block by wall table).
 
     Returns
     -------
     tuple
-        ``(start, block_segs, grid)``: offsets (nby * nbx * n_sectors + 1,)
-        int64, the walls of each list in turn (K, 4), and ``(x0, y0, 1 /
-        side, nbx, nby, n_sectors)``.
+        ``(walls, start, items, grid)``: the segments' `wall_table` (M, 8),
+        offsets (nby * nbx * n_sectors + 1,) int64, the walls of each list in
+        turn (K,) int32 (rows of ``walls``), and ``(x0, y0, 1 / side, nbx,
+        nby, n_sectors)``.
     """
     seg = np.ascontiguousarray(segments, dtype=np.float64).reshape(-1, 4)
     xmin, ymin, xmax, ymax = (float(v) for v in bounds)
@@ -314,8 +484,9 @@ def wall_blocks(segments, bounds, max_range, side=1.0, cone=None):
         half = 0.5 * float(cone) + 1e-6
         if 2.0 * math.pi / SECTORS + 2.0 * half < math.pi - 1e-3:
             n_sectors = SECTORS
-    start, block_segs = _wall_blocks(
+    start, items = _wall_blocks(
         seg, xmin, ymin, float(side), nbx, nby, float(max_range) + 1e-6,
         n_sectors, half,
     )  # fmt: skip
-    return start, block_segs, (xmin, ymin, 1.0 / side, nbx, nby, n_sectors)
+    grid = (xmin, ymin, 1.0 / side, nbx, nby, n_sectors)
+    return wall_table(seg), start, items, grid
