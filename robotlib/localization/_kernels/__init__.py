@@ -62,6 +62,7 @@ from .table_models import (
 from .tables import (
     build_cone_table,
     build_cone_table_indexed,
+    build_cone_table_strips,
     cone_table_cells,
     expected_table,
     expected_table_parallel,
@@ -85,6 +86,7 @@ __all__ = [
     "beam_table_step",
     "build_cone_table",
     "build_cone_table_indexed",
+    "build_cone_table_strips",
     "cone_table_cells",
     "cumulative",
     "expected_scan_blocks",
