@@ -72,6 +72,30 @@ def strip_frame(segments, x0, y0, width, height):
 
 
 @nb.njit(**JIT)
+def _sort_by_start(raw, lo, hi, order):
+    """Sort rows ``lo:hi`` of ``raw`` by ``vmin`` into ``order[:hi - lo]``.
+
+    Written out rather than `numpy.argsort`, which takes seconds to compile.
+    """
+    n = hi - lo
+    for r in range(n):
+        order[r] = lo + r
+    gap = 1
+    while gap < n // 3:
+        gap = 3 * gap + 1
+    while gap >= 1:
+        for r in range(gap, n):
+            q = order[r]
+            key = raw[q, _VMIN]
+            p = r
+            while p >= gap and raw[order[p - gap], _VMIN] > key:
+                order[p] = order[p - gap]
+                p -= gap
+            order[p] = q
+        gap //= 3
+
+
+@nb.njit(**JIT)
 def build_strips(segments, c, s, u0, w, n_strips):
     """Sort the walls into strips across ``(c, s)``: ``(start, entries, ids, reach)``.
 
@@ -143,15 +167,19 @@ def build_strips(segments, c, s, u0, w, n_strips):
     entries = np.empty((n, 8))
     ids = np.empty(n, dtype=np.int64)
     reach = np.zeros(n_strips)
+    most = 0
+    for k in range(n_strips):
+        most = max(most, count[k + 1] - count[k])
+    order = np.empty(most, dtype=np.int64)
     for k in range(n_strips):
         lo = count[k]
         hi = count[k + 1]
         if hi == lo:
             continue
-        order = np.argsort(raw[lo:hi, _VMIN])
+        _sort_by_start(raw, lo, hi, order)
         longest = 0.0
         for r in range(hi - lo):
-            q = lo + order[r]
+            q = order[r]
             for col in range(8):
                 entries[lo + r, col] = raw[q, col]
             ids[lo + r] = raw_ids[q]
@@ -161,7 +189,7 @@ def build_strips(segments, c, s, u0, w, n_strips):
     return count, entries, ids, reach
 
 
-@nb.njit(**JIT, inline="always")
+@nb.njit(**JIT)
 def strip_ray(ox, oy, dx, dy, u0, w, start, entries, ids, reach, finger, limit):
     """Nearest hit ``(t, m)`` of the ray ``o + t d`` on the walls of its strip.
 
@@ -216,7 +244,7 @@ def strip_ray(ox, oy, dx, dy, u0, w, start, entries, ids, reach, finger, limit):
     return best, best_m
 
 
-@nb.njit(**JIT, inline="always")
+@nb.njit(**JIT)
 def _ray_entry(t, m, dx, dy, normals, max_range, min_range, cos_specular):
     """Table entry (uint16, mm) of one ray's first hit ``(t, m)``, as a cone of one."""
     z = max_range
@@ -227,7 +255,80 @@ def _ray_entry(t, m, dx, dy, normals, max_range, min_range, cos_specular):
     return np.uint16(round(z * 1000.0))
 
 
+@nb.njit(**JIT)
+def _direction_rays(
+    segments, normals, x0, y0, resolution, b, n_bins, max_range, min_range,
+    cos_specular, w, xc, yc, d, n_strips, scratch, table,
+):  # fmt: skip
+    """Every cell's ray along bin ``b``: its entry to ``scratch[b]`` (or ``table``)."""
+    ny, nx, _ = table.shape
+    apart = scratch.shape[0] == n_bins
+    dx = math.cos(b * _TWO_PI / n_bins)  # as `cone_echo` computes each ray
+    dy = math.sin(b * _TWO_PI / n_bins)
+    u0 = -dy * xc + dx * yc - 0.5 * d
+    start, entries, ids, reach = build_strips(segments, dx, dy, u0, w, n_strips)
+    finger = start[:n_strips].copy()
+    for i in range(ny):
+        cy = y0 + (i + 0.5) * resolution
+        for j in range(nx):
+            cx = x0 + (j + 0.5) * resolution
+            t, m = strip_ray(
+                cx, cy, dx, dy, u0, w, start, entries, ids, reach, finger, max_range
+            )
+            entry = _ray_entry(
+                t, m, dx, dy, normals, max_range, min_range, cos_specular
+            )
+            if apart:
+                scratch[b, i, j] = entry
+            else:
+                table[i, j, b] = entry
+
+
+@nb.njit(**JIT)
+def _cone_row(i, n_rays, ray_step, scratch, table):
+    """Row ``i``'s cones: each the least entry of its rays (``scratch`` or in place)."""
+    _, nx, n_bins = table.shape
+    apart = scratch.shape[0] == n_bins
+    half = (n_rays - 1) // 2 if n_rays > 1 else 0
+    rays = np.empty(n_bins, dtype=np.uint16)
+    for j in range(nx):
+        for b in range(n_bins):
+            rays[b] = scratch[b, i, j] if apart else table[i, j, b]
+        for b in range(n_bins):
+            e = rays[b]
+            for q in range(1, half + 1):
+                e = min(e, rays[(b + q * ray_step) % n_bins])
+                e = min(e, rays[(b - q * ray_step) % n_bins])
+            table[i, j, b] = e
+
+
 @nb.njit(**JIT_PARALLEL)
+def _strip_rays(
+    segments, normals, x0, y0, resolution, n_bins, ray_step, n_rays, max_range,
+    min_range, cos_specular, w, scratch, table,
+):  # fmt: skip
+    """Every cell's ray along every bin (`_direction_rays`), directions in parallel.
+
+    One parallel loop: the cones follow in `cone_pass`, serially (a second
+    parallel loop here compiles seconds slower).
+    """
+    ny, nx, _ = table.shape
+    xc, yc, d = strip_frame(segments, x0, y0, nx * resolution, ny * resolution)
+    n_strips = int(d / w) + 2
+    for b in nb.prange(n_bins):
+        _direction_rays(
+            segments, normals, x0, y0, resolution, b, n_bins, max_range, min_range,
+            cos_specular, w, xc, yc, d, n_strips, scratch, table,
+        )  # fmt: skip
+
+
+@nb.njit(**JIT)
+def cone_pass(n_rays, ray_step, scratch, table):
+    """Each cone of ``table``: the least entry of its rays (`_cone_row`), row by row."""
+    for i in range(table.shape[0]):
+        _cone_row(i, n_rays, ray_step, scratch, table)
+
+
 def strip_sweep_table(
     segments, normals, x0, y0, resolution, n_bins, ray_step, n_rays, max_range,
     min_range, cos_specular, w, scratch, table,
@@ -240,43 +341,11 @@ def strip_sweep_table(
     (`strip_ray`), the ray's entry written to ``scratch[b]`` (n_bins, ny,
     nx) uint16, or straight into ``table`` when ``scratch`` is empty
     (less memory, more time); then each cone is the least entry of its
-    ``n_rays`` rays ``ray_step`` bins apart. ``normals`` are the walls'
-    `tables._unit_normals`.
+    ``n_rays`` rays ``ray_step`` bins apart (`cone_pass`). ``normals`` are
+    the walls' `tables._unit_normals`.
     """
-    ny, nx, _ = table.shape
-    apart = scratch.shape[0] == n_bins
-    xc, yc, d = strip_frame(segments, x0, y0, nx * resolution, ny * resolution)
-    n_strips = int(d / w) + 2
-    for b in nb.prange(n_bins):
-        dx = math.cos(b * _TWO_PI / n_bins)  # as `cone_echo` computes each ray
-        dy = math.sin(b * _TWO_PI / n_bins)
-        u0 = -dy * xc + dx * yc - 0.5 * d
-        start, entries, ids, reach = build_strips(segments, dx, dy, u0, w, n_strips)
-        finger = start[:n_strips].copy()
-        for i in range(ny):
-            cy = y0 + (i + 0.5) * resolution
-            for j in range(nx):
-                cx = x0 + (j + 0.5) * resolution
-                t, m = strip_ray(
-                    cx, cy, dx, dy, u0, w, start, entries, ids, reach, finger,
-                    max_range,
-                )  # fmt: skip
-                entry = _ray_entry(
-                    t, m, dx, dy, normals, max_range, min_range, cos_specular
-                )
-                if apart:
-                    scratch[b, i, j] = entry
-                else:
-                    table[i, j, b] = entry
-    half = (n_rays - 1) // 2 if n_rays > 1 else 0
-    for i in nb.prange(ny):
-        rays = np.empty(n_bins, dtype=np.uint16)
-        for j in range(nx):
-            for b in range(n_bins):
-                rays[b] = scratch[b, i, j] if apart else table[i, j, b]
-            for b in range(n_bins):
-                e = rays[b]
-                for q in range(1, half + 1):
-                    e = min(e, rays[(b + q * ray_step) % n_bins])
-                    e = min(e, rays[(b - q * ray_step) % n_bins])
-                table[i, j, b] = e
+    _strip_rays(
+        segments, normals, x0, y0, resolution, n_bins, ray_step, n_rays, max_range,
+        min_range, cos_specular, w, scratch, table,
+    )  # fmt: skip
+    cone_pass(n_rays, ray_step, scratch, table)
