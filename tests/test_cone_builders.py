@@ -70,7 +70,7 @@ def test_both_builders_equal_the_every_wall_kernel_on_a_point_grid(
     grid_map, sonar, resolution, ray_step
 ):
     world = load_world(grid_map)
-    table = ConeTable(world, sonar, resolution)  # dense: the indexed builder
+    table = ConeTable(world, sonar, resolution)  # dense: strips or the index
     assert not _sweep_builds(world, sonar, ray_step)
     ny, nx, _ = table.table.shape
     ref = every_wall(world, sonar, resolution, ray_step, (ny, nx), table.origin)
