@@ -25,7 +25,7 @@ import os
 import re
 from pathlib import Path
 
-__all__ = ["install", "unsolved_message", "exercise_of"]
+__all__ = ["install", "unsolved_message", "exercise_of", "structured_traceback"]
 
 _EXERCISE = re.compile(r"^#+\s*Exercise\s+([0-9]+[a-z]?)\b", re.M | re.I)
 _CACHE: dict[Path, tuple[float, list]] = {}
@@ -38,16 +38,25 @@ def install(shell) -> bool:
 
 
 def _handler(shell, etype, value, tb, tb_offset=None):
-    lines = unsolved_message(shell, tb)
-    if lines is None:
-        stb = shell.InteractiveTB.structured_traceback(
-            etype, value, tb, tb_offset=tb_offset
-        )
-    else:
-        red, bold, off = "\x1b[31m", "\x1b[1m", "\x1b[0m"
-        stb = [f"{red}{bold}NotImplementedError{off}: {lines[0]}", *lines[1:]]
+    stb = structured_traceback(shell, etype, value, tb, tb_offset)
     shell._showtraceback(etype, value, stb)
     return None
+
+
+def structured_traceback(shell, etype, value, tb, tb_offset=None) -> list[str]:
+    """Return the lines the handler shows for an error (IPython's ``stb``).
+
+    The plain message of `unsolved_message` for an unsolved exercise, else
+    IPython's own traceback. A panel that runs a cell's function on a worker
+    thread shows an error with these lines, as the kernel's thread would.
+    """
+    lines = unsolved_message(shell, tb)
+    if lines is None:
+        return shell.InteractiveTB.structured_traceback(
+            etype, value, tb, tb_offset=tb_offset
+        )
+    red, bold, off = "\x1b[31m", "\x1b[1m", "\x1b[0m"
+    return [f"{red}{bold}NotImplementedError{off}: {lines[0]}", *lines[1:]]
 
 
 def _cells(notebook: Path) -> list:

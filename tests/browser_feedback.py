@@ -35,8 +35,6 @@ _WATCH = """(root, moved) => {
                       characterData: true });
 }"""
 
-_STATUS = """(root) => root.querySelector('.robotlib-status')?.textContent ?? null"""
-
 
 def watch(panel, slider) -> None:
     """Start timing the panel's answer to the next key press (in the page)."""
@@ -50,8 +48,3 @@ def read(page) -> dict:
         k.replace("_ms", "_s"): (None if rec.get(k) is None else rec[k] / 1000.0)
         for k in ("feedback_ms", "running_ms")
     }
-
-
-def status_text(panel) -> str | None:
-    """The text of the panel's status line (None: not a robotlib panel)."""
-    return panel.evaluate(_STATUS)

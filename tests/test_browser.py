@@ -69,12 +69,15 @@ def browser():
     b.close()
 
 
-def problems(run, solution: bool) -> list[str]:
-    """What a student would notice in a browser run (empty: nothing)."""
+def problems(run, solution: bool, races: set[str] = frozenset()) -> list[str]:
+    """What a student would notice in a browser run (empty: nothing).
+
+    ``races``: the server's own failed kernel lists (`Lab.kernel_list_races`).
+    """
     out = []
     if not run.finished:
         out.append(f"Run All did not finish within {run.run_all_s:.0f} s")
-    out += [f"console: {text}" for text in unexplained_console_errors(run)]
+    out += [f"console: {text}" for text in unexplained_console_errors(run, races)]
     for cell, ename, text in run.errors:
         lines = text.splitlines()
         unsolved = "is not done yet" in text and len(lines) <= UNSOLVED_LINES
@@ -119,6 +122,7 @@ def _record(run) -> None:
         "cells_s": run.cells_s,
         "open_s": run.open_s,
         "check_s": run.check_s,
+        "check_parts": run.check_parts,
     }
     path.write_text(json.dumps(timings, indent=1))
 
@@ -132,11 +136,11 @@ def test_every_notebook_in_a_real_browser(lab, browser):
         PANEL_REDRAW,
         feedback_bound=PANEL_FEEDBACK,
     )
-    found = {}
+    found, races = {}, lab.kernel_list_races()
     for run in runs:
         _record(run)
         solution = run.path.startswith("solutions/")
-        issues = problems(run, solution)
+        issues = problems(run, solution, races)
         if solution and run.first_cell_s is None:
             issues.append("the first cell never finished")
         if not solution and run.finished and not run.errors:

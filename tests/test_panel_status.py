@@ -43,3 +43,77 @@ def test_episode_panel_on_a_worker_keeps_the_newest_and_its_numbers():
     (shown,) = panel.output.outputs
     assert shown["data"]["image/png"]  # drawn from the worker, no capture
     assert panel.status.value.startswith("VFH: ")
+
+
+def _line(k):
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(3, 2))
+    fig.add_subplot().plot([0, 1], [0, k])
+    return fig
+
+
+def test_interact_panel_drops_a_superseded_change_and_coalesces_the_waiting_ones(
+    monkeypatch,
+):
+    """On the worker, a change made while an older one runs is the only one drawn."""
+    import threading
+
+    from robotlib.widgets import _live
+    from robotlib.widgets._live import figure_output
+    from robotlib.widgets.interact import InteractPanel
+
+    monkeypatch.setattr(_live, "in_kernel", lambda: True)  # changes go to the worker
+    calls, started, gate = [], threading.Event(), threading.Event()
+
+    def show(k=1.0):
+        calls.append(k)
+        if k == 2.0:  # the first change: still running when the next ones come
+            started.set()
+            assert gate.wait(5), "the change ran on the thread that made it"
+        return _line(k)
+
+    slider = w.FloatSlider(value=1.0, min=0.0, max=3.0, step=0.5)
+    panel = InteractPanel(show, k=slider)  # the first figure: drawn inline
+    assert panel.runs == 1 and calls == [1.0]
+    slider.value = 2.0  # returns at once: k = 2 runs on the worker
+    assert started.wait(30) and panel.status.value == "running: k = 2 ..."
+    slider.value = 2.5  # both while k = 2 runs: coalesced into one run of 3
+    slider.value = 3.0
+    assert panel.status.value == "running: k = 3 ..." and panel.status.busy
+    gate.set()
+    assert panel.runner.wait(30)
+    assert calls == [1.0, 2.0, 3.0]  # 2.5 never ran
+    assert panel.runs == 2 and panel.runner.cancelled == 1  # 2's figure not drawn
+    (shown,) = panel.output.outputs
+    assert shown == figure_output(_line(3.0))  # the newest change's own figure
+    assert panel.status.value.startswith("k = 3 (drawn in")
+    assert panel.status.drawn == panel.status.values() and not panel.status.busy
+    assert "robotlib-stale" not in panel.output._dom_classes
+
+
+def test_interact_panel_on_the_worker_shows_an_error_in_the_figures_place(
+    monkeypatch,
+):
+    from robotlib.widgets import _live
+    from robotlib.widgets.interact import InteractPanel
+
+    monkeypatch.setattr(_live, "in_kernel", lambda: True)
+
+    def show(k=1.0):
+        if k > 2.0:
+            raise ValueError("too big")
+        return _line(k)
+
+    slider = w.FloatSlider(value=1.0, min=0.0, max=3.0, step=0.5)
+    panel = InteractPanel(show, k=slider)
+    assert panel.runner.background and panel.returns_figure
+    slider.value = 2.5
+    assert panel.runner.wait(30)
+    (shown,) = panel.output.outputs
+    assert shown["output_type"] == "error" and shown["ename"] == "ValueError"
+    assert "too big" in "".join(shown["traceback"])
+    assert panel.status.value == "k = 2.5: failed" and panel.runs == 1
+    slider.value = 1.5  # and it recovers
+    assert panel.runner.wait(30) and panel.runs == 2
+    assert panel.output.outputs[0]["data"]["image/png"]

@@ -180,6 +180,7 @@ class EpisodePanel:
             ]
         )
         self.widget.add_class("robotlib-panel")
+        self.widget.add_class(f"robotlib-kind-{type(self).__name__}")  # for the test
         self.figure = Figure(figsize=(10, 4))
         self.episode = None
         self.runner = LiveRunner(self._job, self._done, self._failed)
@@ -320,6 +321,7 @@ class HistogramPanel:
         self.status.watch(self.step)
         self.widget = w.VBox([w.HTML(STALE_CSS), self.step, self.status, self.output])
         self.widget.add_class("robotlib-panel")
+        self.widget.add_class(f"robotlib-kind-{type(self).__name__}")  # for the test
         self.figure = Figure(figsize=(10, 4))
         self.runner = LiveRunner(self._job, self._done, self._failed)
         inline, self.runner.background = self.runner.background, False

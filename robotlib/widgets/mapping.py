@@ -94,6 +94,7 @@ class MappingPanel:
             ]  # fmt: skip
         )
         self.widget.add_class("robotlib-panel")
+        self.widget.add_class(f"robotlib-kind-{type(self).__name__}")  # for the test
         self.score = None
         self.runner = LiveRunner(self._job, self._done, self._failed)
         inline, self.runner.background = self.runner.background, False

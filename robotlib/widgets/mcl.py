@@ -195,6 +195,7 @@ class MCLPanel:
             ]
         )
         self.widget.add_class("robotlib-panel")
+        self.widget.add_class(f"robotlib-kind-{type(self).__name__}")  # for the test
         self._grey_unused()
         self.figure = Figure(figsize=(WIDTH, 5.4))
         self.history: History | None = None
