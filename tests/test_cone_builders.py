@@ -20,7 +20,6 @@ from robotlib.localization.cones import _sweep_builds
 from robotlib.sensing import SonarModel
 from robotlib.sensing import _kernels as sk
 from robotlib.world import World, load_world
-from robotlib.world.index import SegmentIndex
 
 
 def point_grid_map(x0=-4780, y0=-2700, side=3000, step=20) -> str:
@@ -71,7 +70,7 @@ def test_both_builders_equal_the_every_wall_kernel_on_a_point_grid(
     grid_map, sonar, resolution, ray_step
 ):
     world = load_world(grid_map)
-    table = ConeTable(world, sonar, resolution)  # dense: the indexed builder
+    table = ConeTable(world, sonar, resolution)  # dense: strips or the index
     assert not _sweep_builds(world, sonar, ray_step)
     ny, nx, _ = table.table.shape
     ref = every_wall(world, sonar, resolution, ray_step, (ny, nx), table.origin)
@@ -181,34 +180,39 @@ class _World:
         self.obstacles = np.ascontiguousarray(walls)
 
 
+def near_parallel_walls(rng, n=24):
+    """Walls within 1e-9 .. 1e-5 rad of a direction bin, through the grid."""
+    b = rng.integers(0, 72, n)
+    a = b * (2 * math.pi / 72) + rng.choice([-1, 1], n) * 10.0 ** rng.uniform(-9, -5, n)
+    p = rng.uniform(0.5, 3.5, (n, 2))
+    length = rng.uniform(0.3, 3.0, n)
+    d = np.column_stack([np.cos(a), np.sin(a)])
+    return np.column_stack([p, p + length[:, None] * d])
+
+
 @pytest.mark.parametrize("seed", [0, 1])
-def test_walked_rays_equal_the_every_wall_kernel_on_random_walls(seed):
-    """The indexed builder (`table_rays`), for any bucket side, on 300 walls."""
-    world = World(random_walls(seed, 300), bounds=(0.0, 0.0, 4.0, 4.0))
-    sonar = SonarModel(max_range=3.0)
-    field = world.distance_field(0.1)
-    ref = every_wall(world, sonar, 0.1, 1, field.shape, field.origin)
-    for side in (0.04, 0.1, 0.37, 2.0):
-        index = SegmentIndex.build(world.obstacles, world.bounds, side)
-        out = np.empty(field.shape + (72,), dtype=np.uint16)
-        lk.build_cone_table_indexed(
-            index.segments, *field.origin, *model(sonar, 0.1, 1), *index.args,
-            field.data, out,
-        )  # fmt: skip
+@pytest.mark.parametrize("scratch", [True, False], ids=["scratch", "in-place"])
+def test_strip_rays_equal_the_every_wall_kernel_on_random_walls(
+    seed, scratch, monkeypatch
+):
+    """The strips builder (`table_strips`) on 300 walls, some nearly parallel."""
+    from robotlib.localization._kernels import tables
+
+    rng = np.random.default_rng(seed + 10)
+    walls = np.concatenate([random_walls(seed, 300), near_parallel_walls(rng)])
+    world = World(walls, bounds=(0.0, 0.0, 4.0, 4.0))
+    shape, origin = (40, 40), (0.0, 0.0)
+    if not scratch:
+        monkeypatch.setattr(tables, "SCRATCH_MAX_BYTES", 0)
+    for ray_step, n_rays in ((1, 1), (3, 7)):  # single rays; the Pioneer's cones
+        sonar = SonarModel(max_range=3.0, n_rays=n_rays)
+        ref = every_wall(world, sonar, 0.1, ray_step, shape, origin)
+        assert len(np.unique(ref)) > 200  # hits at many ranges, not a blank table
+        out = np.empty(shape + (72,), dtype=np.uint16)
+        lk.build_cone_table_strips(
+            world.obstacles, *origin, *model(sonar, 0.1, ray_step), out
+        )
         np.testing.assert_array_equal(out, ref)
-
-
-def test_the_walks_float32_field_never_shows_more_clearance():
-    from robotlib.localization._kernels.tables import _below
-
-    rng = np.random.default_rng(3)
-    field = np.concatenate([rng.uniform(0, 50, 10_000), [0.0, 1e-30, 0.1, np.inf]])
-    low = _below(field.reshape(-1, 2))
-    assert low.dtype == np.float32
-    assert (low.astype(np.float64).ravel() <= field).all()
-    assert (
-        np.nextafter(low, np.float32(np.inf)).astype(np.float64).ravel() >= field
-    ).all()
 
 
 def test_disk_cache_gives_the_same_table_and_rebuilds_when_unsure(

@@ -71,7 +71,7 @@ def bench_maps(path: Path, resolution: float = 0.05, sample: int = 40) -> dict:
     warm = load_world(path)  # compile (or load) every kernel once, untimed
     warm_small = type(warm)(warm.obstacles[:300], bounds=warm.bounds)
     ConeTable(warm_small, resolution=1.0)  # the sweep
-    ConeTable(warm, resolution=2.0)  # the indexed builder, on a dense map
+    ConeTable(warm, resolution=2.0)  # the dense-map builder (strips)
     world, t_load, _ = _timed(lambda: load_world(path))
     field, t_field, c_field = _timed(lambda: world.distance_field(resolution))
     _, t_free, c_free = _timed(lambda: world.free_space(resolution))

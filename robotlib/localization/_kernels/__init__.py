@@ -3,6 +3,7 @@
 - `common`: the angle wrap and shared constants
 - `motion`: particles moved by an odometry increment plus drawn noise
 - `tables`: cone tables (expected ranges per cell and heading bin), built and read
+- `table_strips`: the cone-table builder for dense maps (rays through strips)
 - `exact`: expected ranges by cone casts against the walls near each sensor
 - `models`: the paper's, the beam and the likelihood-field models on expected ranges
 - `table_models`: the paper's and the beam model read straight from a cone table
@@ -62,6 +63,7 @@ from .table_models import (
 from .tables import (
     build_cone_table,
     build_cone_table_indexed,
+    build_cone_table_strips,
     cone_table_cells,
     expected_table,
     expected_table_parallel,
@@ -85,6 +87,7 @@ __all__ = [
     "beam_table_step",
     "build_cone_table",
     "build_cone_table_indexed",
+    "build_cone_table_strips",
     "cone_table_cells",
     "cumulative",
     "expected_scan_blocks",

@@ -13,7 +13,7 @@ from ..._config import JIT, JIT_PARALLEL, serial_and_parallel
 from ...sensing._kernels import _EPS, cone_echo, indexed_cone_echo
 from ...world._kernels import point_segment_distance
 from .common import _TWO_PI
-from .table_rays import bucket_walls, walked_sweep_table
+from .table_strips import STRIP, strip_sweep_table
 
 
 @nb.njit(**JIT)
@@ -336,21 +336,39 @@ def indexed_cone_table(
                 table[i, j, b] = _table_entry(echo, max_range, min_range)
 
 
-def _below(field):
-    """``field`` in float32, each value rounded down: half the memory to walk over.
+SCRATCH_MAX_BYTES = 256 << 20
+"""Tables up to this size get a scratch plane per direction while built, bytes.
 
-    A ray jumps over no more clear space than the float64 field shows, so
-    it finds the same walls.
+`build_cone_table_strips` writes each direction's rays to their own plane
+(the table's size again) and then takes each cone's least entry: on
+``columbia.map`` (72 MB) about a fifth less processor time than writing
+them straight into the table, 72 directions apart. Larger tables are
+built in place, to spare the memory.
+"""
+
+
+def build_cone_table_strips(
+    segments, x0, y0, resolution, n_bins, ray_step, n_rays, cone, max_range,
+    min_range, cos_specular, table,
+):  # fmt: skip
+    """`build_cone_table` for shared rays (``ray_step > 0``) on dense maps.
+
+    The same table, each direction's rays cast through strips of the walls
+    (`table_strips.strip_sweep_table`): time grows with the walls near each
+    ray rather than with all of them, for maps of many walls or points
+    (MobileSim's ``columbia.map``: 127,092 segments). ``cone`` is unused
+    (the rays are ``ray_step`` bins apart).
     """
-    low = field.astype(np.float32)
-    over = low.astype(np.float64) > field
-    low[over] = np.nextafter(low[over], np.float32(-np.inf))
-    return low
-
-
-def _compact(start):
-    """Bucket offsets as int32 when they fit (half the memory), else as given."""
-    return start.astype(np.int32) if start[-1] < 2**31 - 1 else start
+    if ray_step <= 0:
+        raise ValueError("the strips builder casts shared rays: ray_step > 0")
+    segments = np.ascontiguousarray(segments, dtype=np.float64)
+    ny, nx, _ = table.shape
+    shape = (n_bins, ny, nx) if table.nbytes <= SCRATCH_MAX_BYTES else (0, 0, 0)
+    strip_sweep_table(
+        segments, _unit_normals(segments), x0, y0, resolution, n_bins, ray_step,
+        n_rays, max_range, min_range, cos_specular, STRIP,
+        np.empty(shape, dtype=np.uint16), table,
+    )  # fmt: skip
 
 
 def build_cone_table_indexed(
@@ -364,18 +382,14 @@ def build_cone_table_indexed(
     `robotlib.sensing._kernels.indexed_ray`), in time that grows with the
     walls near each ray rather than with all of them: for maps of many
     walls or points. ``field`` is the distance field on the table's own
-    cells (rays jump over clear space with it). Rows are filled in parallel
-    (`table_rays.walked_sweep_table` for shared rays, on the index's walls
-    copied in bucket order, the field in float32 rounded down and the
-    offsets in int32: less to read from memory, which bounds the walks;
-    `indexed_cone_table` otherwise).
+    cells (rays jump over clear space with it). Whole cones (``ray_step ==
+    0``) are cast through the index in parallel rows (`indexed_cone_table`);
+    shared rays go to `build_cone_table_strips` (the index is not needed).
     """
     if ray_step > 0:
-        walls, ids = bucket_walls(segments, items)
-        walked_sweep_table(
-            segments, _unit_normals(segments), walls, ids, x0, y0, resolution,
-            n_bins, ray_step, n_rays, max_range, min_range, cos_specular, bx0,
-            by0, bsize, nbx, nby, _compact(start), _below(field), table,
+        build_cone_table_strips(
+            segments, x0, y0, resolution, n_bins, ray_step, n_rays, cone,
+            max_range, min_range, cos_specular, table,
         )  # fmt: skip
     else:
         indexed_cone_table(

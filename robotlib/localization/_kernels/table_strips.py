@@ -1,0 +1,351 @@
+"""Cone tables on dense maps: each direction's rays through strips of the walls.
+
+The indexed table builder of `robotlib.localization.cones.ConeTable` for
+shared rays (a cone's rays a whole number of direction bins apart), in the
+manner of a compressed directional distance transform: for each direction
+bin the plane is cut into strips parallel to the direction, ``STRIP`` m
+wide, and each strip lists the walls that cross it, sorted by where they
+begin along the direction. A cell's ray along that bin lies in one strip:
+it tries that strip's walls from just behind its origin onward, nearest
+first, and stops once the next wall begins beyond its best hit (or the
+sonar's reach). Each wall left is tried by `ray_segments`' own sums, step
+for step, so every ray finds what the cast against every wall finds: the
+nearest hit, the lowest wall index among equal hits
+(`robotlib.localization._kernels.tables.cone_table_cells`, bit for bit).
+
+What makes it safe: a wall is listed in every strip its offset across the
+direction reaches, widened by `_MU` (1e-7 m, far above the rounding of the
+offsets, about 1e-14 m), and with the part of it inside the strip's
+widened bounds spanning ``[vmin, vmax]`` along the direction, widened by
+`_MV` (1 mm, far above the rounding of a hit's distance for any wall more
+than `_PARALLEL` (1e-6) rad off the direction). Walls closer to parallel
+than that are tried by every ray of their strip. Why it is fast: the walls
+a ray tries lie side by side in memory (their end point and edge vector
+copied into the strip), about five a ray on ``columbia.map``, most ruled
+out by comparing two numbers; and each direction's rays are written to
+their own plane (``scratch``), a cone then being the least of its rays'
+entries (entries grow with the range, so the least entry is the entry of
+the least range: the same number as the cone's nearest echo gives).
+
+Numba kernels: contiguous arrays and scalars in; they import nothing of
+robotlib but the JIT options and other kernels.
+"""
+
+import math
+
+import numba as nb
+import numpy as np
+
+from ..._config import JIT, JIT_PARALLEL
+from ...sensing._kernels import _EPS
+from .common import _TWO_PI
+
+STRIP = 0.05
+"""Width of the strips, m (on ``columbia.map`` 0.025 m and 0.1 m are slower)."""
+
+_MU = 1e-7  # m: a wall also goes into strips it misses by this little
+_MV = 1e-3  # m: the span along the direction is widened by this much
+_PARALLEL = 1e-6  # walls this close to the direction (sine) span their strip
+
+# columns of a strip entry
+_VMIN, _VMAX, _ULO, _UHI, _PX, _PY, _EX, _EY = range(8)
+
+
+@nb.njit(**JIT)
+def strip_frame(segments, x0, y0, width, height):
+    """Centre and diameter ``(xc, yc, d)`` of a box holding the walls and the grid.
+
+    Every wall end point and cell lies within ``d / 2`` of the centre, so
+    its offset across any direction lies within ``d / 2`` of the centre's.
+    """
+    xs0 = x0
+    ys0 = y0
+    xs1 = x0 + width
+    ys1 = y0 + height
+    for m in range(segments.shape[0]):
+        xs0 = min(xs0, segments[m, 0], segments[m, 2])
+        xs1 = max(xs1, segments[m, 0], segments[m, 2])
+        ys0 = min(ys0, segments[m, 1], segments[m, 3])
+        ys1 = max(ys1, segments[m, 1], segments[m, 3])
+    d = math.sqrt((xs1 - xs0) ** 2 + (ys1 - ys0) ** 2) + 2.0
+    return 0.5 * (xs0 + xs1), 0.5 * (ys0 + ys1), d
+
+
+@nb.njit(**JIT)
+def _sort_by_start(raw, lo, hi, order):
+    """Sort rows ``lo:hi`` of ``raw`` by ``vmin`` into ``order[:hi - lo]``.
+
+    Written out rather than `numpy.argsort`, which takes seconds to compile.
+    """
+    n = hi - lo
+    for r in range(n):
+        order[r] = lo + r
+    gap = 1
+    while gap < n // 3:
+        gap = 3 * gap + 1
+    while gap >= 1:
+        for r in range(gap, n):
+            q = order[r]
+            key = raw[q, _VMIN]
+            p = r
+            while p >= gap and raw[order[p - gap], _VMIN] > key:
+                order[p] = order[p - gap]
+                p -= gap
+            order[p] = q
+        gap //= 3
+
+
+@nb.njit(**JIT)
+def build_strips(segments, c, s, u0, w, n_strips):
+    """Sort the walls into strips across ``(c, s)``: ``(start, entries, ids, reach)``.
+
+    Strip ``k`` covers offsets ``u = -s x + c y`` in ``[u0 + k w, u0 + (k + 1)
+    w)`` and holds ``entries[start[k]:start[k + 1]]`` (8 columns: the
+    wall's span ``vmin, vmax`` along the direction within the strip, its
+    offsets ``ulo, uhi``, all widened, then its first end point and edge
+    vector as `ray_segments` computes them) and their wall indexes
+    ``ids``: first the walls nearly parallel to the direction (spanning the
+    whole line, ``vmin = -inf``), then the others by ``vmin``. ``reach[k]``
+    is the longest finite span in the strip.
+    """
+    n_walls = segments.shape[0]
+    count = np.zeros(n_strips + 1, dtype=np.int64)
+    for m in range(n_walls):
+        up = -s * segments[m, 0] + c * segments[m, 1]
+        uq = -s * segments[m, 2] + c * segments[m, 3]
+        k0 = int((min(up, uq) - _MU - u0) / w)
+        k1 = int((max(up, uq) + _MU - u0) / w)
+        for k in range(k0, k1 + 1):
+            count[k + 1] += 1
+    for k in range(n_strips):
+        count[k + 1] += count[k]
+    n = count[n_strips]
+    raw = np.empty((n, 8))
+    raw_ids = np.empty(n, dtype=np.int64)
+    fill = count[:n_strips].copy()
+    for m in range(n_walls):
+        px = segments[m, 0]
+        py = segments[m, 1]
+        ex = segments[m, 2] - px
+        ey = segments[m, 3] - py
+        up = -s * px + c * py
+        uq = -s * segments[m, 2] + c * segments[m, 3]
+        vp = c * px + s * py
+        vq = c * segments[m, 2] + s * segments[m, 3]
+        k0 = int((min(up, uq) - _MU - u0) / w)
+        k1 = int((max(up, uq) + _MU - u0) / w)
+        du = uq - up
+        length = math.sqrt(ex * ex + ey * ey)
+        parallel = abs(c * ey - s * ex) <= _PARALLEL * length
+        for k in range(k0, k1 + 1):
+            a = 0.0
+            b = 1.0
+            if k1 > k0 and du != 0.0:  # the part of the wall inside the strip
+                sa = (u0 + k * w - _MU - up) / du
+                sb = (u0 + (k + 1) * w + _MU - up) / du
+                if sa > sb:
+                    sa, sb = sb, sa
+                a = min(max(sa, 0.0), 1.0)
+                b = min(max(sb, 0.0), 1.0)
+            va = vp + a * (vq - vp)
+            vb = vp + b * (vq - vp)
+            f = fill[k]
+            fill[k] = f + 1
+            if parallel:
+                raw[f, _VMIN] = -np.inf
+                raw[f, _VMAX] = np.inf
+            else:
+                raw[f, _VMIN] = min(va, vb) - _MV
+                raw[f, _VMAX] = max(va, vb) + _MV
+            raw[f, _ULO] = min(up, uq) - _MU
+            raw[f, _UHI] = max(up, uq) + _MU
+            raw[f, _PX] = px
+            raw[f, _PY] = py
+            raw[f, _EX] = ex
+            raw[f, _EY] = ey
+            raw_ids[f] = m
+    entries = np.empty((n, 8))
+    ids = np.empty(n, dtype=np.int64)
+    reach = np.zeros(n_strips)
+    most = 0
+    for k in range(n_strips):
+        most = max(most, count[k + 1] - count[k])
+    order = np.empty(most, dtype=np.int64)
+    for k in range(n_strips):
+        lo = count[k]
+        hi = count[k + 1]
+        if hi == lo:
+            continue
+        _sort_by_start(raw, lo, hi, order)
+        longest = 0.0
+        for r in range(hi - lo):
+            q = order[r]
+            for col in range(8):
+                entries[lo + r, col] = raw[q, col]
+            ids[lo + r] = raw_ids[q]
+            if raw[q, _VMIN] > -np.inf:
+                longest = max(longest, raw[q, _VMAX] - raw[q, _VMIN])
+        reach[k] = longest
+    return count, entries, ids, reach
+
+
+@nb.njit(**JIT)
+def strip_ray(ox, oy, dx, dy, u0, w, start, entries, ids, reach, finger, limit):
+    """Nearest hit ``(t, m)`` of the ray ``o + t d`` on the walls of its strip.
+
+    The very ``(t, m)`` of `ray_segments` against every wall whenever the
+    nearest hit is nearer than ``limit`` (else a hit beyond it, or none).
+    ``finger[k]`` remembers where strip ``k``'s last ray started its search
+    (rays of nearby cells start nearby).
+    """
+    uo = -dy * ox + dx * oy
+    vo = dx * ox + dy * oy
+    k = int((uo - u0) / w)
+    lo = start[k]
+    hi = start[k + 1]
+    best = np.inf
+    best_m = -1
+    first = lo  # the nearly parallel walls, tried by every ray
+    while first < hi and entries[first, _VMIN] == -np.inf:
+        first += 1
+    key = vo - reach[k]  # no wall beginning before this reaches the origin
+    a = max(finger[k], first)
+    while a > first and entries[a - 1, _VMIN] >= key:
+        a -= 1
+    while a < hi and entries[a, _VMIN] < key:
+        a += 1
+    finger[k] = a
+    q = lo
+    while q < hi:
+        if q == first:
+            q = a
+            if q >= hi:
+                break
+        if q >= first and entries[q, _VMIN] - vo > limit:
+            break
+        if entries[q, _VMAX] < vo or entries[q, _ULO] > uo or entries[q, _UHI] < uo:
+            q += 1
+            continue
+        ex = entries[q, _EX]
+        ey = entries[q, _EY]
+        denom = dx * ey - dy * ex  # `ray_segments`, step for step
+        if abs(denom) >= _EPS:
+            wx = entries[q, _PX] - ox
+            wy = entries[q, _PY] - oy
+            t = (wx * ey - wy * ex) / denom
+            m = ids[q]
+            if t >= 0.0 and (t < best or (t == best and m < best_m)):
+                sp = (wx * dy - wy * dx) / denom
+                if 0.0 <= sp <= 1.0:
+                    best = t
+                    best_m = m
+                    limit = min(limit, t)
+        q += 1
+    return best, best_m
+
+
+@nb.njit(**JIT)
+def _ray_entry(t, m, dx, dy, normals, max_range, min_range, cos_specular):
+    """Table entry (uint16, mm) of one ray's first hit ``(t, m)``, as a cone of one."""
+    z = max_range
+    if m >= 0 and t < max_range:
+        if abs(dx * normals[m, 0] + dy * normals[m, 1]) >= cos_specular:
+            z = t
+    z = min(max(z, min_range), max_range)
+    return np.uint16(round(z * 1000.0))
+
+
+@nb.njit(**JIT)
+def _direction_rays(
+    segments, normals, x0, y0, resolution, b, n_bins, max_range, min_range,
+    cos_specular, w, xc, yc, d, n_strips, scratch, table,
+):  # fmt: skip
+    """Every cell's ray along bin ``b``: its entry to ``scratch[b]`` (or ``table``)."""
+    ny, nx, _ = table.shape
+    apart = scratch.shape[0] == n_bins
+    dx = math.cos(b * _TWO_PI / n_bins)  # as `cone_echo` computes each ray
+    dy = math.sin(b * _TWO_PI / n_bins)
+    u0 = -dy * xc + dx * yc - 0.5 * d
+    start, entries, ids, reach = build_strips(segments, dx, dy, u0, w, n_strips)
+    finger = start[:n_strips].copy()
+    for i in range(ny):
+        cy = y0 + (i + 0.5) * resolution
+        for j in range(nx):
+            cx = x0 + (j + 0.5) * resolution
+            t, m = strip_ray(
+                cx, cy, dx, dy, u0, w, start, entries, ids, reach, finger, max_range
+            )
+            entry = _ray_entry(
+                t, m, dx, dy, normals, max_range, min_range, cos_specular
+            )
+            if apart:
+                scratch[b, i, j] = entry
+            else:
+                table[i, j, b] = entry
+
+
+@nb.njit(**JIT)
+def _cone_row(i, n_rays, ray_step, scratch, table):
+    """Row ``i``'s cones: each the least entry of its rays (``scratch`` or in place)."""
+    _, nx, n_bins = table.shape
+    apart = scratch.shape[0] == n_bins
+    half = (n_rays - 1) // 2 if n_rays > 1 else 0
+    rays = np.empty(n_bins, dtype=np.uint16)
+    for j in range(nx):
+        for b in range(n_bins):
+            rays[b] = scratch[b, i, j] if apart else table[i, j, b]
+        for b in range(n_bins):
+            e = rays[b]
+            for q in range(1, half + 1):
+                e = min(e, rays[(b + q * ray_step) % n_bins])
+                e = min(e, rays[(b - q * ray_step) % n_bins])
+            table[i, j, b] = e
+
+
+@nb.njit(**JIT_PARALLEL)
+def _strip_rays(
+    segments, normals, x0, y0, resolution, n_bins, ray_step, n_rays, max_range,
+    min_range, cos_specular, w, scratch, table,
+):  # fmt: skip
+    """Every cell's ray along every bin (`_direction_rays`), directions in parallel.
+
+    One parallel loop: the cones follow in `cone_pass`, serially (a second
+    parallel loop here compiles seconds slower).
+    """
+    ny, nx, _ = table.shape
+    xc, yc, d = strip_frame(segments, x0, y0, nx * resolution, ny * resolution)
+    n_strips = int(d / w) + 2
+    for b in nb.prange(n_bins):
+        _direction_rays(
+            segments, normals, x0, y0, resolution, b, n_bins, max_range, min_range,
+            cos_specular, w, xc, yc, d, n_strips, scratch, table,
+        )  # fmt: skip
+
+
+@nb.njit(**JIT)
+def cone_pass(n_rays, ray_step, scratch, table):
+    """Each cone of ``table``: the least entry of its rays (`_cone_row`), row by row."""
+    for i in range(table.shape[0]):
+        _cone_row(i, n_rays, ray_step, scratch, table)
+
+
+def strip_sweep_table(
+    segments, normals, x0, y0, resolution, n_bins, ray_step, n_rays, max_range,
+    min_range, cos_specular, w, scratch, table,
+):  # fmt: skip
+    """Fill ``table`` (ny, nx, n_bins) uint16 mm: shared rays through strips.
+
+    The table of `robotlib.localization._kernels.tables.build_cone_table`
+    for shared rays (the same bits): directions in parallel, each with its
+    own strips (`build_strips`) and every cell's ray along it
+    (`strip_ray`), the ray's entry written to ``scratch[b]`` (n_bins, ny,
+    nx) uint16, or straight into ``table`` when ``scratch`` is empty
+    (less memory, more time); then each cone is the least entry of its
+    ``n_rays`` rays ``ray_step`` bins apart (`cone_pass`). ``normals`` are
+    the walls' `tables._unit_normals`.
+    """
+    _strip_rays(
+        segments, normals, x0, y0, resolution, n_bins, ray_step, n_rays, max_range,
+        min_range, cos_specular, w, scratch, table,
+    )  # fmt: skip
+    cone_pass(n_rays, ray_step, scratch, table)
