@@ -384,7 +384,15 @@ def test_interrupt_leaves_no_process(tmp_path, sig):
     cmd = [sys.executable, "-m", "robotlib.cli", "grade", str(folder), "--lab",
            "tiny", "--solution", str(TINY), "--out", str(tmp_path / "gb.csv"),
            "--cell-timeout", "30", "--jobs", "2", "--quiet"]  # fmt: skip
-    proc = subprocess.Popen(cmd, stderr=subprocess.PIPE, text=True)
+    # Ctrl-C's default action in the CLI even when this run inherited SIGINT
+    # ignored (a job started in the background by a shell without job control):
+    # Python keeps an ignored SIGINT ignored, and the CLI would never see it
+    proc = subprocess.Popen(
+        cmd,
+        stderr=subprocess.PIPE,
+        text=True,
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
+    )
     deadline = time.monotonic() + 120
     while (
         time.monotonic() < deadline
