@@ -32,6 +32,8 @@ import sys
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 
+from .astlock import parse
+
 __all__ = [
     "Finding",
     "aliases",
@@ -369,7 +371,7 @@ def scan_code(source: str, names: dict[str, str]) -> list[Finding]:
         parse gives no findings (it fails when run).
     """
     try:
-        tree = ast.parse(_python(source))
+        tree = parse(_python(source))
     except (SyntaxError, ValueError):
         return []
     sc = _Scanner(names)

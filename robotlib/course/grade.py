@@ -38,13 +38,13 @@ import signal
 import sys
 import threading
 import time
-import traceback
 from pathlib import Path
 
 import nbformat
 
 from . import cache as numba_cache
 from . import sandbox as sb
+from .astlock import format_exc
 from .gradebook import (
     Records,
     Result,
@@ -276,7 +276,7 @@ def grade_task(student, data, solution_text, lab, reference, opts, slot=0):
         res = Result(student, {}, {}, plan.max_points)
         res.status = f"grader error: {type(exc).__name__}: {exc}"[:200]
         res.reasons = {c.grade_id: "not graded (grader error)" for c in plan.checks}
-        res.details = {"grader error": traceback.format_exc()[-3000:]}
+        res.details = {"grader error": format_exc()[-3000:]}
         return res.to_json()
 
 

@@ -256,8 +256,10 @@ def _written_names(source: str) -> list[str]:
     """Top-level names bound by statements that hold a solution region."""
     import ast
 
+    from .astlock import parse
+
     try:
-        tree = ast.parse(source)
+        tree = parse(source)
     except SyntaxError:
         return []
     lines = source.splitlines()

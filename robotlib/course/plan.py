@@ -27,6 +27,7 @@ from dataclasses import dataclass, field
 from nbformat import NotebookNode
 
 from . import answers
+from .astlock import parse
 from .notebooks import (
     HIDDEN,
     META_KEY,
@@ -142,7 +143,7 @@ def lab_plan(solution: NotebookNode, name: str) -> LabPlan:
     names: dict[str, dict] = {}
     for e in exs:
         try:
-            tree = ast.parse(solution.cells[e.index].source)
+            tree = parse(solution.cells[e.index].source)
         except SyntaxError:
             continue
         for node in tree.body:
@@ -159,7 +160,7 @@ def lab_plan(solution: NotebookNode, name: str) -> LabPlan:
         if cell.cell_type != "code" or i == i0 or check_meta(cell) is not None:
             continue
         try:
-            tree = ast.parse(cell.source)
+            tree = parse(cell.source)
         except SyntaxError:
             continue
         lines = cell.source.splitlines()
@@ -218,7 +219,7 @@ def lab_plan(solution: NotebookNode, name: str) -> LabPlan:
 
 def _bound_all(source: str) -> set[str]:
     try:
-        tree = ast.parse(source)
+        tree = parse(source)
     except SyntaxError:
         return set()
     return set().union(*(_bound(n) for n in tree.body)) if tree.body else set()
