@@ -123,6 +123,9 @@ class MCL:
         Standard deviations ``(x, y, theta)`` around ``init``, m and rad.
     """
 
+    _prebuild = None
+    """`robotlib.localization._prebuild.Prebuild` compiling the first step, or None."""
+
     def __init__(
         self,
         world: World,
@@ -218,14 +221,21 @@ class MCL:
         Beam model (tempered), KLD-sampling from 50,000 particles down to no
         fewer than 300, optional augmented MCL, the admissibility check.
         """
+        from ._prebuild import start
         from .sensors import BeamParameters, BeamSensorModel
 
+        helper = start(fast, kwargs)  # the step's kernels compile meanwhile
         options = {**BEST, **kwargs}
         n = options.pop("n")
         beam = BeamParameters(**options.pop("beam"))
         kld = options.pop("kld")
         aug = options.pop("augmented")
-        return cls(
+        if helper is not None:  # the admissible area first: the helper skips it
+            world.free_space(
+                options.get("resolution", 0.05),
+                options.get("admissible_radius", ADMISSIBLE_RADIUS),
+            )
+        mcl = cls(
             world,
             BeamSensorModel(world, fast=fast, params=beam),
             resampling=KLDResampling(**kld),
@@ -234,6 +244,8 @@ class MCL:
             rng=rng,
             **options,
         )
+        mcl._prebuild = helper
+        return mcl
 
     def reset(self, init=None) -> None:
         """Start again: uniform particles, or around ``init`` (3,) if given."""
@@ -430,6 +442,9 @@ class MCL:
         check = getattr(self.sensor, "checked_scan", None)
         if check is not None:  # before any draw or move: a refused scan changes nothing
             z = check(z)
+        if self._prebuild is not None:  # its kernels, from numba's cache
+            self._prebuild.wait()
+            self._prebuild = None
         n = len(self.particles)
         done = self._fused_step(odo_prev, odo_now, z, check is not None)
         fused = done is not False

@@ -1,0 +1,216 @@
+"""Compiling `MCL.best`'s step on the second core while the filter is built.
+
+On an empty numba cache, building `MCL.best` compiles the cone table's
+builder and the admissible area's kernels (seconds), and its first step
+then compiles the step's own kernels (as many seconds again); numba
+compiles one function at a time in a process. `start` runs the second half
+in a helper process at once, on another core, while this process builds
+the filter: the helper builds the same filter on a small room of its own
+(`_ROOM`) and takes steps with it, which compiles the same kernels for the
+same argument types into numba's on-disk cache; `Prebuild.wait` (before the
+filter's first step) waits until the helper has taken its first step, and
+the step then loads those kernels from the cache instead of compiling them.
+The numbers are the same either way (the same compiled code).
+
+The helper's room has no cone table worth building: its table is filled
+with made-up ranges (`_fake_table`) and its admissible area is every cell
+of the room, so the helper compiles neither (this process does). The made-up
+table never reaches the table cache (``ROBOTLIB_TABLE_CACHE=off`` in the
+helper).
+
+No helper is started when the step's kernels are cached already, when
+numba's cache is off or cannot be found, when there is one core, or when
+``ROBOTLIB_PREBUILD`` is ``0``/``off``. The helper ends when it is done or
+when this process ends (its standard input closes), whichever comes first.
+Imports nothing of robotlib at import time but the localization's kernels;
+the helper imports `robotlib.localization.mcl`.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import select
+import subprocess
+import sys
+import threading
+import time
+
+__all__ = ["Prebuild", "start"]
+
+ENV = "ROBOTLIB_PREBUILD"
+"""Environment variable: ``0``/``off`` starts no helper (the helper sets it)."""
+
+WAIT_SECONDS = 300.0
+"""Longest `Prebuild.wait` waits for the helper's first step, s."""
+
+_ROOM = (
+    (0.0, 0.0, 3.0, 0.0),
+    (3.0, 0.0, 3.0, 3.0),
+    (3.0, 3.0, 0.0, 3.0),
+    (0.0, 3.0, 0.0, 0.0),
+)
+"""The helper's world: a 3 m square room, walls ``x1, y1, x2, y2`` in m."""
+
+_READY = "ready"
+
+started: list[Prebuild] = []
+"""Every helper this process started (for benchmarks: their processor time)."""
+
+
+def _cores() -> int:
+    try:
+        return len(os.sched_getaffinity(0))
+    except (AttributeError, OSError):  # pragma: no cover - not Linux
+        return os.cpu_count() or 1
+
+
+def _cached(dispatcher) -> bool | None:
+    """Whether numba's cache holds an index for ``dispatcher`` (None: no cache)."""
+    try:
+        cache = dispatcher._cache._cache_file
+        path = cache._index_path
+    except AttributeError:  # caching off, or numba's layout changed
+        return None
+    return os.path.exists(path)
+
+
+class Prebuild:
+    """A running helper process (see the module's docstring).
+
+    Parameters
+    ----------
+    proc : subprocess.Popen
+        The helper, with its standard input and output piped.
+    """
+
+    def __init__(self, proc: subprocess.Popen):
+        self.proc = proc
+        self.ready = False
+        self.waited = 0.0
+        """Seconds `wait` waited (wall)."""
+
+    def wait(self, timeout: float = WAIT_SECONDS) -> bool:
+        """Wait until the helper has taken its first step; return whether it did.
+
+        Returns at once when it has already, or when it ended without it
+        (it failed, or it was killed): the step then compiles what it needs.
+        """
+        if self.ready:
+            return True
+        t0 = time.monotonic()
+        try:
+            self.ready = self._wait(t0 + timeout)
+        finally:
+            self.waited += time.monotonic() - t0
+        return self.ready
+
+    def _wait(self, end: float) -> bool:
+        out = self.proc.stdout
+        line = b""
+        while not line.endswith(b"\n"):
+            left = end - time.monotonic()
+            if left <= 0 or not select.select([out], [], [], left)[0]:
+                return False
+            chunk = os.read(out.fileno(), 256)
+            if not chunk:  # the helper ended
+                return False
+            line += chunk
+        return line.strip() == _READY.encode()
+
+
+def start(fast: bool = True, options: dict | None = None) -> Prebuild | None:
+    """Start the helper for `MCL.best` (``fast`` and its ``options``), or None.
+
+    None when the helper would not help (see the module's docstring) or
+    ``options`` cannot be passed to it (only JSON values can).
+    """
+    if os.environ.get(ENV, "1").strip().lower() in ("0", "off", "no", ""):
+        return None
+    if not fast or _cores() < 2:
+        return None
+    from ._kernels import chunked
+
+    if _cached(chunked.beam_chunk) is not False:
+        return None
+    try:
+        spec = json.dumps({"options": options or {}})
+    except (TypeError, ValueError):
+        return None
+    env = dict(os.environ, ROBOTLIB_TABLE_CACHE="off")
+    env[ENV] = "0"
+    code = "from robotlib.localization._prebuild import _main; _main()"
+    try:
+        proc = subprocess.Popen(
+            [sys.executable, "-c", code, spec],
+            stdin=subprocess.PIPE,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.DEVNULL,
+            env=env,
+            close_fds=True,
+        )
+    except OSError:
+        return None
+    helper = Prebuild(proc)
+    started.append(helper)
+    return helper
+
+
+def _fake_table(*args) -> None:
+    """Stand-in for the cone table builders: made-up ranges in the last argument."""
+    import numpy as np
+
+    table = args[-1]
+    table[...] = (np.arange(table.size) * 7919 % 4900 + 100).reshape(table.shape)
+
+
+def _exit_with_parent() -> None:
+    """End this process when the parent closes our standard input (it ended)."""
+    try:
+        sys.stdin.buffer.read()
+    finally:
+        os._exit(0)
+
+
+def _main() -> None:
+    """Run the helper: build `MCL.best` on `_ROOM` and step it (module docstring)."""
+    threading.Thread(target=_exit_with_parent, daemon=True).start()
+    spec = json.loads(sys.argv[1])
+    import numpy as np
+
+    from ..world import World
+    from ..world.grid import Grid
+    from . import _kernels
+    from .mcl import BEST, MCL
+    from .paper import ADMISSIBLE_RADIUS
+
+    for name in (
+        "build_cone_table",
+        "build_cone_table_indexed",
+        "build_cone_table_strips",
+    ):
+        setattr(_kernels, name, _fake_table)
+    world = World(np.array(_ROOM), start=(1.5, 1.5, 0.0), name="prebuild")
+    options = {**BEST, **spec["options"]}
+    res = float(options.get("resolution", 0.05))
+    radius = float(options.get("admissible_radius", ADMISSIBLE_RADIUS))
+    x0, y0, x1, y1 = world.bounds
+    ny = int(np.ceil((y1 - y0) / res - 1e-9))
+    nx = int(np.ceil((x1 - x0) / res - 1e-9))
+    free = np.zeros((ny, nx), dtype=bool)
+    ys = y0 + (np.arange(ny) + 0.5) * res
+    xs = x0 + (np.arange(nx) + 0.5) * res
+    free[(ys > radius) & (ys < 3.0 - radius)] = True
+    free[:, ~((xs > radius) & (xs < 3.0 - radius))] = False
+    free.setflags(write=False)
+    world._cache["free", res, radius] = Grid(free, (x0, y0), res)
+    mcl = MCL.best(world, rng=0, **spec["options"])
+    z = np.linspace(0.3, 2.5, len(mcl.sensor.sonar.sensors))
+    odo = np.array(world.start)
+    step = np.array([0.5, 0.0, 0.05])
+    mcl.step(odo, odo + step, z)
+    sys.stdout.write(_READY + "\n")
+    sys.stdout.flush()
+    for k in range(1, 4):  # the next steps' kernels (a smaller set)
+        mcl.step(odo + k * step, odo + (k + 1) * step, z[::-1])
+    os._exit(0)
