@@ -127,19 +127,26 @@ def start(fast: bool = True, options: dict | None = None) -> Prebuild | None:
     """
     if os.environ.get(ENV, "1").strip().lower() in ("0", "off", "no", ""):
         return None
-    if not fast or _cores() < 2:
+    if not fast or os.name != "posix" or _cores() < 2:
         return None
     from ._kernels import chunked
 
     if _cached(chunked.beam_chunk) is not False:
         return None
     try:
-        spec = json.dumps({"options": options or {}})
+        spec = json.dumps({"options": options or {}, "file": os.path.abspath(__file__)})
     except (TypeError, ValueError):
         return None
     env = dict(os.environ, ROBOTLIB_TABLE_CACHE="off")
     env[ENV] = "0"
-    code = "from robotlib.localization._prebuild import _main; _main()"
+    # the same robotlib as this process's (numba caches by the source's folder)
+    package = os.path.dirname(
+        os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    )
+    code = (
+        f"import sys; sys.path.insert(0, {package!r}); "
+        "from robotlib.localization._prebuild import _main; _main()"
+    )
     try:
         proc = subprocess.Popen(
             [sys.executable, "-c", code, spec],
@@ -176,6 +183,8 @@ def _main() -> None:
     """Run the helper: build `MCL.best` on `_ROOM` and step it (module docstring)."""
     threading.Thread(target=_exit_with_parent, daemon=True).start()
     spec = json.loads(sys.argv[1])
+    if os.path.abspath(__file__) != spec["file"]:  # another robotlib: no use
+        os._exit(1)
     import numpy as np
 
     from ..world import World
@@ -208,9 +217,10 @@ def _main() -> None:
     z = np.linspace(0.3, 2.5, len(mcl.sensor.sonar.sensors))
     odo = np.array(world.start)
     step = np.array([0.5, 0.0, 0.05])
-    mcl.step(odo, odo + step, z)
+    for k in range(8):  # until a step resampled: a first step may, or may not
+        mcl.step(odo + k * step, odo + (k + 1) * step, z[::-1] if k % 2 else z)
+        if mcl.info.resampled:
+            break
     sys.stdout.write(_READY + "\n")
     sys.stdout.flush()
-    for k in range(1, 4):  # the next steps' kernels (a smaller set)
-        mcl.step(odo + k * step, odo + (k + 1) * step, z[::-1])
     os._exit(0)
