@@ -41,7 +41,8 @@ FIRST_STEP = textwrap.dedent("""
 
         def on_end(self, ev):
             f = getattr(ev.data.get("dispatcher"), "py_func", None)
-            compiled.append(getattr(f, "__module__", "") + "." + f.__name__)
+            name = getattr(f, "__name__", "")
+            compiled.append(getattr(f, "__module__", "") + "." + name)
 
     world = load_world("corridor")
     mcl = MCL.best(world, rng=0)
