@@ -10,8 +10,8 @@ median CPU time (all threads) and wall time of each part (import, filter,
 first step), the total, the ratios old / new, the number of kernels numba
 compiled in the process, and the load average; for a tree whose `MCL.best`
 compiles in a helper process (`robotlib.localization._prebuild`), also the
-helper's processor time (to its end, after the steps it takes beyond the
-first: an upper bound) and how long the first step waited for it. The
+helper's processor time (to the end of the steps it takes, and to its
+end) and how long the first step waited for it. The
 totals are this process's own. The scan the step weighs is computed
 before the timer of the step starts (outside the totals). Asserts nothing.
 
@@ -68,15 +68,16 @@ try:  # a tree that compiles in a helper process: its processor time too
     from robotlib.localization import _prebuild
 except ImportError:
     _prebuild = None
-waited = 0.0
+waited, to_ready = 0.0, 0.0
 for h in getattr(_prebuild, "started", ()):
     h.proc.wait()
     waited += h.waited
+    to_ready += h.cpu
 ru = resource.getrusage(resource.RUSAGE_CHILDREN)
 print(json.dumps({"import": [c1 - c0, t1 - t0], "filter": [c2 - c1, t2 - t1],
                   "step": [c4 - c3, t4 - t3],
                   "total": [c4 - c3 + c2 - c0, t4 - t3 + t2 - t0],
-                  "helper": [ru.ru_utime + ru.ru_stime, waited],
+                  "helper": [ru.ru_utime + ru.ru_stime, waited, to_ready],
                   "compiled": len(compiled) - n_scan}))
 """
 
@@ -134,11 +135,12 @@ def main() -> int:
             )
             n = statistics.median(x["compiled"] for x in rows)
             print(f"{kind} {name}: CPU s {parts}; {n:g} kernels compiled")  # noqa: T201
-            helper = [x.get("helper", [0.0, 0.0]) for x in rows]
+            helper = [x.get("helper", [0.0, 0.0, 0.0]) for x in rows]
             if any(h[0] for h in helper):
                 print(  # noqa: T201
                     f"  {kind} {name}: helper process CPU s"
-                    f" {statistics.median(h[0] for h in helper):.2f} (all its steps),"
+                    f" {statistics.median(h[2] for h in helper):.2f} to its ready"
+                    f" ({statistics.median(h[0] for h in helper):.2f} to its end),"
                     f" waited for {statistics.median(h[1] for h in helper):.2f} s wall"
                 )
         ratio = statistics.median(x["total"][0] for x in runs["old", kind]) / (

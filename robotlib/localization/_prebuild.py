@@ -13,9 +13,11 @@ the step then loads those kernels from the cache instead of compiling them.
 The numbers are the same either way (the same compiled code).
 
 The helper's room has no cone table worth building: its table is filled
-with made-up ranges (`_fake_table`) and its admissible area is every cell
-of the room, so the helper compiles neither (this process does). The made-up
-table never reaches the table cache (``ROBOTLIB_TABLE_CACHE=off`` in the
+with made-up ranges (`_fake_table`), the beam model's factors are made up
+too (`_fake_norms`) and its admissible area is every cell of the room, so
+the helper compiles none of them (this process does, while the helper
+compiles the step: about half of the compiling each). The made-up table
+never reaches the table cache (``ROBOTLIB_TABLE_CACHE=off`` in the
 helper).
 
 No helper is started when the step's kernels are cached already, when
@@ -89,6 +91,8 @@ class Prebuild:
         self.ready = False
         self.waited = 0.0
         """Seconds `wait` waited (wall)."""
+        self.cpu = float("nan")
+        """The helper's processor time to its first step, s (once `ready`)."""
 
     def wait(self, timeout: float = WAIT_SECONDS) -> bool:
         """Wait until the helper has taken its first step; return whether it did.
@@ -116,7 +120,11 @@ class Prebuild:
             if not chunk:  # the helper ended
                 return False
             line += chunk
-        return line.strip() == _READY.encode()
+        words = line.split()
+        if not words or words[0] != _READY.encode():
+            return False
+        self.cpu = float(words[1]) if len(words) > 1 else float("nan")
+        return True
 
 
 def start(fast: bool = True, options: dict | None = None) -> Prebuild | None:
@@ -171,6 +179,13 @@ def _fake_table(*args) -> None:
     table[...] = (np.arange(table.size) * 7919 % 4900 + 100).reshape(table.shape)
 
 
+def _fake_norms(max_range, z_hit, z_short, sigma, lam_short, n):
+    """Stand-in for `beam_norms`: made-up factors, arrays of the same types."""
+    import numpy as np
+
+    return np.linspace(0.5, 2.0, n), np.linspace(0.0, 1.0, n)
+
+
 def _exit_with_parent() -> None:
     """End this process when the parent closes our standard input (it ended)."""
     try:
@@ -199,6 +214,7 @@ def _main() -> None:
         "build_cone_table_strips",
     ):
         setattr(_kernels, name, _fake_table)
+    _kernels.beam_norms = _fake_norms  # the parent compiles it, after its table
     world = World(np.array(_ROOM), start=(1.5, 1.5, 0.0), name="prebuild")
     options = {**BEST, **spec["options"]}
     res = float(options.get("resolution", 0.05))
@@ -221,6 +237,6 @@ def _main() -> None:
         mcl.step(odo + k * step, odo + (k + 1) * step, z[::-1] if k % 2 else z)
         if mcl.info.resampled:
             break
-    sys.stdout.write(_READY + "\n")
+    sys.stdout.write(f"{_READY} {time.process_time():.3f}\n")
     sys.stdout.flush()
     os._exit(0)
