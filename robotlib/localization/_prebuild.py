@@ -131,12 +131,16 @@ def start(fast: bool = True, options: dict | None = None) -> Prebuild | None:
     """Start the helper for `MCL.best` (``fast`` and its ``options``), or None.
 
     None when the helper would not help (see the module's docstring) or
-    ``options`` cannot be passed to it (only JSON values can).
+    ``options`` cannot be passed to it (only JSON values can). A process
+    starts one helper at most: while it runs, a second call returns it (a
+    second filter's first step waits for the same kernels), and None after.
     """
     if os.environ.get(ENV, "1").strip().lower() in ("0", "off", "no", ""):
         return None
     if not fast or os.name != "posix" or _cores() < 2:
         return None
+    if started:  # one helper per process: a second filter waits for the same
+        return started[0] if started[0].proc.poll() is None else None
     from ._kernels import chunked
 
     if _cached(chunked.beam_chunk) is not False:
@@ -147,6 +151,10 @@ def start(fast: bool = True, options: dict | None = None) -> Prebuild | None:
         return None
     env = dict(os.environ, ROBOTLIB_TABLE_CACHE="off")
     env[ENV] = "0"
+    import numba
+
+    if numba.config.CACHE_DIR:  # this process's numba cache (read at its import)
+        env["NUMBA_CACHE_DIR"] = numba.config.CACHE_DIR
     # the same robotlib as this process's (numba caches by the source's folder)
     package = os.path.dirname(
         os.path.dirname(os.path.dirname(os.path.abspath(__file__)))

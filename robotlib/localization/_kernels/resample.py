@@ -72,9 +72,10 @@ def kld_bound(k, epsilon, z):
 @nb.njit(**JIT, inline="always")
 def _pose_bin(particles, lo, x0, y0, bin_xy, bin_theta, nbx, nby, nbt):
     """Flat ``(y, x, theta)`` bin of particle ``lo``, clamped to the bin grid."""
-    bx = int(math.floor((particles[lo, 0] - x0) / bin_xy))
-    by = int(math.floor((particles[lo, 1] - y0) / bin_xy))
-    bt = int(math.floor((particles[lo, 2] + math.pi) / bin_theta))
+    # numba's math.floor is an int64 already: no int() (numba compiles one per process)
+    bx = math.floor((particles[lo, 0] - x0) / bin_xy)
+    by = math.floor((particles[lo, 1] - y0) / bin_xy)
+    bt = math.floor((particles[lo, 2] + math.pi) / bin_theta)
     bx = min(max(bx, 0), nbx - 1)
     by = min(max(by, 0), nby - 1)
     bt = min(max(bt, 0), nbt - 1)
@@ -151,10 +152,10 @@ def gather(particles, idx, out):
 def outside(particles, admissible, x0, y0, inv_res, out):
     """``out[j]`` True where particle ``j`` is not on an admissible cell."""
     ny, nx = admissible.shape
-    count = 0
+    count = 0  # math.floor is an int64 in numba: no int() to compile (`_pose_bin`)
     for j in range(particles.shape[0]):
-        col = int(math.floor((particles[j, 0] - x0) * inv_res))
-        row = int(math.floor((particles[j, 1] - y0) * inv_res))
+        col = math.floor((particles[j, 0] - x0) * inv_res)
+        row = math.floor((particles[j, 1] - y0) * inv_res)
         bad = not (0 <= row < ny and 0 <= col < nx and admissible[row, col])
         out[j] = bad
         if bad:

@@ -114,9 +114,9 @@ def _ray_echoes(
             elif span <= -math.pi:
                 span += _TWO_PI
             if abs(span) < math.pi - 5.0 * w:
-                lo = a0 if span >= 0.0 else a0 + span
-                first = int(math.floor(lo / w)) - 2
-                count = min(int(math.ceil((lo + abs(span)) / w)) + 3 - first, n_bins)
+                lo = a0 if span >= 0.0 else a0 + span  # floor, ceil: int64 in numba
+                first = math.floor(lo / w) - 2
+                count = min(math.ceil((lo + abs(span)) / w) + 3 - first, n_bins)
         b = first % n_bins - 1
         for _ in range(count):
             b += 1
