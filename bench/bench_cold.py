@@ -1,11 +1,12 @@
 """Cold and warm start of `MCL.best` for two robotlib source trees, interleaved.
 
-Run ``python bench/bench_cold.py OLD_TREE NEW_TREE [--rounds R] [--world W]``
-(trees as for ``bench/bench_ab.py``). Each round, per tree (the order
-alternates), one fresh process with an empty numba cache (a new
-``NUMBA_CACHE_DIR``, so the cone table's disk cache is empty too) and then
-one more on the cache it left (warm): each imports robotlib, loads the
-world, builds `MCL.best` and takes its first step. Prints per tree the
+Run ``python bench/bench_cold.py OLD_TREE NEW_TREE [--rounds R] [--warm K]
+[--world W]`` (trees as for ``bench/bench_ab.py``). Each round, per tree (the
+order alternates), one fresh process with an empty numba cache (a new
+``NUMBA_CACHE_DIR``, so the cone table's disk cache is empty too), and then
+``K`` more on the cache it left (warm), alternating between the trees:
+each imports robotlib, loads the world, builds `MCL.best` and takes its
+first step. Prints per tree the
 median CPU time (all threads) and wall time of each part (import, filter,
 first step), the total, the ratios old / new, the number of kernels numba
 compiled in the process, and the load average; for a tree whose `MCL.best`
@@ -111,19 +112,31 @@ def main() -> int:
     parser.add_argument("--rounds", type=int, default=1)
     parser.add_argument("--world", default="corridor")
     parser.add_argument("--bytecode", choices=("on", "off"), default="on")
+    parser.add_argument(
+        "--warm", type=int, default=1, help="warm runs per tree and round (alternating)"
+    )
     args = parser.parse_args()
     bytecode = args.bytecode == "on"
     runs = {(t, k): [] for t in ("old", "new") for k in ("cold", "warm")}
     for r in range(args.rounds):
-        for name in ("old", "new") if r % 2 == 0 else ("new", "old"):
-            cache = tempfile.mkdtemp(prefix="robotlib-cold-")
-            try:
-                tree = getattr(args, name)
+        order = ("old", "new") if r % 2 == 0 else ("new", "old")
+        caches = {name: tempfile.mkdtemp(prefix="robotlib-cold-") for name in order}
+        try:
+            trees = {}
+            for name in order:
+                trees[name] = getattr(args, name)
                 if bytecode:
-                    tree = _copy(tree, cache)
-                for kind in ("cold", "warm"):
-                    runs[name, kind].append(_run(tree, cache, args.world, bytecode))
-            finally:
+                    trees[name] = _copy(trees[name], caches[name])
+                runs[name, "cold"].append(
+                    _run(trees[name], caches[name], args.world, bytecode)
+                )
+            for _ in range(args.warm):  # warm runs alternate between the trees
+                for name in order:
+                    runs[name, "warm"].append(
+                        _run(trees[name], caches[name], args.world, bytecode)
+                    )
+        finally:
+            for cache in caches.values():
                 shutil.rmtree(cache, ignore_errors=True)
     for kind in ("cold", "warm"):
         for name in ("old", "new"):
