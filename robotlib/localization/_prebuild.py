@@ -14,18 +14,19 @@ The numbers are the same either way (the same compiled code).
 
 The helper's room has no cone table worth building: its table is filled
 with made-up ranges (`_fake_table`), the beam model's factors are made up
-too (`_fake_norms`) and its admissible area is every cell of the room, so
-the helper compiles none of them (this process does, while the helper
-compiles the step: about half of the compiling each). The made-up table
-never reaches the table cache (``ROBOTLIB_TABLE_CACHE=off`` in the
-helper).
+too (`_fake_norms`), and its admissible area and free test are every point
+of the room by the robot's radius (`_room_free`), so the helper compiles
+none of their kernels (this process does, while the helper compiles the
+step's: about half of the compiling each). The made-up table never reaches
+the table cache (``ROBOTLIB_TABLE_CACHE=off`` in the helper).
 
 No helper is started when the step's kernels are cached already, when
 numba's cache is off or cannot be found, when there is one core, or when
 ``ROBOTLIB_PREBUILD`` is ``0``/``off``. The helper ends when it is done or
 when this process ends (its standard input closes), whichever comes first.
-Imports nothing of robotlib at import time but the localization's kernels;
-the helper imports `robotlib.localization.mcl`.
+Imports nothing of robotlib at import time (`start` imports the
+localization's kernels; the helper `robotlib.localization.mcl` and
+`robotlib.world`), and never a layer above the localization.
 """
 
 from __future__ import annotations
@@ -194,6 +195,15 @@ def _fake_norms(max_range, z_hit, z_short, sigma, lam_short, n):
     return np.linspace(0.5, 2.0, n), np.linspace(0.0, 1.0, n)
 
 
+def _room_free(xy, radius=0.0):
+    """Stand-in for the helper's `World.is_free`: inside `_ROOM` by ``radius``."""
+    import numpy as np
+
+    xy = np.asarray(xy, dtype=float)
+    x, y = xy[..., 0], xy[..., 1]
+    return (x > radius) & (x < 3.0 - radius) & (y > radius) & (y < 3.0 - radius)
+
+
 def _exit_with_parent() -> None:
     """End this process when the parent closes our standard input (it ended)."""
     try:
@@ -224,6 +234,7 @@ def _main() -> None:
         setattr(_kernels, name, _fake_table)
     _kernels.beam_norms = _fake_norms  # the parent compiles it, after its table
     world = World(np.array(_ROOM), start=(1.5, 1.5, 0.0), name="prebuild")
+    object.__setattr__(world, "is_free", _room_free)  # no distance kernels either
     options = {**BEST, **spec["options"]}
     res = float(options.get("resolution", 0.05))
     radius = float(options.get("admissible_radius", ADMISSIBLE_RADIUS))
