@@ -27,16 +27,20 @@ def beam_norms(max_range, z_hit, z_short, sigma, lam_short, n):
     `_beam_prob` is ``hit exp(-u^2 / 2) + short exp(-lambda z) [z <= zhat] +
     z_rand / max_range``.
     """
-    hit = np.zeros(n)
-    short = np.zeros(n)
+    # np.empty as the cone table's builder calls it, every entry written: no
+    # np.zeros for numba to compile on a cold start
+    hit = np.empty(n)
+    short = np.empty(n)
     for k in range(n):
         zhat = k * 0.001
         mass = 0.5 * (
             math.erf((max_range - zhat) / (sigma * math.sqrt(2.0)))
             - math.erf(-zhat / (sigma * math.sqrt(2.0)))
         )
+        hit[k] = 0.0
         if mass > 0.0:
             hit[k] = z_hit * math.exp(-_LOG_SQRT_2PI) / sigma / mass
+        short[k] = 0.0
         if zhat > 0.0:
             short[k] = z_short * lam_short / (1.0 - math.exp(-lam_short * zhat))
     return hit, short

@@ -176,14 +176,14 @@ def _table_entry(echo, max_range, min_range):
 @nb.njit(**JIT)
 def _near_walls(segments, bx, by, reach):
     """Copy the walls within ``reach`` of ``(bx, by)``, in order, to a new (K, 4)."""
-    keep = np.zeros(segments.shape[0], dtype=np.bool_)
+    keep = np.empty(segments.shape[0], dtype=np.bool_)  # each written: no np.zeros
     count = 0
     for m in range(segments.shape[0]):
         d = point_segment_distance(
             bx, by, segments[m, 0], segments[m, 1], segments[m, 2], segments[m, 3]
         )
-        if d <= reach:
-            keep[m] = True
+        keep[m] = d <= reach
+        if keep[m]:
             count += 1
     near = np.empty((count, 4))
     c = 0
