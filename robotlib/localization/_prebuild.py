@@ -44,7 +44,7 @@ __all__ = ["Prebuild", "start"]
 ENV = "ROBOTLIB_PREBUILD"
 """Environment variable: ``0``/``off`` starts no helper (the helper sets it)."""
 
-WAIT_SECONDS = 300.0
+WAIT_SECONDS = 120.0
 """Longest `Prebuild.wait` waits for the helper's first step, s."""
 
 _ROOM = (
@@ -175,6 +175,7 @@ def start(fast: bool = True, options: dict | None = None) -> Prebuild | None:
         )
     except OSError:
         return None
+    threading.Thread(target=proc.wait, daemon=True).start()  # reaped when it ends
     helper = Prebuild(proc)
     started.append(helper)
     return helper
