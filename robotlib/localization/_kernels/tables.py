@@ -21,10 +21,12 @@ def _pseudo_atan2(y, x):
     """``math.atan2(y, x)`` within 1e-5 rad (a polynomial; for bin ranges only)."""
     ax = abs(x)
     ay = abs(y)
-    hi = max(ax, ay)
+    # min and max spelled as numba's builtins compute them (``max(a, b)`` is
+    # ``b if b > a else a``): no builtin for numba to compile on a cold start
+    hi = ay if ay > ax else ax
     if hi == 0.0:
         return 0.0
-    a = min(ax, ay) / hi
+    a = (ay if ay < ax else ax) / hi
     s = a * a
     r = ((-0.0464964749 * s + 0.15931422) * s - 0.327622764) * s * a + a
     if ay > ax:
@@ -91,7 +93,8 @@ def _ray_echoes(
         if ordered and open_rays == 0 and near > worst:
             worst = 0.0
             for b in range(n_bins):
-                worst = max(worst, best[b])
+                if best[b] > worst:  # max(worst, best[b]), as `_pseudo_atan2`
+                    worst = best[b]
             if near > worst:
                 break  # every ray has a hit nearer than the walls left
         px = segments[m, 0]
@@ -116,7 +119,9 @@ def _ray_echoes(
             if abs(span) < math.pi - 5.0 * w:
                 lo = a0 if span >= 0.0 else a0 + span  # floor, ceil: int64 in numba
                 first = math.floor(lo / w) - 2
-                count = min(math.ceil((lo + abs(span)) / w) + 3 - first, n_bins)
+                count = math.ceil((lo + abs(span)) / w) + 3 - first
+                if n_bins < count:  # min(count, n_bins)
+                    count = n_bins
         b = first % n_bins - 1
         for _ in range(count):
             b += 1
@@ -169,7 +174,10 @@ def _unit_normals(segments):
 def _table_entry(echo, max_range, min_range):
     """Return the table entry (uint16, mm) of a cone's echo (m, ``inf`` for none)."""
     z = max_range if echo >= max_range else echo
-    z = min(max(z, min_range), max_range)
+    if min_range > z:  # min(max(z, min_range), max_range), as `_pseudo_atan2`
+        z = min_range
+    if max_range < z:
+        z = max_range
     return np.uint16(round(z * 1000.0))
 
 
@@ -223,9 +231,15 @@ def _sweep_table(
         for b in range(n_bins):  # as `cone_echo` computes each ray's direction
             dirs[b, 0] = math.cos(b * _TWO_PI / n_bins)
             dirs[b, 1] = math.sin(b * _TWO_PI / n_bins)
-        for i in range(bi * block, min((bi + 1) * block, ny)):
+        i_end = (bi + 1) * block
+        if ny < i_end:  # min(i_end, ny), as `_pseudo_atan2`
+            i_end = ny
+        j_end = (bj + 1) * block
+        if nx < j_end:
+            j_end = nx
+        for i in range(bi * block, i_end):
             cy = y0 + (i + 0.5) * resolution
-            for j in range(bj * block, min((bj + 1) * block, nx)):
+            for j in range(bj * block, j_end):
                 cx = x0 + (j + 0.5) * resolution
                 _ray_echoes(
                     cx, cy, near, normals, max_range, cos_specular, dirs, best,
