@@ -23,7 +23,7 @@ import numba
 import numpy as np
 
 from . import _kernels
-from ._kernels import chunked
+from ._kernels import chunked, normals
 from .motion import NORMALS_CHUNK, PARALLEL_MIN, _executor, _fill
 
 __all__ = ["PARALLEL_MIN", "beam_lut", "run_step", "spans"]
@@ -160,14 +160,9 @@ def run_step(kind, particles, weights, prm, noise, key, sensors, skip, table, lu
 def _openmp_step(kind, particles, weights, prm, noise, key, sensors, skip, table, lut,
                  out, u):  # fmt: skip
     """`run_step` with numba's threaded kernels (`OPENMP_MIN` particles and more)."""
-    n = len(particles)
     out_p, out_w, cs, mm, new_p, new_w = out
-    if key is not None:
-        chunks = [
-            (key, c, noise[lo : lo + NORMALS_CHUNK])
-            for c, lo in enumerate(range(0, n, NORMALS_CHUNK))
-        ]
-        _run(_fill, chunks)
+    if key is not None:  # every chunk's normals, over numba's threads
+        normals.fill_chunks_parallel(key, NORMALS_CHUNK, noise)
     motion, where = tuple(prm[:6].tolist()), tuple(prm[6:9].tolist())
     if kind == "beam":
         res = _kernels.lut_table_step_parallel(

@@ -1,0 +1,168 @@
+"""Keyed standard normals in numba: NumPy's numbers, without NumPy's objects.
+
+`robotlib.localization.motion.standard_normals` draws the motion noise of
+many particles in chunks: chunk ``c`` of a step keyed ``key`` is
+``Generator(SFC64(SeedSequence([key, c]))).standard_normal``. Making those
+three objects costs tens of microseconds a chunk in Python, and NumPy's
+fill calls its generator through a pointer for every number. These kernels
+compute the same numbers bit for bit, in compiled code: `SeedSequence`'s
+hashing of ``[key, c]`` (NumPy's ``bit_generator.pyx``), SFC64's seeding
+and steps (``sfc64.h``) and NumPy's ziggurat (``random_standard_normal`` in
+``distributions.c``, as numba's own port, whose tables this module uses).
+``tests/test_localization_normals.py`` checks them against NumPy.
+
+Numba kernels: contiguous arrays and scalars in, no Python objects; they
+import nothing of robotlib but the JIT options.
+"""
+
+import numba as nb
+import numpy as np
+from numba.np.random import _constants as _zig
+
+from ..._config import JIT, serial_and_parallel
+
+_WI = _zig.wi_double
+_KI = _zig.ki_double
+_FI = _zig.fi_double
+_R = _zig.ziggurat_nor_r
+_INV_R = _zig.ziggurat_nor_inv_r
+
+_M32 = np.uint64(0xFFFFFFFF)
+_INIT_A = np.uint64(0x43B0D7E5)
+_MULT_A = np.uint64(0x931E8875)
+_INIT_B = np.uint64(0x8B51F9DD)
+_MULT_B = np.uint64(0x58F38DED)
+_MIX_L = np.uint64(0xCA01F9DD)
+_MIX_R = np.uint64(0x4973F715)
+_U16 = np.uint64(16)
+
+
+@nb.njit(**JIT, inline="always")
+def _hashmix(value, hc):
+    """SeedSequence's ``hashmix`` on 32-bit words held in uint64; ``hc`` (1,)."""
+    value = (value ^ hc[0]) & _M32
+    hc[0] = (hc[0] * _MULT_A) & _M32
+    value = (value * hc[0]) & _M32
+    return value ^ (value >> _U16)
+
+
+@nb.njit(**JIT, inline="always")
+def _mix(x, y):
+    r = (_MIX_L * x - _MIX_R * y) & _M32
+    return r ^ (r >> _U16)
+
+
+@nb.njit(**JIT)
+def sfc64_state(key, chunk, s):
+    """``SFC64(SeedSequence([key, chunk]))``'s state into ``s`` (4,) uint64.
+
+    ``key`` and ``chunk`` are whole numbers in [0, 2^63).
+    """
+    ent = np.zeros(4, dtype=np.uint64)
+    m = 0
+    k = np.uint64(key)
+    if k == np.uint64(0):  # `_int_to_uint32_array`: 0 is one word
+        ent[0] = 0
+        m = 1
+    while k != np.uint64(0):
+        ent[m] = k & _M32
+        k = k >> np.uint64(32)
+        m += 1
+    ent[m] = np.uint64(chunk) & _M32  # one word below 2^32
+    m += 1
+    pool = np.zeros(4, dtype=np.uint64)
+    hc = np.empty(1, dtype=np.uint64)
+    hc[0] = _INIT_A
+    for i in range(4):
+        pool[i] = _hashmix(ent[i] if i < m else np.uint64(0), hc)
+    for i_src in range(4):
+        for i_dst in range(4):
+            if i_src != i_dst:
+                pool[i_dst] = _mix(pool[i_dst], _hashmix(pool[i_src], hc))
+    # `generate_state(3, uint64)`: six words, paired little-endian
+    hb = _INIT_B
+    words = np.empty(6, dtype=np.uint64)
+    for i in range(6):
+        v = (pool[i % 4] ^ hb) & _M32
+        hb = (hb * _MULT_B) & _M32
+        v = (v * hb) & _M32
+        words[i] = v ^ (v >> _U16)
+    for i in range(3):
+        s[i] = words[2 * i] | (words[2 * i + 1] << np.uint64(32))
+    s[3] = 1
+    for _ in range(12):  # `sfc64_set_seed`
+        _next(s)
+
+
+@nb.njit(**JIT, inline="always")
+def _next(s):
+    """SFC64's next 64 bits; advances the state ``s`` (4,) uint64."""
+    tmp = s[0] + s[1] + s[3]
+    s[3] += np.uint64(1)
+    s[0] = s[1] ^ (s[1] >> np.uint64(11))
+    s[1] = s[2] + (s[2] << np.uint64(3))
+    s[2] = ((s[2] << np.uint64(24)) | (s[2] >> np.uint64(40))) + tmp
+    return tmp
+
+
+@nb.njit(**JIT, inline="always")
+def _next_double(s):
+    return np.float64(_next(s) >> np.uint64(11)) * (1.0 / 9007199254740992.0)
+
+
+@nb.njit(**JIT, inline="always")
+def normal(s):
+    """One standard normal from the SFC64 state ``s``: NumPy's ziggurat."""
+    while True:
+        r = _next(s)
+        idx = r & np.uint64(0xFF)
+        r = r >> np.uint64(8)
+        sign = r & np.uint64(1)
+        rabs = (r >> np.uint64(1)) & np.uint64(0x000FFFFFFFFFFFFF)
+        x = np.float64(rabs) * _WI[idx]
+        if sign & np.uint64(1):
+            x = -x
+        if rabs < _KI[idx]:
+            return x
+        if idx == np.uint64(0):
+            while True:
+                xx = -_INV_R * np.log1p(-_next_double(s))
+                yy = -np.log1p(-_next_double(s))
+                if yy + yy > xx * xx:
+                    if (rabs >> np.uint64(8)) & np.uint64(1):
+                        return -(_R + xx)
+                    return _R + xx
+        else:
+            if (_FI[idx - np.uint64(1)] - _FI[idx]) * _next_double(s) + _FI[
+                idx
+            ] < np.exp(-0.5 * x * x):
+                return x
+
+
+@nb.njit(**JIT)
+def fill_chunk(key, chunk, out):
+    """``out`` (m, 3) := chunk ``chunk`` of the step keyed ``key``'s normals."""
+    s = np.empty(4, dtype=np.uint64)
+    sfc64_state(key, chunk, s)
+    for j in range(out.shape[0]):
+        out[j, 0] = normal(s)
+        out[j, 1] = normal(s)
+        out[j, 2] = normal(s)
+
+
+def _fill_chunks(key, rows, out):
+    """``out`` (n, 3) := every chunk of ``rows`` rows of the step keyed ``key``."""
+    n = out.shape[0]
+    n_chunks = (n + rows - 1) // rows
+    for c in nb.prange(n_chunks):
+        s = np.empty(4, dtype=np.uint64)
+        sfc64_state(key, c, s)
+        lo = c * rows
+        hi = min(lo + rows, n)
+        for j in range(lo, hi):
+            out[j, 0] = normal(s)
+            out[j, 1] = normal(s)
+            out[j, 2] = normal(s)
+
+
+fill_chunks, fill_chunks_parallel = serial_and_parallel(_fill_chunks)

@@ -1,0 +1,64 @@
+"""The keyed normals of `_kernels.normals` against NumPy's: the same bits."""
+
+import numpy as np
+import pytest
+
+from robotlib.localization._kernels import normals
+
+
+def _numpy_state(key, chunk):
+    bg = np.random.SFC64(np.random.SeedSequence([key, chunk]))
+    return np.array(bg.state["state"]["state"], dtype=np.uint64)
+
+
+@pytest.mark.parametrize(
+    "key", [0, 1, 7, 2**32 - 1, 2**32, 2**32 + 5, 123456789012345, 2**63 - 1]
+)
+@pytest.mark.parametrize("chunk", [0, 1, 2, 121, 2**31])
+def test_sfc64_state_is_numpys(key, chunk):
+    s = np.empty(4, dtype=np.uint64)
+    normals.sfc64_state(key, chunk, s)
+    np.testing.assert_array_equal(s, _numpy_state(key, chunk))
+
+
+def test_fill_chunk_is_numpys_generator():
+    rng = np.random.default_rng(3)
+    for key in [*rng.integers(np.iinfo(np.int64).max, size=20), 0, 2**63 - 1]:
+        key, chunk = int(key), int(rng.integers(0, 200))
+        # enough rows that the ziggurat's rare branches (tail, wedges) run
+        got = np.empty((8192, 3))
+        normals.fill_chunk(key, chunk, got)
+        gen = np.random.Generator(np.random.SFC64(np.random.SeedSequence([key, chunk])))
+        np.testing.assert_array_equal(got, gen.standard_normal((8192, 3)))
+
+
+@pytest.mark.parametrize("n", [1, 8191, 8192, 8193, 30_000])
+def test_fill_chunks_is_standard_normals(n):
+    from robotlib.localization.motion import NORMALS_CHUNK
+
+    key = 987654321987
+    ref = np.empty((n, 3))
+    for c, lo in enumerate(range(0, n, NORMALS_CHUNK)):
+        seq = np.random.SeedSequence([key, c])
+        np.random.Generator(np.random.SFC64(seq)).standard_normal(
+            out=ref[lo : lo + NORMALS_CHUNK]
+        )
+    for kernel in (normals.fill_chunks, normals.fill_chunks_parallel):
+        got = np.full((n, 3), np.nan)
+        kernel(key, NORMALS_CHUNK, got)
+        np.testing.assert_array_equal(got, ref)
+
+
+def test_standard_normals_keeps_numpys_numbers():
+    """`standard_normals` beyond one chunk: the draws of NumPy's generators."""
+    from robotlib.localization.motion import NORMALS_CHUNK, standard_normals
+
+    n = 3 * NORMALS_CHUNK + 17
+    got = standard_normals(np.random.default_rng(11), n)
+    key = int(np.random.default_rng(11).integers(np.iinfo(np.int64).max))
+    for c, lo in enumerate(range(0, n, NORMALS_CHUNK)):
+        gen = np.random.Generator(np.random.SFC64(np.random.SeedSequence([key, c])))
+        np.testing.assert_array_equal(
+            got[lo : lo + NORMALS_CHUNK],
+            gen.standard_normal((min(NORMALS_CHUNK, n - lo), 3)),
+        )
