@@ -23,7 +23,7 @@ import numba
 import numpy as np
 
 from . import _kernels
-from ._kernels import chunked, normals
+from ._kernels import chunked
 from .motion import NORMALS_CHUNK, PARALLEL_MIN, _executor, _fill
 
 __all__ = ["PARALLEL_MIN", "beam_lut", "run_step", "spans"]
@@ -87,7 +87,8 @@ def run_step(kind, particles, weights, prm, noise, key, sensors, skip, table, lu
         The per-step scalars (`robotlib.localization._kernels.chunked`).
     noise : numpy.ndarray, shape (N, 3)
         The motion noise; when ``key`` is given, filled here chunk by chunk
-        from the streams ``SeedSequence([key, c])``.
+        from the streams ``SeedSequence([key, c])`` (from `OPENMP_MIN`
+        particles on, drawn inside the threaded kernel and not stored).
     key : int or None
         The noise's key (`standard_normals` beyond `NORMALS_CHUNK` rows), or
         None for noise drawn already.
@@ -161,10 +162,19 @@ def _openmp_step(kind, particles, weights, prm, noise, key, sensors, skip, table
                  out, u):  # fmt: skip
     """`run_step` with numba's threaded kernels (`OPENMP_MIN` particles and more)."""
     out_p, out_w, cs, mm, new_p, new_w = out
-    if key is not None:  # every chunk's normals, over numba's threads
-        normals.fill_chunks_parallel(key, NORMALS_CHUNK, noise)
     motion, where = tuple(prm[:6].tolist()), tuple(prm[6:9].tolist())
-    if kind == "beam":
+    if key is not None:  # the noise drawn in the kernel's first pass
+        if kind == "beam":
+            res = _kernels.lut_table_step_keyed_parallel(
+                particles, key, NORMALS_CHUNK, motion, sensors, table, where, lut,
+                skip, float(prm[9]), weights, out_p, out_w, cs, mm,
+            )  # fmt: skip
+        else:
+            res = _kernels.paper_lut_step_keyed_parallel(
+                particles, key, NORMALS_CHUNK, motion, sensors, table, where, lut,
+                float(prm[9]), weights, out_p, out_w, cs, mm,
+            )  # fmt: skip
+    elif kind == "beam":
         res = _kernels.lut_table_step_parallel(
             particles, noise, motion, sensors, table, where, lut, skip, float(prm[9]),
             weights, out_p, out_w, cs, mm,

@@ -28,7 +28,9 @@ from .common import wrap
 from .exact import expected_scan_blocks, expected_scan_blocks_parallel, wall_blocks
 from .fused import (
     beam_table_step,
+    lut_table_step_keyed_parallel,
     lut_table_step_parallel,
+    paper_lut_step_keyed_parallel,
     paper_lut_step_parallel,
     paper_table_step,
 )
@@ -100,9 +102,11 @@ __all__ = [
     "kld_bound",
     "kld_resample",
     "lut_table_loglik_parallel",
+    "lut_table_step_keyed_parallel",
     "lut_table_step_parallel",
     "outside",
     "paper_loglik",
+    "paper_lut_step_keyed_parallel",
     "paper_lut_step_parallel",
     "paper_table_loglik",
     "paper_table_loglik_parallel",
