@@ -26,7 +26,6 @@ import numpy as np
 
 from .._random import as_rng
 from . import _kernels
-from ._kernels.normals import fill_chunk
 
 __all__ = ["odometry_increment", "sample_motion_odometry", "OdometryMotionModel"]
 
@@ -48,12 +47,8 @@ def _executor(threads: int) -> ThreadPoolExecutor:
 
 
 def _fill(key: int, chunk: int, out: np.ndarray) -> None:
-    """``out`` (m, 3) := ``Generator(SFC64(SeedSequence([key, chunk])))``'s normals.
-
-    Drawn by `_kernels.normals.fill_chunk` (the same bits, in compiled code,
-    without the GIL).
-    """
-    fill_chunk(key, chunk, out)
+    gen = np.random.Generator(np.random.SFC64(np.random.SeedSequence([key, chunk])))
+    gen.standard_normal(out=out)
 
 
 class Scratch:

@@ -24,7 +24,6 @@ import numpy as np
 
 from . import _kernels
 from ._kernels import chunked
-from ._kernels.normals import fill_chunks
 from .motion import NORMALS_CHUNK, PARALLEL_MIN, _executor, _fill
 
 __all__ = ["PARALLEL_MIN", "beam_lut", "run_step", "spans"]
@@ -43,9 +42,9 @@ than the chunks on Python threads. The same numbers either way.
 
 
 FILL_FIRST_MAX = 4 * NORMALS_CHUNK
-"""Up to this many particles `run_step` draws all the noise first, in one call.
+"""Up to this many particles `run_step` draws the noise first, in the calling thread.
 
-The noise is about a tenth of a particle's work; drawn first, the rest is
+The noise is about a sixth of a particle's work; drawn first, the rest is
 cut into even pieces instead of the noise's chunks of `NORMALS_CHUNK`
 rows (at 10,000 particles: 8,192 and 1,808 rows, one thread doing four
 fifths of the step).
@@ -135,8 +134,9 @@ def run_step(kind, particles, weights, prm, noise, key, sensors, skip, table, lu
         float(prm[9]),
     )
     threads = _threads()
-    if key is not None and n <= FILL_FIRST_MAX:
-        fill_chunks(key, NORMALS_CHUNK, noise)  # compiled, a tenth of the work
+    if key is not None and n <= FILL_FIRST_MAX:  # the noise first, in this thread
+        for c, lo in enumerate(range(0, n, NORMALS_CHUNK)):
+            _fill(key, c, noise[lo : lo + NORMALS_CHUNK])
         key = None
     if key is None:  # even pieces, more than threads: a slowed thread takes fewer
         parts = [(lo, hi, -1) for lo, hi in spans(n, PIECES_PER_THREAD * threads)]
