@@ -5,11 +5,15 @@ models allow: the odometry motion model, a ``fast`` paper or beam model)
 runs here from `PARALLEL_MIN` particles on (below, the models call one
 serial kernel, `chunked.beam_small` or `chunked.paper_small`, that moves,
 weighs, estimates and, when the caller passes the resampling draw,
-resamples): `run_step`, in chunks on a pool of Python threads
-(`robotlib.localization._kernels.chunked`): each chunk draws its own rows
-of motion noise (`robotlib.localization.motion.standard_normals`' streams,
-so the numbers do not depend on the threads) and then moves and weighs
-them; the sums run serially at the end. A waiting thread sleeps (no
+resamples): `run_step`, in pieces on a pool of Python threads
+(`robotlib.localization._kernels.chunked`), twice as many as threads, each
+a task of its own so that a thread another process slows takes fewer. The
+motion noise follows `robotlib.localization.motion.standard_normals`'
+streams, so the numbers do not depend on the threads: up to
+`FILL_FIRST_MAX` particles it is drawn first, beyond each piece is one of
+the noise's chunks and draws its own rows; from `OPENMP_MIN` particles
+numba's threaded kernel draws it where it is used
+(`_kernels.normals`). The sums run serially at the end. A waiting thread sleeps (no
 OpenMP spinning), so a step keeps its pace when another process shares
 the cores. Same numbers, bit for bit, as the models' kernels in turn.
 
