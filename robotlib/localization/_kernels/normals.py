@@ -115,9 +115,13 @@ def _next_double(s):
     return np.float64(_next(s) >> np.uint64(11)) * (1.0 / 9007199254740992.0)
 
 
-@nb.njit(**JIT, inline="always")
+@nb.njit(**JIT)
 def normal(s):
-    """One standard normal from the SFC64 state ``s``: NumPy's ziggurat."""
+    """One standard normal from the SFC64 state ``s``: NumPy's ziggurat.
+
+    A call, not inlined: three copies in a threaded kernel's loop cost
+    seconds of compile time.
+    """
     while True:
         r = _next(s)
         idx = r & np.uint64(0xFF)
