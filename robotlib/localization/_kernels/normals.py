@@ -40,61 +40,55 @@ _MULT_B = np.uint64(0x58F38DED)
 _MIX_L = np.uint64(0xCA01F9DD)
 _MIX_R = np.uint64(0x4973F715)
 _U16 = np.uint64(16)
-
-
-@nb.njit(**JIT, inline="always")
-def _hashmix(value, hc):
-    """SeedSequence's ``hashmix`` on 32-bit words held in uint64; ``hc`` (1,)."""
-    value = (value ^ hc[0]) & _M32
-    hc[0] = (hc[0] * _MULT_A) & _M32
-    value = (value * hc[0]) & _M32
-    return value ^ (value >> _U16)
-
-
-@nb.njit(**JIT, inline="always")
-def _mix(x, y):
-    r = (_MIX_L * x - _MIX_R * y) & _M32
-    return r ^ (r >> _U16)
+_U32 = np.uint64(32)
 
 
 @nb.njit(**JIT)
 def sfc64_state(key, chunk, s):
     """``SFC64(SeedSequence([key, chunk]))``'s state into ``s`` (4,) uint64.
 
-    ``key`` and ``chunk`` are whole numbers in [0, 2^63).
+    ``key`` in [0, 2^63), ``chunk`` in [0, 2^32). SeedSequence's hashing on
+    32-bit words held in uint64 (masked after each product), written out
+    without helpers (a third less compile time).
     """
-    ent = np.zeros(4, dtype=np.uint64)
-    m = 0
     k = np.uint64(key)
-    if k == np.uint64(0):  # `_int_to_uint32_array`: 0 is one word
-        ent[0] = 0
-        m = 1
-    while k != np.uint64(0):
-        ent[m] = k & _M32
-        k = k >> np.uint64(32)
-        m += 1
-    ent[m] = np.uint64(chunk) & _M32  # one word below 2^32
+    ent = np.zeros(4, dtype=np.uint64)  # `_coerce_to_uint32_array([key, chunk])`
+    ent[0] = k & _M32
+    m = 1
+    if (k >> _U32) != np.uint64(0):
+        ent[1] = k >> _U32
+        m = 2
+    ent[m] = np.uint64(chunk) & _M32
     m += 1
-    pool = np.zeros(4, dtype=np.uint64)
-    hc = np.empty(1, dtype=np.uint64)
-    hc[0] = _INIT_A
+    pool = np.zeros(4, dtype=np.uint64)  # `mix_entropy`, pool size 4
+    hc = _INIT_A
     for i in range(4):
-        pool[i] = _hashmix(ent[i] if i < m else np.uint64(0), hc)
+        v = ent[i] if i < m else np.uint64(0)
+        v = (v ^ hc) & _M32  # `hashmix`
+        hc = (hc * _MULT_A) & _M32
+        v = (v * hc) & _M32
+        pool[i] = v ^ (v >> _U16)
     for i_src in range(4):
         for i_dst in range(4):
             if i_src != i_dst:
-                pool[i_dst] = _mix(pool[i_dst], _hashmix(pool[i_src], hc))
-    # `generate_state(3, uint64)`: six words, paired little-endian
-    hb = _INIT_B
-    words = np.empty(6, dtype=np.uint64)
-    for i in range(6):
-        v = (pool[i % 4] ^ hb) & _M32
-        hb = (hb * _MULT_B) & _M32
-        v = (v * hb) & _M32
-        words[i] = v ^ (v >> _U16)
+                v = (pool[i_src] ^ hc) & _M32
+                hc = (hc * _MULT_A) & _M32
+                v = (v * hc) & _M32
+                v = v ^ (v >> _U16)
+                r = (_MIX_L * pool[i_dst] - _MIX_R * v) & _M32  # `mix`
+                pool[i_dst] = r ^ (r >> _U16)
+    hb = _INIT_B  # `generate_state(3, uint64)`: six words, paired little-endian
     for i in range(3):
-        s[i] = words[2 * i] | (words[2 * i + 1] << np.uint64(32))
-    s[3] = 1
+        lo = (pool[(2 * i) % 4] ^ hb) & _M32
+        hb = (hb * _MULT_B) & _M32
+        lo = (lo * hb) & _M32
+        lo = lo ^ (lo >> _U16)
+        hi = (pool[(2 * i + 1) % 4] ^ hb) & _M32
+        hb = (hb * _MULT_B) & _M32
+        hi = (hi * hb) & _M32
+        hi = hi ^ (hi >> _U16)
+        s[i] = lo | (hi << _U32)
+    s[3] = np.uint64(1)
     for _ in range(12):  # `sfc64_set_seed`
         _next(s)
 
