@@ -94,8 +94,11 @@ def _copy(tree: str, into: str) -> str:
     return src
 
 
-def _run(tree: str, cache: str, world: str, bytecode: bool = True) -> dict:
+def _run(tree: str, cache: str, world: str, bytecode: bool = True,
+         prebuild: str | None = None) -> dict:  # fmt: skip
     env = dict(os.environ, NUMBA_CACHE_DIR=cache)
+    if prebuild is not None:
+        env["ROBOTLIB_PREBUILD"] = prebuild
     env.pop("ROBOTLIB_TABLE_CACHE", None)
     if bytecode:
         env.pop("PYTHONDONTWRITEBYTECODE", None)
@@ -115,6 +118,12 @@ def main() -> int:
     parser.add_argument(
         "--warm", type=int, default=1, help="warm runs per tree and round (alternating)"
     )
+    parser.add_argument(
+        "--prebuild",
+        default=None,
+        help="ROBOTLIB_PREBUILD for the runs: 1 (a helper even on a busy machine),"
+        " 0, auto (a helper with a core to spare); default: the environment's",
+    )
     args = parser.parse_args()
     bytecode = args.bytecode == "on"
     runs = {(t, k): [] for t in ("old", "new") for k in ("cold", "warm")}
@@ -127,13 +136,15 @@ def main() -> int:
                 trees[name] = getattr(args, name)
                 if bytecode:
                     trees[name] = _copy(trees[name], caches[name])
+                tree, cache = trees[name], caches[name]
                 runs[name, "cold"].append(
-                    _run(trees[name], caches[name], args.world, bytecode)
+                    _run(tree, cache, args.world, bytecode, args.prebuild)
                 )
             for _ in range(args.warm):  # warm runs alternate between the trees
                 for name in order:
+                    tree, cache = trees[name], caches[name]
                     runs[name, "warm"].append(
-                        _run(trees[name], caches[name], args.world, bytecode)
+                        _run(tree, cache, args.world, bytecode, args.prebuild)
                     )
         finally:
             for cache in caches.values():

@@ -91,9 +91,15 @@ def test_the_first_step_compiles_nothing_and_gives_the_same_numbers(tmp_path):
     assert not _first_step(tmp_path / "helped", True)["helper"]
 
 
-def test_no_helper_when_switched_off(monkeypatch):
+def test_no_helper_when_switched_off_or_busy(monkeypatch):
     monkeypatch.setenv(_prebuild.ENV, "0")
     assert _prebuild.start() is None
+    monkeypatch.setenv(_prebuild.ENV, "auto")
+    monkeypatch.setattr(_prebuild.os, "getloadavg", lambda: (64.0, 64.0, 64.0))
+    assert not _prebuild._core_to_spare()
+    assert _prebuild.start() is None  # every core busy: the helper would not help
+    monkeypatch.setattr(_prebuild.os, "getloadavg", lambda: (0.0, 0.0, 0.0))
+    assert _prebuild._core_to_spare()
     monkeypatch.setenv(_prebuild.ENV, "1")
     assert _prebuild.start(fast=False) is None  # cone casts: not these kernels
 
