@@ -12,6 +12,7 @@ import numba as nb
 import numpy as np
 
 from .._config import JIT, serial_and_parallel
+from ._kernels_cone import JIT_CONTRACT
 
 
 @nb.njit(**JIT)
@@ -22,7 +23,7 @@ def _evidence(L, i, j):
     return 0.0
 
 
-@nb.njit(**JIT)
+@nb.njit(**JIT_CONTRACT)
 def _bilinear_evidence(L, x0, y0, res, px, py):
     """`_evidence` at point ``(px, py)``, bilinear between cell centres."""
     gx = (px - x0) / res - 0.5
@@ -43,7 +44,7 @@ def _bilinear_evidence(L, x0, y0, res, px, py):
     )
 
 
-@nb.njit(**JIT)
+@nb.njit(**JIT_CONTRACT)
 def _match_score(L, x0, y0, res, px, py, pth, bx, by):
     """Sum of `_bilinear_evidence` at the scan's end points from robot pose p.
 
