@@ -223,6 +223,8 @@ class GridFastSLAM:
         self.sonar_model = InverseSonarModel() if sonar_model is None else sonar_model
         self.motion = OdometryNoise() if motion is None else motion
         self._wall_groups = _sonar_groups(len(self.sonar.sensors), sonar_walls)
+        self._angle_cache: dict = {}
+        self._lp_last = None
         self.inflate = float(inflate)
         self.beam_step = int(beam_step)
         self.p_rand = float(p_rand)
@@ -279,14 +281,34 @@ class GridFastSLAM:
     def _geometry(self):
         return (*self.origin, self.resolution)
 
+    def _angles(self, step: int = 1) -> np.ndarray:
+        """Every ``step``-th beam direction of the laser (contiguous, kept)."""
+        if self._angle_cache.get("laser") is not self.laser:
+            self._angle_cache = {"laser": self.laser}
+        if step not in self._angle_cache:
+            a = np.ascontiguousarray(self.laser.angles[::step])
+            self._angle_cache[step] = a
+        return self._angle_cache[step]
+
+    def _laser_poses(self, poses) -> np.ndarray:
+        """`laser_poses` of ``poses`` (N, 3), kept for the last poses asked for."""
+        last = self._lp_last
+        if (
+            last is not None and last[0] is poses and last[3] is self.laser
+            and np.array_equal(last[1], poses)
+        ):  # fmt: skip
+            return last[2]
+        lp = np.ascontiguousarray(laser_poses(poses, self.laser))
+        self._lp_last = (poses, np.array(poses, dtype=float), lp, self.laser)
+        return lp
+
     def weigh_laser(self, poses, scan) -> np.ndarray:
         """Log-likelihood (N,) of a laser scan in each particle's map at ``poses``."""
-        lp = np.ascontiguousarray(laser_poses(poses, self.laser))
+        lp = self._laser_poses(poses)
         k = self.beam_step
         out = np.empty(len(lp))
         self._kernel("laser_loglik_many")(
-            self.maps, *self._geometry(), lp,
-            np.ascontiguousarray(self.laser.angles[::k]),
+            self.maps, *self._geometry(), lp, self._angles(k),
             np.ascontiguousarray(np.asarray(scan, dtype=float)[::k]),
             self.laser.max_range, self.p_rand, out,
         )  # fmt: skip
@@ -316,8 +338,7 @@ class GridFastSLAM:
         out = np.empty((len(poses), 3))
         self._kernel("match_laser_many")(
             self.maps, *self._geometry(), np.ascontiguousarray(poses, dtype=float),
-            np.asarray(self.laser.mount, dtype=float),
-            np.ascontiguousarray(self.laser.angles[::k]),
+            np.asarray(self.laser.mount, dtype=float), self._angles(k),
             np.ascontiguousarray(np.asarray(scan, dtype=float)[::k]),
             self.laser.max_range, *self.match_step, self.match_levels,
             *self.match_prior, out,
@@ -340,8 +361,7 @@ class GridFastSLAM:
             m = self.laser_model
             self._kernel("laser_update_many")(
                 maps, *self._geometry(),
-                np.ascontiguousarray(laser_poses(poses, self.laser)),
-                np.ascontiguousarray(self.laser.angles), z, self.laser.max_range,
+                self._laser_poses(poses), self._angles(), z, self.laser.max_range,
                 m.l_occ, m.l_free, m.l_min, m.l_max,
             )  # fmt: skip
         else:
@@ -371,8 +391,8 @@ class GridFastSLAM:
         if self.sensor == "laser":
             _kernels_copy.laser_boxes(
                 *self._geometry(), ny, nx,
-                np.ascontiguousarray(laser_poses(poses, self.laser)),
-                np.ascontiguousarray(self.laser.angles), z, self.laser.max_range, boxes,
+                self._laser_poses(poses), self._angles(), z, self.laser.max_range,
+                boxes,
             )  # fmt: skip
         else:
             reach = np.where(
