@@ -26,6 +26,7 @@ kernels; never plots.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -36,7 +37,7 @@ from ..sensing import SonarModel
 from ..sensing.laser import LaserModel, laser_poses
 from ..sim import OdometryNoise
 from ..world import World
-from . import _kernels, _kernels_copy, _kernels_window
+from . import _kernels, _kernels_copy, _kernels_incidence, _kernels_window
 from .metrics import MapScore, map_score, trajectory_rms
 from .motion import sample_arc_motion
 from .occupancy import InverseLaserModel, InverseSonarModel, OccupancyGrid
@@ -204,6 +205,7 @@ class GridFastSLAM:
         sonar_walls=None,
         window: int = 0,
         window_weigh: str = "window",
+        sonar_incidence: float | None = None,
         rng: np.random.Generator | int | None = None,
     ):
         if sensor not in ("laser", "sonar"):
@@ -223,6 +225,12 @@ class GridFastSLAM:
         self.sonar_model = InverseSonarModel() if sonar_model is None else sonar_model
         self.motion = OdometryNoise() if motion is None else motion
         self._wall_groups = _sonar_groups(len(self.sonar.sensors), sonar_walls)
+        self._default_marks = np.zeros(len(self.sonar.sensors), dtype=bool)
+        for k, marks in self._wall_groups:
+            self._default_marks[slice(None) if k is None else k] = marks
+        self.sonar_incidence = None if sonar_incidence is None else float(
+            sonar_incidence
+        )  # fmt: skip
         self._angle_cache: dict = {}
         self._lp_last = None
         self.inflate = float(inflate)
@@ -364,6 +372,8 @@ class GridFastSLAM:
                 self._laser_poses(poses), self._angles(), z, self.laser.max_range,
                 m.l_occ, m.l_free, m.l_min, m.l_max,
             )  # fmt: skip
+        elif self.sonar_incidence is not None:
+            self._update_sonar_incidence(maps, poses, z)
         else:
             m = self.sonar_model
             for k, marks in self._wall_groups:
@@ -375,6 +385,29 @@ class GridFastSLAM:
                     m.l_occ if marks else 0.0, m.l_free, m.sigma or 0.0,
                     m.max_weight, m.l_min, m.l_max,
                 )  # fmt: skip
+
+    def _update_sonar_incidence(self, maps, poses, z) -> None:
+        """Add a ring reading, each echo marking walls by its incidence (``maps``)."""
+        m = self.sonar_model
+        n = len(poses)
+        cos_inc = np.empty((n, len(z)))
+        par = "_parallel" if n >= PARALLEL_MIN else ""
+        k = _kernels_incidence
+        getattr(k, "sonar_incidence_many" + par)(
+            maps, *self._geometry(), poses, self.sonar.sensors, z,
+            self.sonar.max_range, 3.0, cos_inc,
+        )  # fmt: skip
+        known = ~np.isnan(cos_inc)
+        marks = np.where(
+            known, np.nan_to_num(cos_inc) >= math.cos(self.sonar_incidence),
+            self._default_marks[None, :],
+        )  # fmt: skip
+        getattr(k, "sonar_update_marks_many" + par)(
+            maps, *self._geometry(), poses, self.sonar.sensors, z,
+            np.ascontiguousarray(marks), self.sonar.cone / 2, self.sonar.max_range,
+            m.thickness, m.l_occ, m.l_free, m.sigma or 0.0, m.max_weight, m.l_min,
+            m.l_max,
+        )  # fmt: skip
 
     def _tracked_diff(self) -> MapDiff:
         """Return the maps' `MapDiff` (whole-grid boxes if ``maps`` was replaced)."""
