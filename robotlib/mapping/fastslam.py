@@ -26,7 +26,6 @@ kernels; never plots.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -37,12 +36,13 @@ from ..sensing import SonarModel
 from ..sensing.laser import LaserModel, laser_poses
 from ..sim import OdometryNoise
 from ..world import World
-from . import _kernels, _kernels_copy, _kernels_incidence, _kernels_window
+from . import _kernels, _kernels_copy, _kernels_window
 from .metrics import MapScore, map_score, trajectory_rms
 from .motion import sample_arc_motion
 from .occupancy import InverseLaserModel, InverseSonarModel, OccupancyGrid
 from .resampling import normalise_log_weights, resample_maps, resample_parents
 from .sharing import MapDiff
+from .sonar_walls import incidence_marks, sonar_groups, update_sonar_marks
 
 PARALLEL_MIN = 64
 """Particle count from which the per-particle kernels run over threads (below,
@@ -88,16 +88,6 @@ __all__ = [
     "resample_maps",
     "resample_parents",
 ]
-
-
-def _sonar_groups(n_sensors: int, walls) -> list:
-    """``[(indexes or None, marks_walls)]``: the sonars per map-update call."""
-    if walls is None:
-        return [(None, True)]
-    mark = np.zeros(n_sensors, dtype=bool)
-    mark[np.asarray(walls, dtype=np.int64)] = True
-    groups = [(np.flatnonzero(mark), True), (np.flatnonzero(~mark), False)]
-    return [(np.ascontiguousarray(k), m) for k, m in groups if len(k)]
 
 
 class GridFastSLAM:
@@ -164,6 +154,11 @@ class GridFastSLAM:
         degree sonars, 0.1-0.3 m inside the corridor);
         `SONAR_WALL_SENSORS` are the ones that meet the walls it drives
         along or towards near their normal.
+    sonar_incidence : float, optional
+        Sonar only: choose per reading and particle, instead, which echoes mark
+        walls: those whose wall in the particle's map (the log-odds gradient
+        at the echo) is within this angle (rad) of facing the sonar; where
+        the map shows no wall there yet, ``sonar_walls`` decides. None: off.
     window : int
         Sonar only: keep each particle's last ``window`` records out of its
         map (0: none) and weigh by them (``window_weigh``) in the map of the
@@ -224,13 +219,11 @@ class GridFastSLAM:
         self.laser_model = InverseLaserModel() if laser_model is None else laser_model
         self.sonar_model = InverseSonarModel() if sonar_model is None else sonar_model
         self.motion = OdometryNoise() if motion is None else motion
-        self._wall_groups = _sonar_groups(len(self.sonar.sensors), sonar_walls)
+        self._wall_groups = sonar_groups(len(self.sonar.sensors), sonar_walls)
         self._default_marks = np.zeros(len(self.sonar.sensors), dtype=bool)
         for k, marks in self._wall_groups:
             self._default_marks[slice(None) if k is None else k] = marks
-        self.sonar_incidence = None if sonar_incidence is None else float(
-            sonar_incidence
-        )  # fmt: skip
+        self.sonar_incidence = sonar_incidence and float(sonar_incidence)
         self._angle_cache: dict = {}
         self._lp_last = None
         self.inflate = float(inflate)
@@ -282,9 +275,9 @@ class GridFastSLAM:
         return normalise_log_weights(self.logw)
 
     # -- the pieces -------------------------------------------------------
-    def _kernel(self, name: str):
-        """Return the serial or threaded kernel ``name`` for this many particles."""
-        return getattr(_kernels, name + ("_parallel" if self.n >= PARALLEL_MIN else ""))
+    def _kernel(self, name: str, module=_kernels):
+        """Return ``module``'s serial or threaded kernel ``name`` (N particles)."""
+        return getattr(module, name + ("_parallel" if self.n >= PARALLEL_MIN else ""))
 
     def _geometry(self):
         return (*self.origin, self.resolution)
@@ -294,18 +287,14 @@ class GridFastSLAM:
         if self._angle_cache.get("laser") is not self.laser:
             self._angle_cache = {"laser": self.laser}
         if step not in self._angle_cache:
-            a = np.ascontiguousarray(self.laser.angles[::step])
-            self._angle_cache[step] = a
+            self._angle_cache[step] = np.ascontiguousarray(self.laser.angles[::step])
         return self._angle_cache[step]
 
     def _laser_poses(self, poses) -> np.ndarray:
         """`laser_poses` of ``poses`` (N, 3), kept for the last poses asked for."""
-        last = self._lp_last
-        if (
-            last is not None and last[0] is poses and last[3] is self.laser
-            and np.array_equal(last[1], poses)
-        ):  # fmt: skip
-            return last[2]
+        p, copy, lp, laser = self._lp_last or (None, None, None, None)
+        if p is poses and laser is self.laser and np.array_equal(copy, poses):
+            return lp
         lp = np.ascontiguousarray(laser_poses(poses, self.laser))
         self._lp_last = (poses, np.array(poses, dtype=float), lp, self.laser)
         return lp
@@ -388,26 +377,14 @@ class GridFastSLAM:
 
     def _update_sonar_incidence(self, maps, poses, z) -> None:
         """Add a ring reading, each echo marking walls by its incidence (``maps``)."""
-        m = self.sonar_model
-        n = len(poses)
-        cos_inc = np.empty((n, len(z)))
-        par = "_parallel" if n >= PARALLEL_MIN else ""
-        k = _kernels_incidence
-        getattr(k, "sonar_incidence_many" + par)(
-            maps, *self._geometry(), poses, self.sonar.sensors, z,
-            self.sonar.max_range, 3.0, cos_inc,
+        par = self.n >= PARALLEL_MIN
+        marks = incidence_marks(
+            maps, self._geometry(), poses, z, self.sonar, self.sonar_incidence,
+            self._default_marks, par,
         )  # fmt: skip
-        known = ~np.isnan(cos_inc)
-        marks = np.where(
-            known, np.nan_to_num(cos_inc) >= math.cos(self.sonar_incidence),
-            self._default_marks[None, :],
-        )  # fmt: skip
-        getattr(k, "sonar_update_marks_many" + par)(
-            maps, *self._geometry(), poses, self.sonar.sensors, z,
-            np.ascontiguousarray(marks), self.sonar.cone / 2, self.sonar.max_range,
-            m.thickness, m.l_occ, m.l_free, m.sigma or 0.0, m.max_weight, m.l_min,
-            m.l_max,
-        )  # fmt: skip
+        update_sonar_marks(
+            maps, self._geometry(), poses, z, marks, self.sonar, self.sonar_model, par
+        )
 
     def _tracked_diff(self) -> MapDiff:
         """Return the maps' `MapDiff` (whole-grid boxes if ``maps`` was replaced)."""
@@ -455,19 +432,13 @@ class GridFastSLAM:
         if self.window_weigh == "last":
             return self.weigh_sonar(self.particles, scan)
         ll = np.empty(self.n)
-        self._kernel_w("window_loglik_many")(
+        self._kernel("window_loglik_many", _kernels_window)(
             self.maps, *self._geometry(), wins, self.sonar.sensors, scans,
             self.sonar.cone / 2,
             self.sonar.max_range, 5, self.sonar_sigma, self.p_rand, self.sonar_occ,
             self.sonar_unknown, ll,
         )  # fmt: skip
         return ll
-
-    def _kernel_w(self, name: str):
-        """`_kernel` for the window kernels."""
-        return getattr(
-            _kernels_window, name + ("_parallel" if self.n >= PARALLEL_MIN else "")
-        )
 
     # -- one step -----------------------------------------------------------
     def step(self, odometry, scan) -> None:
