@@ -362,10 +362,13 @@ def _direction_rays(
     )
     finger = start[:n_strips].copy()
     finger2 = start[:n_strips].copy()
-    for i in range(ny):
-        cy = y0 + (i + 0.5) * resolution
-        for j in range(nx):
+    down = abs(dy) > abs(dx)  # along the strips: rays of one strip in a row
+    for r in range(nx if down else ny):
+        for q in range(ny if down else nx):
+            i = q if down else r
+            j = r if down else q
             cx = x0 + (j + 0.5) * resolution
+            cy = y0 + (i + 0.5) * resolution
             t, m = strip_ray(
                 cx, cy, dx, dy, u0, w, start, entries, ids, reach, finger, max_range
             )
