@@ -8,8 +8,9 @@ wide, and each strip lists the walls that cross it, sorted by where they
 begin along the direction. A cell's ray along that bin lies in one strip:
 it tries that strip's walls from just behind its origin onward, nearest
 first, and stops once the next wall begins beyond its best hit (or the
-sonar's reach). Each wall left is tried by `ray_segments`' own sums, step
-for step, so every ray finds what the cast against every wall finds: the
+sonar's reach); the opposite direction's rays use the same strips,
+walking back from their origin. Each wall left is tried by `ray_segments`'
+own sums, step for step, so every ray finds what the cast against every wall finds: the
 nearest hit, the lowest wall index among equal hits
 (`robotlib.localization._kernels.tables.cone_table_cells`, bit for bit).
 
@@ -477,16 +478,18 @@ def strip_sweep_table(
     """Fill ``table`` (ny, nx, n_bins) uint16 mm: shared rays through strips.
 
     The table of `robotlib.localization._kernels.tables.build_cone_table`
-    for shared rays (the same bits): directions in parallel, each with its
-    own strips (`build_strips`) and every cell's ray along it
-    (`strip_ray`), the ray's entry written to ``scratch[b]`` (n_bins, ny,
-    nx) uint16, or straight into ``table`` when ``scratch`` is empty
-    (less memory, more time); then each cone is the least entry of its
-    ``n_rays`` rays ``ray_step`` bins apart (`cone_pass`). ``normals`` are
+    for shared rays (the same bits): pairs of opposite directions in
+    parallel, each pair with its own strips (`build_strips`) and every
+    cell's ray along both (`strip_ray`, `strip_ray_back`), the ray's entry
+    written to ``scratch[b]`` (n_bins, ny, nx) uint16, or straight into
+    ``table`` when ``scratch`` is empty (less memory, more time); then each
+    cone is the least entry of its ``n_rays`` rays ``ray_step`` bins apart
+    (`cone_pass`). ``normals`` are
     the walls' `tables._unit_normals`.
     """
-    _strip_rays(
-        segments, normals, x0, y0, resolution, n_bins, ray_step, n_rays, max_range,
-        min_range, cos_specular, w, scratch, table,
-    )  # fmt: skip
+    with nb.parallel_chunksize(1):  # pairs to whichever thread is free
+        _strip_rays(
+            segments, normals, x0, y0, resolution, n_bins, ray_step, n_rays,
+            max_range, min_range, cos_specular, w, scratch, table,
+        )  # fmt: skip
     cone_pass(n_rays, ray_step, scratch, table)
