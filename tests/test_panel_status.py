@@ -117,3 +117,35 @@ def test_interact_panel_on_the_worker_shows_an_error_in_the_figures_place(
     slider.value = 1.5  # and it recovers
     assert panel.runner.wait(30) and panel.runs == 2
     assert panel.output.outputs[0]["data"]["image/png"]
+
+
+def test_interact_panel_runs_only_the_newest_of_queued_pyplot_changes(monkeypatch):
+    """In a kernel, changes read back to back give one pyplot run, the newest."""
+    import asyncio
+
+    from robotlib.widgets import interact as panel_module
+
+    monkeypatch.setattr(panel_module, "in_kernel", lambda: True)
+    calls = []
+
+    def show(k=1.0):  # draws with pyplot: returns no figure
+        import matplotlib.pyplot as plt
+
+        calls.append(k)
+        plt.plot([0, 1], [0, k])
+        plt.close("all")
+
+    async def session():
+        slider = w.FloatSlider(value=1.0, min=0.0, max=3.0, step=0.5)
+        panel = panel_module.InteractPanel(show, k=slider)
+        assert calls == [1.0] and panel.returns_figure is False  # drawn at once
+        for k in (2.0, 2.5, 3.0):  # queued while an older change drew
+            slider.value = k
+        assert calls == [1.0] and panel.status.value == "running: k = 3 ..."
+        await asyncio.sleep(4 * panel_module.COALESCE_S)
+        return panel
+
+    panel = asyncio.run(session())
+    assert calls == [1.0, 3.0]
+    assert panel.runs == 2 and panel.status.value.startswith("k = 3 (drawn in")
+    assert not panel.status.busy

@@ -15,6 +15,7 @@ Imports nothing of robotlib; panels in this package use it.
 
 from __future__ import annotations
 
+import sys
 import threading
 import traceback
 from collections.abc import Callable
@@ -24,6 +25,7 @@ __all__ = [
     "Cancelled",
     "LiveRunner",
     "in_kernel",
+    "ipython_shell",
     "figure_output",
     "error_output",
     "status_line",
@@ -38,13 +40,19 @@ class Cancelled(Exception):
     """Raised inside a job by `LiveRunner.check` when a newer run was asked for."""
 
 
+def ipython_shell():
+    """Return the running IPython shell, or None.
+
+    Also from a widget's callback or a worker thread, where the builtin
+    ``get_ipython`` is gone (IPython adds it only while a cell runs).
+    """
+    ipython = sys.modules.get("IPython")
+    return None if ipython is None else ipython.get_ipython()
+
+
 def in_kernel() -> bool:
     """Return True inside a Jupyter kernel (where a frontend can send changes)."""
-    try:
-        shell = get_ipython()  # type: ignore[name-defined]  # noqa: F821
-    except NameError:
-        return False
-    return getattr(shell, "kernel", None) is not None
+    return getattr(ipython_shell(), "kernel", None) is not None
 
 
 class LiveRunner:

@@ -19,8 +19,11 @@ Two kinds of ``f``:
   the newest, and the figure of a run that a newer change superseded is
   never rendered nor shown. The first figure is drawn before the cell ends.
 - ``f`` **draws with pyplot** (``plt.show()``, or figures left open): pyplot
-  is not safe from another thread, so ``f`` runs on the kernel's thread,
-  as ``ipywidgets.interact`` runs it, each change in turn.
+  is not safe from another thread, so ``f`` runs on the kernel's thread, as
+  ``ipywidgets.interact`` runs it. In a kernel, a change's run waits
+  `COALESCE_S` on the kernel's event loop first, so the changes that queued
+  up while an older run drew are read before any runs: only the newest of
+  them runs.
 
 Used by the labs' small panels (Lab 1's likelihood exponent, Lab 4's A*
 weight). Imports nothing of robotlib but the panels' shared pieces and the
@@ -29,13 +32,24 @@ unsolved-exercise message.
 
 from __future__ import annotations
 
+import asyncio
 import time
 import traceback
 from collections.abc import Callable
 
-from ._live import STALE_CSS, LiveRunner, figure_output, in_kernel, status_line
+from ._live import (
+    STALE_CSS,
+    LiveRunner,
+    figure_output,
+    in_kernel,
+    ipython_shell,
+    status_line,
+)
 
-__all__ = ["InteractPanel", "interact"]
+__all__ = ["COALESCE_S", "InteractPanel", "interact"]
+
+COALESCE_S = 0.05
+"""s a pyplot function's run waits in a kernel, so newer changes supersede it."""
 
 
 class InteractPanel:
@@ -104,7 +118,9 @@ class InteractPanel:
         """Say that it is working, grey the old figure, draw the new one.
 
         A figure-returning ``function`` in a kernel is then run on the worker
-        (this returns at once); otherwise it runs here.
+        (this returns at once). A pyplot one runs here: for a change, in a
+        kernel, `COALESCE_S` later, and not at all if a newer change came
+        meanwhile; otherwise at once.
         """
         request = {
             "shown": self.describe(),
@@ -118,7 +134,13 @@ class InteractPanel:
         self.output.add_class("robotlib-stale")
         if self.returns_figure and self.runner.background:
             self.runner.submit(request)
+        elif _change is not None and (loop := _kernel_loop()) is not None:
+            loop.call_later(COALESCE_S, self._inline_if_newest, request)
         else:
+            self._inline(request)
+
+    def _inline_if_newest(self, request: dict) -> None:
+        if request is self._latest:  # else the newer change's own run draws
             self._inline(request)
 
     def _inline(self, request: dict) -> None:
@@ -205,7 +227,7 @@ def _error_output(error: BaseException) -> dict:
     """
     etype, tb = type(error), error.__traceback__
     tb = tb.tb_next if tb is not None and tb.tb_next is not None else tb
-    shell = _shell() if in_kernel() else None
+    shell = ipython_shell() if in_kernel() else None
     if shell is None:
         stb = traceback.format_exception(etype, error, tb)
     elif isinstance(error, NotImplementedError) and (
@@ -224,8 +246,11 @@ def _error_output(error: BaseException) -> dict:
     }
 
 
-def _shell():
+def _kernel_loop() -> asyncio.AbstractEventLoop | None:
+    """Return the kernel's running event loop, or None (no kernel, no loop)."""
+    if not in_kernel():
+        return None
     try:
-        return get_ipython()  # type: ignore[name-defined]  # noqa: F821
-    except NameError:
+        return asyncio.get_running_loop()
+    except RuntimeError:
         return None
