@@ -114,7 +114,7 @@ def _unseen(segments, m, c, s, c2, s2):
 
 @nb.njit(**JIT)
 def build_strips(segments, c, s, c2, s2, u0, w, n_strips):
-    """Sort the walls into strips across ``(c, s)``: ``(start, entries, ids, reach)``.
+    """Sort the walls into strips across ``(c, s)``: start, firsts, entries, ids, reach.
 
     Strip ``k`` covers offsets ``u = -s x + c y`` in ``[u0 + k w, u0 + (k + 1)
     w)`` and holds ``entries[start[k]:start[k + 1]]`` (8 columns: the
@@ -122,7 +122,8 @@ def build_strips(segments, c, s, c2, s2, u0, w, n_strips):
     offsets ``ulo, uhi``, all widened, then its first end point and edge
     vector as `ray_segments` computes them) and their wall indexes
     ``ids``: first the walls nearly parallel to the direction (spanning the
-    whole line, ``vmin = -inf``), then the others by ``vmin``. ``reach[k]``
+    whole line, ``vmin = -inf``; up to ``firsts[k]``), then the others by
+    ``vmin``. ``reach[k]``
     is the longest finite span in the strip. Walls that no ray along ``(c,
     s)`` or ``(c2, s2)`` can hit (`_unseen`: on a map of points, one arm of
     every cross along the axes) are left out.
@@ -190,6 +191,7 @@ def build_strips(segments, c, s, c2, s2, u0, w, n_strips):
     entries = np.empty((n, 8))
     ids = np.empty(n, dtype=np.int64)
     reach = np.zeros(n_strips)
+    firsts = count[:n_strips].copy()
     most = 0
     for k in range(n_strips):
         most = max(most, count[k + 1] - count[k])
@@ -209,12 +211,16 @@ def build_strips(segments, c, s, c2, s2, u0, w, n_strips):
             ids[lo + r] = raw_ids[q]
             if raw[q, _VMIN] > -np.inf:
                 longest = max(longest, raw[q, _VMAX] - raw[q, _VMIN])
+            else:
+                firsts[k] = lo + r + 1
         reach[k] = longest
-    return count, entries, ids, reach
+    return count, firsts, entries, ids, reach
 
 
 @nb.njit(inline="always", **JIT)  # ~12 % sooner, +0.4 s to compile
-def strip_ray(ox, oy, dx, dy, u0, w, start, entries, ids, reach, finger, limit):
+def strip_ray(
+    ox, oy, dx, dy, u0, inv_w, start, firsts, entries, ids, reach, finger, limit
+):  # fmt: skip
     """Nearest hit ``(t, m)`` of the ray ``o + t d`` on the walls of its strip.
 
     The very ``(t, m)`` of `ray_segments` against every wall whenever the
@@ -224,14 +230,12 @@ def strip_ray(ox, oy, dx, dy, u0, w, start, entries, ids, reach, finger, limit):
     """
     uo = -dy * ox + dx * oy
     vo = dx * ox + dy * oy
-    k = int((uo - u0) / w)
+    k = int((uo - u0) * inv_w)  # a strip's walls reach _MU into its neighbours
     lo = start[k]
     hi = start[k + 1]
     best = np.inf
     best_m = -1
-    first = lo  # the nearly parallel walls, tried by every ray
-    while first < hi and entries[first, _VMIN] == -np.inf:
-        first += 1
+    first = firsts[k]  # the nearly parallel walls, tried by every ray
     key = vo - reach[k]  # no wall beginning before this reaches the origin
     a = max(finger[k], first)
     while a > first and entries[a - 1, _VMIN] >= key:
@@ -270,7 +274,8 @@ def strip_ray(ox, oy, dx, dy, u0, w, start, entries, ids, reach, finger, limit):
 
 @nb.njit(inline="always", **JIT)  # ~12 % sooner, +0.4 s to compile
 def strip_ray_back(
-    ox, oy, c, s, dx, dy, u0, w, start, entries, ids, reach, finger, limit
+    ox, oy, c, s, dx, dy, u0, inv_w, start, firsts, entries, ids, reach, finger,
+    limit,
 ):  # fmt: skip
     """`strip_ray` for the opposite direction ``(dx, dy)`` of the strips' ``(c, s)``.
 
@@ -284,14 +289,12 @@ def strip_ray_back(
     """
     uo = -s * ox + c * oy
     vo = c * ox + s * oy
-    k = int((uo - u0) / w)
+    k = int((uo - u0) * inv_w)  # a strip's walls reach _MU into its neighbours
     lo = start[k]
     hi = start[k + 1]
     best = np.inf
     best_m = -1
-    first = lo
-    while first < hi and entries[first, _VMIN] == -np.inf:
-        first += 1
+    first = firsts[k]
     a = max(finger[k], first)
     while a > first and entries[a - 1, _VMIN] > vo:
         a -= 1
@@ -363,9 +366,10 @@ def _direction_rays(
         dx2 = math.cos(b2 * _TWO_PI / n_bins)
         dy2 = math.sin(b2 * _TWO_PI / n_bins)
     u0 = -dy * xc + dx * yc - 0.5 * d
-    start, entries, ids, reach = build_strips(
+    start, firsts, entries, ids, reach = build_strips(
         segments, dx, dy, dx2, dy2, u0, w, n_strips
     )
+    inv_w = 1.0 / w
     finger = start[:n_strips].copy()
     finger2 = start[:n_strips].copy()
     for i in range(ny):
@@ -373,8 +377,9 @@ def _direction_rays(
         for j in range(nx):
             cx = x0 + (j + 0.5) * resolution
             t, m = strip_ray(
-                cx, cy, dx, dy, u0, w, start, entries, ids, reach, finger, max_range
-            )
+                cx, cy, dx, dy, u0, inv_w, start, firsts, entries, ids, reach,
+                finger, max_range,
+            )  # fmt: skip
             entry = _ray_entry(
                 t, m, dx, dy, normals, max_range, min_range, cos_specular
             )
@@ -385,8 +390,8 @@ def _direction_rays(
             if b2 < 0:
                 continue
             t, m = strip_ray_back(
-                cx, cy, dx, dy, dx2, dy2, u0, w, start, entries, ids, reach,
-                finger2, max_range,
+                cx, cy, dx, dy, dx2, dy2, u0, inv_w, start, firsts, entries, ids,
+                reach, finger2, max_range,
             )  # fmt: skip
             entry = _ray_entry(
                 t, m, dx2, dy2, normals, max_range, min_range, cos_specular
