@@ -5,11 +5,15 @@ models allow: the odometry motion model, a ``fast`` paper or beam model)
 runs here from `PARALLEL_MIN` particles on (below, the models call one
 serial kernel, `chunked.beam_small` or `chunked.paper_small`, that moves,
 weighs, estimates and, when the caller passes the resampling draw,
-resamples): `run_step`, in chunks on a pool of Python threads
-(`robotlib.localization._kernels.chunked`): each chunk draws its own rows
-of motion noise (`robotlib.localization.motion.standard_normals`' streams,
-so the numbers do not depend on the threads) and then moves and weighs
-them; the sums run serially at the end. A waiting thread sleeps (no
+resamples): `run_step`, in pieces on a pool of Python threads
+(`robotlib.localization._kernels.chunked`), twice as many as threads, each
+a task of its own so that a thread another process slows takes fewer. The
+motion noise follows `robotlib.localization.motion.standard_normals`'
+streams, so the numbers do not depend on the threads: up to
+`FILL_FIRST_MAX` particles it is drawn first, beyond each piece is one of
+the noise's chunks and draws its own rows; from `OPENMP_MIN` particles
+numba's threaded kernel draws it where it is used
+(`_kernels.normals`). The sums run serially at the end. A waiting thread sleeps (no
 OpenMP spinning), so a step keeps its pace when another process shares
 the cores. Same numbers, bit for bit, as the models' kernels in turn.
 
@@ -39,6 +43,19 @@ filter this large pays it: `MCL.best` starts at 50,000), they keep a step
 over hundreds of thousands of particles about a tenth cheaper in CPU time
 than the chunks on Python threads. The same numbers either way.
 """
+
+
+FILL_FIRST_MAX = 4 * NORMALS_CHUNK
+"""Up to this many particles `run_step` draws the noise first, in the calling thread.
+
+The noise is about a sixth of a particle's work; drawn first, the rest is
+cut into even pieces instead of the noise's chunks of `NORMALS_CHUNK`
+rows (at 10,000 particles: 8,192 and 1,808 rows, one thread doing four
+fifths of the step).
+"""
+
+PIECES_PER_THREAD = 2
+"""Pieces of a step per thread: a thread that another process slows takes fewer."""
 
 
 def spans(n: int, parts: int) -> list[tuple[int, int]]:
@@ -87,7 +104,8 @@ def run_step(kind, particles, weights, prm, noise, key, sensors, skip, table, lu
         The per-step scalars (`robotlib.localization._kernels.chunked`).
     noise : numpy.ndarray, shape (N, 3)
         The motion noise; when ``key`` is given, filled here chunk by chunk
-        from the streams ``SeedSequence([key, c])``.
+        from the streams ``SeedSequence([key, c])`` (from `OPENMP_MIN`
+        particles on, drawn inside the threaded kernel and not stored).
     key : int or None
         The noise's key (`standard_normals` beyond `NORMALS_CHUNK` rows), or
         None for noise drawn already.
@@ -119,32 +137,32 @@ def run_step(kind, particles, weights, prm, noise, key, sensors, skip, table, lu
         tuple(prm[6:9].tolist()),
         float(prm[9]),
     )
-    if key is None:
-        parts = [(lo, hi, -1) for lo, hi in spans(n, _threads())]
-    else:
+    threads = _threads()
+    if key is not None and n <= FILL_FIRST_MAX:  # the noise first, in this thread
+        for c, lo in enumerate(range(0, n, NORMALS_CHUNK)):
+            _fill(key, c, noise[lo : lo + NORMALS_CHUNK])
+        key = None
+    if key is None:  # even pieces, more than threads: a slowed thread takes fewer
+        parts = [(lo, hi, -1) for lo, hi in spans(n, PIECES_PER_THREAD * threads)]
+    else:  # the noise's own chunks, each drawn by the task that uses it
         parts = [
             (lo, min(lo + NORMALS_CHUNK, n), c)
             for c, lo in enumerate(range(0, n, NORMALS_CHUNK))
         ]
 
-    def move_weigh(group):
-        tops = []
-        for lo, hi, c in group:
-            if c >= 0:
-                _fill(key, c, noise[lo:hi])
-            tops.append(kernel(
-                particles[lo:hi], noise[lo:hi], motion, sensors, table, where, skip,
-                out_p[lo:hi], cs[lo:hi], mm[lo:hi], lut, const, out_w[lo:hi],
-            ))  # fmt: skip
-        return tops
+    def move_weigh(lo, hi, c):
+        if c >= 0:
+            _fill(key, c, noise[lo:hi])
+        return kernel(
+            particles[lo:hi], noise[lo:hi], motion, sensors, table, where, skip,
+            out_p[lo:hi], cs[lo:hi], mm[lo:hi], lut, const, out_w[lo:hi],
+        )  # fmt: skip
 
-    # one task per thread, each a run of consecutive chunks (few hand-overs)
-    groups = [(parts[lo:hi],) for lo, hi in spans(len(parts), _threads())]
+    # one task per piece, taken by whichever thread is free
     top = -np.inf
-    for tops in _run(move_weigh, groups):  # in order: the first of equal values
-        for t in tops:  # never NaN
-            if t > top:
-                top = t
+    for t in _run(move_weigh, parts):  # in order: the first of equal values
+        if t > top:  # never NaN
+            top = t
 
     def exp(lo, hi):
         chunked.exp_chunk(lo, hi, weights, top, out_w)
@@ -160,16 +178,20 @@ def run_step(kind, particles, weights, prm, noise, key, sensors, skip, table, lu
 def _openmp_step(kind, particles, weights, prm, noise, key, sensors, skip, table, lut,
                  out, u):  # fmt: skip
     """`run_step` with numba's threaded kernels (`OPENMP_MIN` particles and more)."""
-    n = len(particles)
     out_p, out_w, cs, mm, new_p, new_w = out
-    if key is not None:
-        chunks = [
-            (key, c, noise[lo : lo + NORMALS_CHUNK])
-            for c, lo in enumerate(range(0, n, NORMALS_CHUNK))
-        ]
-        _run(_fill, chunks)
     motion, where = tuple(prm[:6].tolist()), tuple(prm[6:9].tolist())
-    if kind == "beam":
+    if key is not None:  # the noise drawn in the kernel's first pass
+        if kind == "beam":
+            res = _kernels.lut_table_step_keyed_parallel(
+                particles, key, NORMALS_CHUNK, motion, sensors, table, where, lut,
+                skip, float(prm[9]), weights, out_p, out_w, cs, mm,
+            )  # fmt: skip
+        else:
+            res = _kernels.paper_lut_step_keyed_parallel(
+                particles, key, NORMALS_CHUNK, motion, sensors, table, where, lut,
+                float(prm[9]), weights, out_p, out_w, cs, mm,
+            )  # fmt: skip
+    elif kind == "beam":
         res = _kernels.lut_table_step_parallel(
             particles, noise, motion, sensors, table, where, lut, skip, float(prm[9]),
             weights, out_p, out_w, cs, mm,

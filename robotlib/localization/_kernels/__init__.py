@@ -12,10 +12,14 @@
 - `fused`: predict, read the table, weigh, normalise and estimate in one call
 - `chunked`: the fused step in chunks for a pool of Python threads, and in
   one call with the resampling for a few particles
+- `normals`: NumPy's keyed motion noise (SeedSequence, SFC64, ziggurat)
+  in compiled code, for the threaded steps that draw their own
 
 Every kernel takes contiguous arrays and scalars only; random numbers are
-drawn by the caller's ``numpy.random.Generator`` and passed in, so a seed
-reproduces a run bit for bit. A kernel wanted both serially and over threads
+drawn by the caller's ``numpy.random.Generator`` and passed in, or (the
+threaded steps from 65,536 particles) drawn in the kernel from a key the
+caller's generator drew, as NumPy would draw them, so a seed reproduces a
+run bit for bit. A kernel wanted both serially and over threads
 is written once, looping with ``numba.prange``, and compiled twice
 (`robotlib._config.serial_and_parallel`): its iterations write only their
 own slots and its sums run serially, so both forms give identical results.
@@ -28,7 +32,9 @@ from .common import wrap
 from .exact import expected_scan_blocks, expected_scan_blocks_parallel, wall_blocks
 from .fused import (
     beam_table_step,
+    lut_table_step_keyed_parallel,
     lut_table_step_parallel,
+    paper_lut_step_keyed_parallel,
     paper_lut_step_parallel,
     paper_table_step,
 )
@@ -100,9 +106,11 @@ __all__ = [
     "kld_bound",
     "kld_resample",
     "lut_table_loglik_parallel",
+    "lut_table_step_keyed_parallel",
     "lut_table_step_parallel",
     "outside",
     "paper_loglik",
+    "paper_lut_step_keyed_parallel",
     "paper_lut_step_parallel",
     "paper_table_loglik",
     "paper_table_loglik_parallel",

@@ -10,8 +10,9 @@ import numba as nb
 import numpy as np
 
 from ..._config import JIT, JIT_PARALLEL, serial_and_parallel
-from .common import _TWO_PI
+from .common import _TWO_PI, wrap
 from .motion import _odometry_one
+from .normals import normal, sfc64_state
 from .weights import _finish_estimate
 
 
@@ -129,6 +130,65 @@ def _move_and_read(
 
 
 move_and_read, move_and_read_parallel = serial_and_parallel(_move_and_read)
+
+
+@nb.njit(**JIT_PARALLEL)
+def move_and_read_keyed_parallel(
+    particles, key, rows, motion, sensors, table, where, skip, out_p, cs, mm
+):  # fmt: skip
+    """`move_and_read_parallel` drawing its own motion noise, chunk by chunk.
+
+    The noise of rows ``c * rows`` on is chunk ``c`` of the step keyed
+    ``key`` (`normals.fill_chunks`: `motion.standard_normals`' numbers),
+    drawn where it is used instead of stored: the threads take whole chunks
+    (a chunk's numbers come one after the other). The same numbers as
+    `move_and_read_parallel` on `normals.fill_chunks`' noise.
+    """
+    rot1, trans, rot2, sd1, sdt, sd2 = motion
+    x0, y0, inv_res = where
+    ny, nx, n_bins = table.shape
+    s_count = sensors.shape[0]
+    ax = np.empty(s_count)
+    ay = np.empty(s_count)
+    aa = np.empty(s_count)
+    keep = np.empty(s_count, dtype=np.int32)
+    for i in range(s_count):
+        ax[i] = sensors[i, 0]
+        ay[i] = sensors[i, 1]
+        aa[i] = sensors[i, 2]
+        keep[i] = 0 if skip[i] else -1
+    bins = n_bins / _TWO_PI
+    n = particles.shape[0]
+    n_chunks = (n + rows - 1) // rows
+    for ch in nb.prange(n_chunks):
+        st = np.empty(4, dtype=np.uint64)
+        sfc64_state(key, ch, st)
+        for j in range(ch * rows, min(ch * rows + rows, n)):
+            # `_odometry_one` on the three numbers just drawn
+            r1 = rot1 + sd1 * normal(st)
+            t = trans + sdt * normal(st)
+            r2 = rot2 + sd2 * normal(st)
+            th0 = particles[j, 2]
+            x = particles[j, 0] + t * math.cos(th0 + r1)
+            y = particles[j, 1] + t * math.sin(th0 + r1)
+            th = wrap(th0 + r1 + r2)
+            out_p[j, 0] = x
+            out_p[j, 1] = y
+            out_p[j, 2] = th
+            c = math.cos(th)
+            s = math.sin(th)
+            cs[j, 0] = c
+            cs[j, 1] = s
+            row = mm[j]
+            for i in range(s_count):
+                row[i] = keep[i] & _flat_index(
+                    x + c * ax[i] - s * ay[i], y + s * ax[i] + c * ay[i],
+                    (th + aa[i]) * bins, ny, nx, n_bins, x0, y0, inv_res,
+                )  # fmt: skip
+    flat = table.reshape(table.size)
+    for j in nb.prange(n):
+        for i in range(s_count):
+            mm[j, i] = flat[mm[j, i]]
 
 
 @nb.njit(**JIT)
@@ -267,4 +327,52 @@ def lut_table_step_parallel(
                 prod = 1.0
             prod *= lut[i, mm[j, i]]
         out_w[j] = (ll + math.log(prod)) * exponent
+    return _weigh_estimate_parallel(weights, out_p, cs, out_w)
+
+
+@nb.njit(**JIT_PARALLEL)
+def lut_table_step_keyed_parallel(
+    particles, key, rows, motion, sensors, table, where, lut, skip, exponent,
+    weights, out_p, out_w, cs, mm,
+):  # fmt: skip
+    """`lut_table_step_parallel` drawing its noise (`move_and_read_keyed_parallel`).
+
+    The same numbers as `lut_table_step_parallel` on the noise of
+    `normals.fill_chunks` (``key``, chunks of ``rows`` rows), which is not
+    stored: one pass less over memory and no threaded pass of its own.
+    """
+    n = particles.shape[0]
+    s_count = sensors.shape[0]
+    move_and_read_keyed_parallel(
+        particles, key, rows, motion, sensors, table, where, skip, out_p, cs, mm
+    )
+    for j in nb.prange(n):
+        ll = 0.0
+        prod = 1.0
+        for i in range(s_count):
+            if i % 16 == 15:
+                ll += math.log(prod)
+                prod = 1.0
+            prod *= lut[i, mm[j, i]]
+        out_w[j] = (ll + math.log(prod)) * exponent
+    return _weigh_estimate_parallel(weights, out_p, cs, out_w)
+
+
+@nb.njit(**JIT_PARALLEL)
+def paper_lut_step_keyed_parallel(
+    particles, key, rows, motion, sensors, table, where, terms, inv_n, weights,
+    out_p, out_w, cs, mm,
+):  # fmt: skip
+    """`paper_lut_step_parallel` drawing its noise (see the beam one's)."""
+    n = particles.shape[0]
+    s_count = sensors.shape[0]
+    skip = np.zeros(s_count, dtype=np.bool_)
+    move_and_read_keyed_parallel(
+        particles, key, rows, motion, sensors, table, where, skip, out_p, cs, mm
+    )
+    for j in nb.prange(n):
+        d = 0.0
+        for i in range(s_count):
+            d += terms[i, mm[j, i]]
+        out_w[j] = math.log(math.exp(-d / s_count) + inv_n)
     return _weigh_estimate_parallel(weights, out_p, cs, out_w)
