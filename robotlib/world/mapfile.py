@@ -60,7 +60,7 @@ def _int_run(lines: list[str], first: int, n: int) -> tuple[list[list[float]], i
         run = _INT_RUNS[n].match("\n".join(part) + "\n").group()
         count = run.count("\n")
         if count:
-            values = np.array(run.split(), dtype=np.float64) / 1000.0
+            values = np.fromstring(run, dtype=np.float64, sep=" ") / 1000.0
             rows.extend(values.reshape(count, n).tolist())
         if count < window:
             return rows, len(rows)
