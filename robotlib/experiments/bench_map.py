@@ -197,12 +197,15 @@ def speed(out: dict) -> None:
 
 
 def quality(out: dict, seeds: int, ekf_seeds: int, first: int = 0,
-            streams: int = 1, sonar_particles: int = 30) -> None:  # fmt: skip
+            streams: int = 1, sonar_particles: int = 30,
+            sonar_kw: dict | None = None) -> None:  # fmt: skip
     """Map and trajectory quality over seeds ``first .. first + seeds - 1``.
 
     Sonar FastSLAM runs ``streams`` times per log, with the filter's seeds
     ``seed + 1000 k``: its outcome depends much on the filter's own draws.
+    ``sonar_kw``: more `GridFastSLAM` parameters for the sonar runs.
     """
+    sonar_kw = sonar_kw or {}
     log = record_drive("office", seed=0, every=2)
     w = log.world
     s = map_score(map_sonar(w, log.truth, log.sonar, 0.1), w, 0.1)
@@ -216,7 +219,8 @@ def quality(out: dict, seeds: int, ekf_seeds: int, first: int = 0,
     for seed in range(first, first + seeds):
         log = record_drive("loop", seed=seed, every=2)
         a = run_fastslam(log, 30, "laser", rng=seed)
-        bs = [run_fastslam(log, sonar_particles, "sonar", rng=seed + 1000 * k)
+        bs = [run_fastslam(log, sonar_particles, "sonar", rng=seed + 1000 * k,
+                           **sonar_kw)
               for k in range(streams)]  # fmt: skip
         per_stream.append([(b.rms, b.score.mean_distance) for b in bs])
         odo = map_score(
@@ -238,6 +242,7 @@ def quality(out: dict, seeds: int, ekf_seeds: int, first: int = 0,
     ps = np.array(per_stream)  # (seeds, streams, 2)
     out["fastslam_loop"] = {
         "seeds": seeds, "first_seed": first, "sonar_particles": sonar_particles,
+        "sonar_kw": sonar_kw,
         "sonar_streams": streams,
         "sonar_rms_per_stream": ps[:, :, 0].mean(axis=0).tolist(),
         "sonar_map_error_per_stream": ps[:, :, 1].mean(axis=0).tolist(),
@@ -368,6 +373,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="sonar FastSLAM particles",
     )  # fmt: skip
     parser.add_argument(
+        "--sonar-incidence", type=float, default=None,
+        help="sonar FastSLAM: echoes mark walls by incidence (rad) in each map",
+    )  # fmt: skip
+    parser.add_argument(
         "--quality-only", action="store_true", help="skip the speed runs"
     )
     parser.add_argument("--json", help="write the numbers to this file")
@@ -380,8 +389,11 @@ def run(args: argparse.Namespace) -> int:
         speed(out)
         peer(out)
     if not args.speed_only:
+        kw = {}
+        if args.sonar_incidence is not None:
+            kw["sonar_incidence"] = args.sonar_incidence
         quality(out, args.seeds, args.ekf_seeds, args.first_seed, args.streams,
-                args.sonar_particles)  # fmt: skip
+                args.sonar_particles, kw)  # fmt: skip
     if args.json:
         with open(args.json, "w", encoding="utf-8") as fh:
             json.dump(out, fh, indent=1, default=float)

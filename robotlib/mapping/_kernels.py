@@ -119,9 +119,14 @@ def laser_beam_update(L, x0, y0, res, ox, oy, a, z, max_range, l_occ, l_free,
     else:
         t_y = np.inf
     n_steps = abs(je - j) + abs(ie - i)
+    uny = np.uint64(ny)
+    unx = np.uint64(nx)
     for _ in range(n_steps):
-        if 0 <= i < ny and 0 <= j < nx:
-            L[i, j] = _clamp(L[i, j] + l_free, l_min, l_max)
+        # unsigned: one test a side, and no negative-index fix
+        ui = np.uint64(i)
+        uj = np.uint64(j)
+        if ui < uny and uj < unx:
+            L[ui, uj] = min(max(L[ui, uj] + l_free, l_min), l_max)
         if t_x < t_y:
             j += step_j
             t_x += t_dx

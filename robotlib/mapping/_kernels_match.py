@@ -12,6 +12,7 @@ import numba as nb
 import numpy as np
 
 from .._config import JIT, serial_and_parallel
+from ._kernels_cone import JIT_CONTRACT
 
 
 @nb.njit(**JIT)
@@ -22,7 +23,7 @@ def _evidence(L, i, j):
     return 0.0
 
 
-@nb.njit(**JIT)
+@nb.njit(**JIT_CONTRACT)
 def _bilinear_evidence(L, x0, y0, res, px, py):
     """`_evidence` at point ``(px, py)``, bilinear between cell centres."""
     gx = (px - x0) / res - 0.5
@@ -43,7 +44,7 @@ def _bilinear_evidence(L, x0, y0, res, px, py):
     )
 
 
-@nb.njit(**JIT)
+@nb.njit(**JIT_CONTRACT)
 def _match_score(L, x0, y0, res, px, py, pth, bx, by):
     """Sum of `_bilinear_evidence` at the scan's end points from robot pose p.
 
@@ -91,7 +92,9 @@ def _match_laser_many(Ls, x0, y0, res, poses, mount, angles, ranges, max_range,
     `_match_score` less the prior ``w_xy d^2 + w_th a^2`` (``d``: distance
     from the start pose, m; ``a``: turn from it, rad; 0 and 0: no prior),
     so a scan that does not pin the pose (a corridor's walls) leaves it
-    where the motion put it. Writes the fitted poses to ``out`` (N, 3).
+    where the motion put it. The move straight back to the last pose is not
+    scored (it scored below the pose it left). Writes the fitted poses to
+    ``out`` (N, 3).
     """
     pts = scan_points(mount, angles, ranges, max_range)
     bx = np.ascontiguousarray(pts[:, 0])
@@ -107,12 +110,15 @@ def _match_laser_many(Ls, x0, y0, res, poses, mount, angles, ranges, max_range,
         sxy = step_xy
         sth = step_th
         for _ in range(levels):
+            back = -1  # the move back to the last pose: never better, not scored
             for _it in range(20):
                 bi = -1
                 bx_ = px
                 by_ = py
                 bt = pth
                 for k in range(6):
+                    if k == back:
+                        continue
                     qx = px + (sxy if k == 0 else (-sxy if k == 1 else 0.0))
                     qy = py + (sxy if k == 2 else (-sxy if k == 3 else 0.0))
                     qt = pth + (sth if k == 4 else (-sth if k == 5 else 0.0))
@@ -128,6 +134,7 @@ def _match_laser_many(Ls, x0, y0, res, poses, mount, angles, ranges, max_range,
                         bt = qt
                 if bi < 0:
                     break
+                back = bi ^ 1
                 px = bx_
                 py = by_
                 pth = bt

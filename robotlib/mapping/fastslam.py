@@ -42,6 +42,7 @@ from .motion import sample_arc_motion
 from .occupancy import InverseLaserModel, InverseSonarModel, OccupancyGrid
 from .resampling import normalise_log_weights, resample_maps, resample_parents
 from .sharing import MapDiff
+from .sonar_walls import incidence_marks, sonar_groups, update_sonar_marks
 
 PARALLEL_MIN = 64
 """Particle count from which the per-particle kernels run over threads (below,
@@ -87,16 +88,6 @@ __all__ = [
     "resample_maps",
     "resample_parents",
 ]
-
-
-def _sonar_groups(n_sensors: int, walls) -> list:
-    """``[(indexes or None, marks_walls)]``: the sonars per map-update call."""
-    if walls is None:
-        return [(None, True)]
-    mark = np.zeros(n_sensors, dtype=bool)
-    mark[np.asarray(walls, dtype=np.int64)] = True
-    groups = [(np.flatnonzero(mark), True), (np.flatnonzero(~mark), False)]
-    return [(np.ascontiguousarray(k), m) for k, m in groups if len(k)]
 
 
 class GridFastSLAM:
@@ -163,6 +154,11 @@ class GridFastSLAM:
         degree sonars, 0.1-0.3 m inside the corridor);
         `SONAR_WALL_SENSORS` are the ones that meet the walls it drives
         along or towards near their normal.
+    sonar_incidence : float, optional
+        Sonar only: choose per reading and particle, instead, which echoes mark
+        walls: those whose wall in the particle's map (the log-odds gradient
+        at the echo) is within this angle (rad) of facing the sonar; where
+        the map shows no wall there yet, ``sonar_walls`` decides. None: off.
     window : int
         Sonar only: keep each particle's last ``window`` records out of its
         map (0: none) and weigh by them (``window_weigh``) in the map of the
@@ -204,6 +200,7 @@ class GridFastSLAM:
         sonar_walls=None,
         window: int = 0,
         window_weigh: str = "window",
+        sonar_incidence: float | None = None,
         rng: np.random.Generator | int | None = None,
     ):
         if sensor not in ("laser", "sonar"):
@@ -222,7 +219,13 @@ class GridFastSLAM:
         self.laser_model = InverseLaserModel() if laser_model is None else laser_model
         self.sonar_model = InverseSonarModel() if sonar_model is None else sonar_model
         self.motion = OdometryNoise() if motion is None else motion
-        self._wall_groups = _sonar_groups(len(self.sonar.sensors), sonar_walls)
+        self._wall_groups = sonar_groups(len(self.sonar.sensors), sonar_walls)
+        self._default_marks = np.zeros(len(self.sonar.sensors), dtype=bool)
+        for k, marks in self._wall_groups:
+            self._default_marks[slice(None) if k is None else k] = marks
+        self.sonar_incidence = sonar_incidence and float(sonar_incidence)
+        self._angle_cache: dict = {}
+        self._lp_last = None
         self.inflate = float(inflate)
         self.beam_step = int(beam_step)
         self.p_rand = float(p_rand)
@@ -272,21 +275,37 @@ class GridFastSLAM:
         return normalise_log_weights(self.logw)
 
     # -- the pieces -------------------------------------------------------
-    def _kernel(self, name: str):
-        """Return the serial or threaded kernel ``name`` for this many particles."""
-        return getattr(_kernels, name + ("_parallel" if self.n >= PARALLEL_MIN else ""))
+    def _kernel(self, name: str, module=_kernels):
+        """Return ``module``'s serial or threaded kernel ``name`` (N particles)."""
+        return getattr(module, name + ("_parallel" if self.n >= PARALLEL_MIN else ""))
 
     def _geometry(self):
         return (*self.origin, self.resolution)
 
+    def _angles(self, step: int = 1) -> np.ndarray:
+        """Every ``step``-th beam direction of the laser (contiguous, kept)."""
+        if self._angle_cache.get("laser") is not self.laser:
+            self._angle_cache = {"laser": self.laser}
+        if step not in self._angle_cache:
+            self._angle_cache[step] = np.ascontiguousarray(self.laser.angles[::step])
+        return self._angle_cache[step]
+
+    def _laser_poses(self, poses) -> np.ndarray:
+        """`laser_poses` of ``poses`` (N, 3), kept for the last poses asked for."""
+        p, copy, lp, laser = self._lp_last or (None, None, None, None)
+        if p is poses and laser is self.laser and np.array_equal(copy, poses):
+            return lp
+        lp = np.ascontiguousarray(laser_poses(poses, self.laser))
+        self._lp_last = (poses, np.array(poses, dtype=float), lp, self.laser)
+        return lp
+
     def weigh_laser(self, poses, scan) -> np.ndarray:
         """Log-likelihood (N,) of a laser scan in each particle's map at ``poses``."""
-        lp = np.ascontiguousarray(laser_poses(poses, self.laser))
+        lp = self._laser_poses(poses)
         k = self.beam_step
         out = np.empty(len(lp))
         self._kernel("laser_loglik_many")(
-            self.maps, *self._geometry(), lp,
-            np.ascontiguousarray(self.laser.angles[::k]),
+            self.maps, *self._geometry(), lp, self._angles(k),
             np.ascontiguousarray(np.asarray(scan, dtype=float)[::k]),
             self.laser.max_range, self.p_rand, out,
         )  # fmt: skip
@@ -316,8 +335,7 @@ class GridFastSLAM:
         out = np.empty((len(poses), 3))
         self._kernel("match_laser_many")(
             self.maps, *self._geometry(), np.ascontiguousarray(poses, dtype=float),
-            np.asarray(self.laser.mount, dtype=float),
-            np.ascontiguousarray(self.laser.angles[::k]),
+            np.asarray(self.laser.mount, dtype=float), self._angles(k),
             np.ascontiguousarray(np.asarray(scan, dtype=float)[::k]),
             self.laser.max_range, *self.match_step, self.match_levels,
             *self.match_prior, out,
@@ -340,10 +358,11 @@ class GridFastSLAM:
             m = self.laser_model
             self._kernel("laser_update_many")(
                 maps, *self._geometry(),
-                np.ascontiguousarray(laser_poses(poses, self.laser)),
-                np.ascontiguousarray(self.laser.angles), z, self.laser.max_range,
+                self._laser_poses(poses), self._angles(), z, self.laser.max_range,
                 m.l_occ, m.l_free, m.l_min, m.l_max,
             )  # fmt: skip
+        elif self.sonar_incidence is not None:
+            self._update_sonar_incidence(maps, poses, z)
         else:
             m = self.sonar_model
             for k, marks in self._wall_groups:
@@ -355,6 +374,17 @@ class GridFastSLAM:
                     m.l_occ if marks else 0.0, m.l_free, m.sigma or 0.0,
                     m.max_weight, m.l_min, m.l_max,
                 )  # fmt: skip
+
+    def _update_sonar_incidence(self, maps, poses, z) -> None:
+        """Add a ring reading, each echo marking walls by its incidence (``maps``)."""
+        par = self.n >= PARALLEL_MIN
+        marks = incidence_marks(
+            maps, self._geometry(), poses, z, self.sonar, self.sonar_incidence,
+            self._default_marks, par,
+        )  # fmt: skip
+        update_sonar_marks(
+            maps, self._geometry(), poses, z, marks, self.sonar, self.sonar_model, par
+        )
 
     def _tracked_diff(self) -> MapDiff:
         """Return the maps' `MapDiff` (whole-grid boxes if ``maps`` was replaced)."""
@@ -371,8 +401,8 @@ class GridFastSLAM:
         if self.sensor == "laser":
             _kernels_copy.laser_boxes(
                 *self._geometry(), ny, nx,
-                np.ascontiguousarray(laser_poses(poses, self.laser)),
-                np.ascontiguousarray(self.laser.angles), z, self.laser.max_range, boxes,
+                self._laser_poses(poses), self._angles(), z, self.laser.max_range,
+                boxes,
             )  # fmt: skip
         else:
             reach = np.where(
@@ -402,19 +432,13 @@ class GridFastSLAM:
         if self.window_weigh == "last":
             return self.weigh_sonar(self.particles, scan)
         ll = np.empty(self.n)
-        self._kernel_w("window_loglik_many")(
+        self._kernel("window_loglik_many", _kernels_window)(
             self.maps, *self._geometry(), wins, self.sonar.sensors, scans,
             self.sonar.cone / 2,
             self.sonar.max_range, 5, self.sonar_sigma, self.p_rand, self.sonar_occ,
             self.sonar_unknown, ll,
         )  # fmt: skip
         return ll
-
-    def _kernel_w(self, name: str):
-        """`_kernel` for the window kernels."""
-        return getattr(
-            _kernels_window, name + ("_parallel" if self.n >= PARALLEL_MIN else "")
-        )
 
     # -- one step -----------------------------------------------------------
     def step(self, odometry, scan) -> None:
