@@ -39,6 +39,7 @@ table = timed("table", lambda: ConeTable(world))
 out["digest"] = hashlib.sha256(table.table.tobytes()).hexdigest()[:16]
 out["peak_mb"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
 out["load_avg"] = os.getloadavg()[0]
+out["robotlib"] = os.path.dirname(os.path.dirname(sys.modules["robotlib"].__file__))
 print(json.dumps(out))
 """
 
@@ -52,8 +53,12 @@ def run_one(checkout: Path, world: str, cache: str) -> dict:
         "NUMBA_CACHE_DIR": cache,
         "ROBOTLIB_TABLE_CACHE": "off",
     }
-    done = subprocess.run(
-        [sys.executable, "-c", CHILD, world], env=env, capture_output=True, text=True
+    done = subprocess.run(  # in the checkout: `-c` puts the working folder first
+        [sys.executable, "-c", CHILD, world],
+        env=env,
+        cwd=checkout,
+        capture_output=True,
+        text=True,
     )
     if done.returncode != 0:
         raise SystemExit(done.stderr)
@@ -78,7 +83,8 @@ def main() -> int:
                     f"{name}: load {got['load'][1]:.2f} s, free space "
                     f"{got['free'][1]:.2f} s, table {got['table'][1]:.2f} s CPU "
                     f"({got['table'][0]:.2f} s wall), peak {got['peak_mb']:.0f} MB, "
-                    f"table {got['digest']}, load average {got['load_avg']:.1f}"
+                    f"table {got['digest']}, load average {got['load_avg']:.1f} "
+                    f"({got['robotlib']})"
                 )
     print(f"table CPU old/new x{cpu['old'] / cpu['new']:.2f}")  # noqa: T201
     return 0

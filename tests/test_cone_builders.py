@@ -254,3 +254,26 @@ def test_disk_cache_that_cannot_be_written_is_left_alone(tmp_path, monkeypatch):
     monkeypatch.setenv("ROBOTLIB_TABLE_CACHE", str(blocker / "tables"))
     table = ConeTable(square_world(8.0), resolution=0.1)
     assert not table.from_disk and table.table.any()
+
+
+@pytest.mark.parametrize("n_bins", [9, 40])
+def test_strip_rays_pair_opposite_bins_and_work_alone_for_odd_counts(n_bins):
+    """Even counts share strips between bins b and b + n/2; odd ones cannot."""
+    walls = random_walls(3, 200)
+    walls = np.concatenate([walls, [[1.0, 0.2, 1.0, 3.8], [0.2, 2.0, 3.8, 2.0]]])
+    sonar = SonarModel(max_range=3.0, n_rays=3)
+    shape, origin = (40, 40), (0.0, 0.0)
+    ny, nx = shape
+    rows, cols = np.divmod(np.arange(ny * nx), nx)
+    ref = np.empty((ny * nx, n_bins), dtype=np.uint16)
+    lk.cone_table_cells(
+        walls, *origin, 0.1, rows, cols, n_bins, 1, sonar.n_rays, sonar.cone,
+        sonar.max_range, sonar.min_range, sonar.cos_specular, ref,
+    )  # fmt: skip
+    out = np.empty(shape + (n_bins,), dtype=np.uint16)
+    lk.build_cone_table_strips(
+        walls, *origin, 0.1, n_bins, 1, sonar.n_rays, sonar.cone, sonar.max_range,
+        sonar.min_range, sonar.cos_specular, out,
+    )  # fmt: skip
+    assert len(np.unique(ref)) > 100
+    np.testing.assert_array_equal(out, ref.reshape(shape + (n_bins,)))

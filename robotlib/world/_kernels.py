@@ -278,6 +278,7 @@ def indexed_distance_field(
         for a in range(ia, ib + 1):
             total += start[a * nbx + jb + 1] - start[a * nbx + ja]
         near = np.empty(total, dtype=np.int64)
+        gap = np.empty(total)
         count = 0
         for a in range(ia, ib + 1):
             for t in range(start[a * nbx + ja], start[a * nbx + jb + 1]):
@@ -292,6 +293,10 @@ def indexed_distance_field(
                 )
                 if d <= reach:
                     near[count] = m
+                    gap[count] = d - r - 1e-9  # no cell of the block is nearer
+                    if d == dc:  # the centre's nearest first: a close first bound
+                        near[0], near[count] = near[count], near[0]
+                        gap[0], gap[count] = gap[count], gap[0]
                     count += 1
         for i in range(i_lo, i_hi):
             py = y0 + (i + 0.5) * resolution
@@ -299,6 +304,8 @@ def indexed_distance_field(
                 px = x0 + (j + 0.5) * resolution
                 best = np.inf
                 for t in range(count):
+                    if gap[t] > best:  # this wall is farther: the same minimum
+                        continue
                     m = near[t]
                     d = point_segment_distance(
                         px, py, segments[m, 0], segments[m, 1], segments[m, 2],

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import math
 import os
+import re
 from pathlib import Path
 from typing import IO
 
@@ -33,6 +34,37 @@ from .fileformat import (
 from .model import World
 
 __all__ = ["parse_map", "format_map", "read_map", "write_map"]
+
+# A run of DATA or LINES records of plain integers (mm) within the size limit
+# is read in one go, without `decimal`: an integer below 2**53 divided by 1000
+# is correctly rounded, as `_mm` rounds, and "-0" stays -0.0. Any other line
+# ends the run and takes the full path.
+_INT = r"[ \t]*[+-]?[0-9]{1,7}"
+_INT_RUNS = {
+    n: re.compile(r"(?:" + r"[ \t]".join([_INT] * n) + r"[ \t]*\n)*") for n in (2, 4)
+}
+
+
+def _int_run(lines: list[str], first: int, n: int) -> tuple[list[list[float]], int]:
+    """Read the records of ``n`` plain integers from ``lines[first]`` on.
+
+    Returns their numbers in m (one list per line) and how many lines they
+    take (0 when ``lines[first]`` is another line). Looks ahead in windows
+    that double while they fill, so the work stays in proportion to the
+    lines read, however the records are interleaved with others.
+    """
+    rows: list[list[float]] = []
+    window = 16
+    while True:
+        part = lines[first + len(rows) : first + len(rows) + window]
+        run = _INT_RUNS[n].match("\n".join(part) + "\n").group()
+        count = run.count("\n")
+        if count:
+            values = np.fromstring(run, dtype=np.float64, sep=" ") / 1000.0
+            rows.extend(values.reshape(count, n).tolist())
+        if count < window:
+            return rows, len(rows)
+        window *= 2
 
 
 def parse_map(
@@ -79,8 +111,17 @@ def parse_map(
     boxes: dict[str, tuple[float, float]] = {}
     home = dock = None
     section = None
+    resume = 0
     for lineno in range(first + 2, len(lines) + 1):
+        if lineno < resume:  # read in a run of plain records
+            continue
         line = lines[lineno - 1]
+        if section == "DATA" or section == "LINES":  # the bulk of a map: sooner
+            rows, count = _int_run(lines, lineno - 1, 2 if section == "DATA" else 4)
+            if count:
+                (points if section == "DATA" else segments).extend(rows)
+                resume = lineno + count
+                continue
         tokens = line.split()
         if not tokens:
             continue
