@@ -78,6 +78,26 @@ def _weigh_estimate(weights, particles, cs, out_w):
 _weigh_estimate, _weigh_estimate_parallel = serial_and_parallel(_weigh_estimate)
 
 
+@nb.njit(**JIT, inline="always")
+def _sensor_columns(sensors, skip):
+    """Return the sensors' (S, 3) columns as contiguous arrays and a read mask.
+
+    Returns ``(x, y, angle, keep)``: each (S,), ``keep[i]`` int32 0 where
+    ``skip[i]`` (the index is zeroed: not read) and -1 (all bits) elsewhere.
+    """
+    s_count = sensors.shape[0]
+    ax = np.empty(s_count)
+    ay = np.empty(s_count)
+    aa = np.empty(s_count)
+    keep = np.empty(s_count, dtype=np.int32)
+    for i in range(s_count):
+        ax[i] = sensors[i, 0]
+        ay[i] = sensors[i, 1]
+        aa[i] = sensors[i, 2]
+        keep[i] = 0 if skip[i] else -1
+    return ax, ay, aa, keep
+
+
 def _move_and_read(
     particles, normals, motion, sensors, table, where, skip, out_p, cs, mm
 ):  # fmt: skip
@@ -98,16 +118,7 @@ def _move_and_read(
     x0, y0, inv_res = where
     ny, nx, n_bins = table.shape
     s_count = sensors.shape[0]
-    # the sensors' columns, contiguous, and a mask that zeroes skipped indexes
-    ax = np.empty(s_count)
-    ay = np.empty(s_count)
-    aa = np.empty(s_count)
-    keep = np.empty(s_count, dtype=np.int32)
-    for i in range(s_count):
-        ax[i] = sensors[i, 0]
-        ay[i] = sensors[i, 1]
-        aa[i] = sensors[i, 2]
-        keep[i] = 0 if skip[i] else -1
+    ax, ay, aa, keep = _sensor_columns(sensors, skip)
     bins = n_bins / _TWO_PI
     for j in nb.prange(particles.shape[0]):
         x, y, th = _odometry_one(
@@ -148,15 +159,7 @@ def move_and_read_keyed_parallel(
     x0, y0, inv_res = where
     ny, nx, n_bins = table.shape
     s_count = sensors.shape[0]
-    ax = np.empty(s_count)
-    ay = np.empty(s_count)
-    aa = np.empty(s_count)
-    keep = np.empty(s_count, dtype=np.int32)
-    for i in range(s_count):
-        ax[i] = sensors[i, 0]
-        ay[i] = sensors[i, 1]
-        aa[i] = sensors[i, 2]
-        keep[i] = 0 if skip[i] else -1
+    ax, ay, aa, keep = _sensor_columns(sensors, skip)
     bins = n_bins / _TWO_PI
     n = particles.shape[0]
     n_chunks = (n + rows - 1) // rows
@@ -253,6 +256,41 @@ def paper_table_step(
 
 
 @nb.njit(**JIT_PARALLEL)
+def _lut_weigh_parallel(lut, mm, exponent, out_w):
+    """Each particle's beam log-likelihood from its table entries, over threads.
+
+    ``out_w[j]`` is `_lut_mm_row`'s number for row ``mm[j]`` (N, S) int32 of
+    millimetres, written out (no call per particle in a threaded loop):
+    the log of products of 16 of ``lut[i, mm]``, times ``exponent``.
+    """
+    s_count = mm.shape[1]
+    for j in nb.prange(mm.shape[0]):
+        ll = 0.0
+        prod = 1.0
+        for i in range(s_count):
+            if i % 16 == 15:
+                ll += math.log(prod)
+                prod = 1.0
+            prod *= lut[i, mm[j, i]]
+        out_w[j] = (ll + math.log(prod)) * exponent
+
+
+@nb.njit(**JIT_PARALLEL)
+def _paper_weigh_parallel(terms, mm, inv_n, out_w):
+    """Each particle's paper log-weight from its table entries, over threads.
+
+    ``out_w[j]`` is ``log(exp(-mean_i terms[i, mm[j, i]]) + inv_n)``, as
+    `paper_table_step` weighs a row (``terms``: `paper_lut_step_parallel`'s).
+    """
+    s_count = mm.shape[1]
+    for j in nb.prange(mm.shape[0]):
+        d = 0.0
+        for i in range(s_count):
+            d += terms[i, mm[j, i]]
+        out_w[j] = math.log(math.exp(-d / s_count) + inv_n)
+
+
+@nb.njit(**JIT_PARALLEL)
 def paper_lut_step_parallel(
     particles, normals, motion, sensors, table, where, terms, inv_n, weights, out_p,
     out_w, cs, mm,
@@ -264,17 +302,12 @@ def paper_lut_step_parallel(
     instead of a division per beam. Sums serial. ``cs`` (N, 2) and ``mm``
     (N, S) int32 are scratch (`move_and_read`), kept by the caller.
     """
-    n = particles.shape[0]
     s_count = sensors.shape[0]
     skip = np.zeros(s_count, dtype=np.bool_)
     move_and_read_parallel(
         particles, normals, motion, sensors, table, where, skip, out_p, cs, mm
     )
-    for j in nb.prange(n):
-        d = 0.0
-        for i in range(s_count):
-            d += terms[i, mm[j, i]]
-        out_w[j] = math.log(math.exp(-d / s_count) + inv_n)
+    _paper_weigh_parallel(terms, mm, inv_n, out_w)
     return _weigh_estimate_parallel(weights, out_p, cs, out_w)
 
 
@@ -312,21 +345,10 @@ def lut_table_step_parallel(
     (``lut[i]`` is constant there: the table is not read). ``cs`` and ``mm``
     are scratch, as for `paper_lut_step_parallel`.
     """
-    n = particles.shape[0]
-    s_count = sensors.shape[0]
     move_and_read_parallel(
         particles, normals, motion, sensors, table, where, skip, out_p, cs, mm
     )
-    for j in nb.prange(n):
-        # `_lut_mm_row`, written out (no call per particle in a threaded loop)
-        ll = 0.0
-        prod = 1.0
-        for i in range(s_count):
-            if i % 16 == 15:
-                ll += math.log(prod)
-                prod = 1.0
-            prod *= lut[i, mm[j, i]]
-        out_w[j] = (ll + math.log(prod)) * exponent
+    _lut_weigh_parallel(lut, mm, exponent, out_w)
     return _weigh_estimate_parallel(weights, out_p, cs, out_w)
 
 
@@ -341,20 +363,10 @@ def lut_table_step_keyed_parallel(
     `normals.fill_chunks` (``key``, chunks of ``rows`` rows), which is not
     stored: one pass less over memory and no threaded pass of its own.
     """
-    n = particles.shape[0]
-    s_count = sensors.shape[0]
     move_and_read_keyed_parallel(
         particles, key, rows, motion, sensors, table, where, skip, out_p, cs, mm
     )
-    for j in nb.prange(n):
-        ll = 0.0
-        prod = 1.0
-        for i in range(s_count):
-            if i % 16 == 15:
-                ll += math.log(prod)
-                prod = 1.0
-            prod *= lut[i, mm[j, i]]
-        out_w[j] = (ll + math.log(prod)) * exponent
+    _lut_weigh_parallel(lut, mm, exponent, out_w)
     return _weigh_estimate_parallel(weights, out_p, cs, out_w)
 
 
@@ -364,15 +376,10 @@ def paper_lut_step_keyed_parallel(
     out_p, out_w, cs, mm,
 ):  # fmt: skip
     """`paper_lut_step_parallel` drawing its noise (see the beam one's)."""
-    n = particles.shape[0]
     s_count = sensors.shape[0]
     skip = np.zeros(s_count, dtype=np.bool_)
     move_and_read_keyed_parallel(
         particles, key, rows, motion, sensors, table, where, skip, out_p, cs, mm
     )
-    for j in nb.prange(n):
-        d = 0.0
-        for i in range(s_count):
-            d += terms[i, mm[j, i]]
-        out_w[j] = math.log(math.exp(-d / s_count) + inv_n)
+    _paper_weigh_parallel(terms, mm, inv_n, out_w)
     return _weigh_estimate_parallel(weights, out_p, cs, out_w)
