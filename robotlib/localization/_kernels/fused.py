@@ -290,7 +290,7 @@ def _paper_weigh_parallel(terms, mm, inv_n, out_w):
         out_w[j] = math.log(math.exp(-d / s_count) + inv_n)
 
 
-@nb.njit(**JIT_PARALLEL)
+@nb.njit(**JIT)  # its passes are threaded kernels
 def paper_lut_step_parallel(
     particles, normals, motion, sensors, table, where, terms, inv_n, weights, out_p,
     out_w, cs, mm,
@@ -334,7 +334,7 @@ def beam_table_step(
     return _weigh_estimate(weights, out_p, cs, out_w)
 
 
-@nb.njit(**JIT_PARALLEL)
+@nb.njit(**JIT)  # its passes are threaded kernels
 def lut_table_step_parallel(
     particles, normals, motion, sensors, table, where, lut, skip, exponent, weights,
     out_p, out_w, cs, mm,
@@ -352,7 +352,7 @@ def lut_table_step_parallel(
     return _weigh_estimate_parallel(weights, out_p, cs, out_w)
 
 
-@nb.njit(**JIT_PARALLEL)
+@nb.njit(**JIT)  # its passes are threaded kernels
 def lut_table_step_keyed_parallel(
     particles, key, rows, motion, sensors, table, where, lut, skip, exponent,
     weights, out_p, out_w, cs, mm,
@@ -370,7 +370,7 @@ def lut_table_step_keyed_parallel(
     return _weigh_estimate_parallel(weights, out_p, cs, out_w)
 
 
-@nb.njit(**JIT_PARALLEL)
+@nb.njit(**JIT)  # its passes are threaded kernels
 def paper_lut_step_keyed_parallel(
     particles, key, rows, motion, sensors, table, where, terms, inv_n, weights,
     out_p, out_w, cs, mm,
