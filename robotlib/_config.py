@@ -72,11 +72,22 @@ compiles, a C-callable wrapper robotlib never calls (no kernel is passed as
 a function pointer), about a tenth of a small kernel's compile time.
 """
 
+JIT_INNER = {**JIT, "no_cpython_wrapper": True}
+"""Options for ``numba.njit`` on helpers that only other kernels call.
+
+``no_cpython_wrapper``: numba otherwise builds, for every function it
+compiles, the wrapper that lets Python call it; a helper called only from
+compiled code never uses it, and building it is about a third of a small
+function's compile time (measured: 80 -> 55 ms each, empty cache). The
+helper's own machine code is the same, and so are its callers'. Calling such
+a helper from Python raises ``TypeError``.
+"""
+
 JIT_PARALLEL = {**JIT, "parallel": True}
 """Options for ``numba.njit`` on kernels that loop with ``prange``."""
 
 
-def serial_and_parallel(body):
+def serial_and_parallel(body, inner: bool = False):
     """Compile one kernel body twice: serially, and over threads.
 
     ``body`` loops over its particles (or poses) with ``numba.prange``, which
@@ -88,6 +99,9 @@ def serial_and_parallel(body):
     ----------
     body : function
         The plain Python function (not yet compiled).
+    inner : bool
+        Only other kernels call the serial one (`JIT_INNER`: no wrapper for
+        Python's calls).
 
     Returns
     -------
@@ -101,4 +115,4 @@ def serial_and_parallel(body):
     )  # fmt: skip
     twin.__qualname__ = body.__qualname__ + "_parallel"
     twin.__doc__ = body.__doc__
-    return nb.njit(**JIT)(body), nb.njit(**JIT_PARALLEL)(twin)
+    return nb.njit(**(JIT_INNER if inner else JIT))(body), nb.njit(**JIT_PARALLEL)(twin)

@@ -140,7 +140,7 @@ def _move_and_read(
             mm[j, i] = flat[mm[j, i]]
 
 
-move_and_read, move_and_read_parallel = serial_and_parallel(_move_and_read)
+move_and_read, move_and_read_parallel = serial_and_parallel(_move_and_read, inner=True)
 
 
 @nb.njit(**JIT_PARALLEL)
