@@ -40,7 +40,8 @@ def _flat_index(sx, sy, a, ny, nx, n_bins, x0, y0, inv_res):
     fb = fb - fn * np.floor(fb / fn)  # b mod n_bins, on whole numbers
     fb = fb if fb > 0.0 else 0.0
     fb = fb if fb < fn - 1.0 else fn - 1.0
-    return np.int32((int(fr) * nx + int(fc)) * n_bins + int(fb))
+    # np.int64, not int(): the same truncation, and no int() for numba to compile
+    return np.int32((np.int64(fr) * nx + np.int64(fc)) * n_bins + np.int64(fb))
 
 
 # -- one fused step: predict, weigh, normalise, estimate ---------------------------

@@ -157,9 +157,12 @@ def _ray_echoes(
         rays[pad + n_bins + b] = rays[pad + b]
 
 
-@nb.njit(**JIT)
+@nb.njit(**JIT_INNER)
 def _unit_normals(segments):
-    """Each wall's unit normal ``(-ey, ex) / length`` as `_cone` computes it, (M, 2)."""
+    """Each wall's unit normal ``(-ey, ex) / length`` as `_cone` computes it, (M, 2).
+
+    For the kernels; Python takes `unit_normals` (the same numbers).
+    """
     out = np.empty((segments.shape[0], 2))
     for m in range(segments.shape[0]):
         ex = segments[m, 2] - segments[m, 0]
@@ -167,6 +170,22 @@ def _unit_normals(segments):
         length = math.sqrt(ex * ex + ey * ey)
         out[m, 0] = -ey / length
         out[m, 1] = ex / length
+    return out
+
+
+def unit_normals(segments):
+    """`_unit_normals` in NumPy, for Python callers: the same bits.
+
+    Each entry is the same IEEE operations in the same order (two products,
+    a sum, a square root, a division; no fused multiply-add either way), and
+    each is correctly rounded in both.
+    """
+    ex = segments[:, 2] - segments[:, 0]
+    ey = segments[:, 3] - segments[:, 1]
+    length = np.sqrt(ex * ex + ey * ey)
+    out = np.empty((segments.shape[0], 2))
+    out[:, 0] = -ey / length
+    out[:, 1] = ex / length
     return out
 
 
@@ -379,7 +398,7 @@ def build_cone_table_strips(
     ny, nx, _ = table.shape
     shape = (n_bins, ny, nx) if table.nbytes <= SCRATCH_MAX_BYTES else (0, 0, 0)
     strip_sweep_table(
-        segments, _unit_normals(segments), x0, y0, resolution, n_bins, ray_step,
+        segments, unit_normals(segments), x0, y0, resolution, n_bins, ray_step,
         n_rays, max_range, min_range, cos_specular, STRIP,
         np.empty(shape, dtype=np.uint16), table,
     )  # fmt: skip
