@@ -28,6 +28,7 @@ import numpy as np
 
 from ..world import World
 from . import _kernels
+from .cones import free_space
 from .motion import (
     NORMALS_CHUNK,
     PARALLEL_MIN,
@@ -155,7 +156,7 @@ class MCL:
         self.resolution = float(resolution)
         self.rng = np.random.default_rng(rng)
         self.map_diagonal = math.hypot(*world.size)
-        grid = world.free_space(self.resolution, self.admissible_radius)
+        grid = free_space(world, self.resolution, self.admissible_radius)  # disk too
         self._admissible = np.ascontiguousarray(grid.data)
         self._adm_origin = grid.origin
         self.n_initial = int(n)
@@ -231,7 +232,8 @@ class MCL:
         kld = options.pop("kld")
         aug = options.pop("augmented")
         if helper is not None:  # the admissible area first: the helper skips it
-            world.free_space(
+            free_space(
+                world,
                 options.get("resolution", 0.05),
                 options.get("admissible_radius", ADMISSIBLE_RADIUS),
             )
