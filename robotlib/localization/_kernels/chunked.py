@@ -26,12 +26,12 @@ import math
 import numba as nb
 import numpy as np
 
-from ..._config import JIT, JIT_INNER
+from ..._config import JIT, jit_inner
 from .fused import _beam_mm_row, _buffers, _paper_mm, move_and_read
 from .weights import _finish_estimate
 
 
-@nb.njit(**JIT_INNER)
+@jit_inner
 def beam_rows(mm, lut, exponent, out_w):
     """Beam log-likelihoods from looked-up entries ``mm`` (n, S) into ``out_w`` (n,).
 
@@ -54,7 +54,7 @@ def beam_rows(mm, lut, exponent, out_w):
     return top
 
 
-@nb.njit(**JIT_INNER)
+@jit_inner
 def paper_rows(mm, terms, inv_n, out_w):
     """As `beam_rows` with the paper's model (`fused.paper_lut_step_parallel`)."""
     s_count = mm.shape[1]

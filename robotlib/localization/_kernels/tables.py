@@ -9,14 +9,14 @@ import math
 import numba as nb
 import numpy as np
 
-from ..._config import JIT, JIT_INNER, JIT_PARALLEL, serial_and_parallel
+from ..._config import JIT, JIT_PARALLEL, jit_inner, serial_and_parallel
 from ...sensing._kernels import _EPS, cone_echo, indexed_cone_echo
 from ...world._kernels import point_segment_distance
 from .common import _TWO_PI
 from .table_strips import STRIP, strip_sweep_table
 
 
-@nb.njit(**JIT_INNER)
+@jit_inner
 def _pseudo_atan2(y, x):
     """``math.atan2(y, x)`` within 1e-5 rad (a polynomial; for bin ranges only)."""
     ax = abs(x)
@@ -40,7 +40,7 @@ _SORT_MAX = 256
 """Walls near a block up to which `_ray_echoes` sorts them (beyond: in order)."""
 
 
-@nb.njit(**JIT_INNER)
+@jit_inner
 def _ray_echoes(
     cx, cy, segments, normals, max_range, cos_specular, dirs, best, best_m, rays,
     pad, dist, order,
@@ -157,7 +157,7 @@ def _ray_echoes(
         rays[pad + n_bins + b] = rays[pad + b]
 
 
-@nb.njit(**JIT_INNER)
+@jit_inner
 def _unit_normals(segments):
     """Each wall's unit normal ``(-ey, ex) / length`` as `_cone` computes it, (M, 2).
 
@@ -189,7 +189,7 @@ def unit_normals(segments):
     return out
 
 
-@nb.njit(**JIT_INNER)
+@jit_inner
 def _table_entry(echo, max_range, min_range):
     """Return the table entry (uint16, mm) of a cone's echo (m, ``inf`` for none)."""
     z = max_range if echo >= max_range else echo
@@ -200,7 +200,7 @@ def _table_entry(echo, max_range, min_range):
     return np.uint16(round(z * 1000.0))
 
 
-@nb.njit(**JIT_INNER)
+@jit_inner
 def _near_walls(segments, bx, by, reach):
     """Copy the walls within ``reach`` of ``(bx, by)``, in order, to a new (K, 4)."""
     keep = np.empty(segments.shape[0], dtype=np.bool_)  # each written: no np.zeros

@@ -9,7 +9,7 @@ import math
 import numba as nb
 import numpy as np
 
-from ..._config import JIT, JIT_INNER, serial_and_parallel
+from ..._config import JIT, jit_inner, serial_and_parallel
 
 
 @nb.njit(**JIT)
@@ -28,7 +28,7 @@ def _finish_weights(weights, top, out):
     return top + math.log(total / wsum), 1.0 / sq
 
 
-@nb.njit(**JIT_INNER)
+@jit_inner
 def _finish_estimate(weights, top, out, particles, cs, est, cum):
     """`_finish_weights`, then `_pose_mean` into ``est`` (3,): one pass after the sums.
 
