@@ -241,3 +241,57 @@ def test_inner_helpers_are_not_callable_from_python_but_their_callers_are():
     assert out.tolist() == [1.0, 1.0]
     with pytest.raises(TypeError):  # compiled now (for its caller): still refused
         wk.point_segment_distance(0.0, 0.0, 1.0, 1.0, 2.0, 1.0)
+
+
+TAIL = textwrap.dedent("""
+    import json
+    import numpy as np
+    from robotlib.localization import MCL, _prebuild
+    from robotlib.world import load_world
+    from numba.core import event
+
+    compiled = []
+
+    class Count(event.Listener):
+        def on_start(self, ev):
+            pass
+
+        def on_end(self, ev):
+            f = getattr(ev.data.get("dispatcher"), "py_func", None)
+            compiled.append(getattr(f, "__name__", ""))
+
+    class Busy:  # a helper that never gets there
+        def poll(self):
+            return False
+
+    world = load_world("corridor")
+    a, b = MCL.best(world, rng=0), MCL.best(world, rng=0)
+    before = (a.particles.copy(), a.weights.copy(), a.rng.bit_generator.state)
+    done = _prebuild.compile_tail(a, Busy())
+    same = (np.array_equal(before[0], a.particles) and np.array_equal(before[1],
+            a.weights) and before[2] == a.rng.bit_generator.state)
+    event.register("numba:compile", Count())
+    odo = np.array(world.start)
+    z = np.linspace(0.4, 3.0, len(a.sensor.sonar.sensors))
+    ea = a.step(odo, odo + [0.5, 0.0, 0.05], z).tolist()
+    eb = b.step(odo, odo + [0.5, 0.0, 0.05], z).tolist()
+    print(json.dumps({"done": done, "same": same, "compiled": compiled,
+                      "resampled": a.info.resampled, "ests": [ea, eb],
+                      "sets": [a.particles.tolist(), b.particles.tolist()]}))
+""")
+
+
+def test_the_tail_compiled_here_is_what_the_first_step_needs(tmp_path):
+    """`compile_tail`: the last kernels for the step's own types, no state touched."""
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path), ROBOTLIB_PREBUILD="0")
+    out = subprocess.run(
+        [sys.executable, "-c", TAIL], env=env, capture_output=True, text=True,
+        timeout=600, check=True,
+    )  # fmt: skip
+    got = json.loads(out.stdout.strip().splitlines()[-1])
+    assert got["done"] == 3 and got["same"] and got["resampled"]
+    assert got["compiled"]  # the step's first kernels were compiled in the step
+    for name in ("gather", "kld_resample", "cumulative", "outside"):
+        assert name not in got["compiled"], name  # compiled before, same types
+    assert got["ests"][0] == got["ests"][1]  # and the filter's numbers unchanged
+    assert got["sets"][0] == got["sets"][1]

@@ -10,7 +10,10 @@ the filter: the helper builds the same filter on a small room of its own
 same argument types into numba's on-disk cache; `Prebuild.wait` (before the
 filter's first step) waits until the helper has taken its first step, and
 the step then loads those kernels from the cache instead of compiling them.
-The numbers are the same either way (the same compiled code).
+While it would wait, this process compiles the step's last kernels itself
+(`compile_tail`, from the last on, until the helper is done), so neither
+process waits for the other. The numbers are the same either way (the same
+compiled code).
 
 The helper's room has no cone table worth building: its table is filled
 with made-up ranges (`_fake_table`), the beam model's factors are made up
@@ -132,18 +135,27 @@ class Prebuild:
             self.waited += time.monotonic() - t0
         return self.ready
 
+    def poll(self) -> bool:
+        """Whether the helper has taken its first step, without waiting."""
+        return self.wait(0.0)
+
+    _line = b""
+    _ended = False
+
     def _wait(self, end: float) -> bool:
         out = self.proc.stdout
-        line = b""
-        while not line.endswith(b"\n"):
-            left = end - time.monotonic()
-            if left <= 0 or not select.select([out], [], [], left)[0]:
+        while not self._line.endswith(b"\n"):
+            if self._ended:
+                return False
+            left = max(0.0, end - time.monotonic())
+            if not select.select([out], [], [], left)[0]:
                 return False
             chunk = os.read(out.fileno(), 256)
             if not chunk:  # the helper ended
+                self._ended = True
                 return False
-            line += chunk
-        words = line.split()
+            self._line += chunk
+        words = self._line.split()
         if not words or words[0] != _READY.encode():
             return False
         self.cpu = float(words[1]) if len(words) > 1 else float("nan")
@@ -204,6 +216,63 @@ def start(fast: bool = True, options: dict | None = None) -> Prebuild | None:
     helper = Prebuild(proc)
     started.append(helper)
     return helper
+
+
+def compile_tail(mcl, helper: Prebuild) -> int:
+    """Compile the end of ``mcl``'s first step here while ``helper`` is not done.
+
+    The helper compiles the first step's kernels in the order the step calls
+    them; this process, once its filter is built and while it would wait,
+    compiles the last of them (gathering the new set, KLD-sampling with its
+    cumulative weights, the admissibility check) from the last on, each on a
+    few of the filter's own particles, so for the same argument types, and
+    stops as soon as the helper has taken its step. The helper then loads
+    from numba's cache what this process has compiled, and the two meet in
+    the middle instead of one waiting for the other. Draws nothing from the
+    filter's generator and changes none of its state. Returns how many
+    kernels it compiled (or found compiled).
+    """
+    import numpy as np
+
+    from ._kernels import outside
+    from .kld import kld_resample
+    from .policies import KLDResampling, _gather
+
+    p, w = mcl.particles[:4], mcl.weights[:4]
+    jobs = []
+    policy = mcl.resampling
+    if type(policy) is KLDResampling:
+        idx = np.zeros(2, dtype=np.int64)
+        jobs.append(lambda: _gather(p, idx))
+        jobs.append(
+            lambda: kld_resample(
+                p,
+                w,
+                mcl.world.bounds,
+                np.random.default_rng(0),
+                policy.n_min,
+                policy.n_max,
+                policy.epsilon,
+                policy.delta,
+                policy.bin_xy,
+                policy.bin_theta,
+            )  # fmt: skip
+        )
+    if mcl.check:
+        bad = np.empty(len(p), dtype=np.bool_)
+        x0, y0 = mcl._adm_origin
+        jobs.append(
+            lambda: outside(
+                p.copy(), mcl._admissible, x0, y0, 1.0 / mcl.resolution, bad
+            )  # fmt: skip
+        )
+    done = 0
+    for job in jobs:
+        if helper.poll():
+            break
+        job()
+        done += 1
+    return done
 
 
 def _fake_table(*args) -> None:

@@ -445,6 +445,10 @@ class MCL:
         if check is not None:  # before any draw or move: a refused scan changes nothing
             z = check(z)
         if self._prebuild is not None:  # its kernels, from numba's cache
+            if not self._prebuild.poll():  # meanwhile the last ones here
+                from ._prebuild import compile_tail
+
+                compile_tail(self, self._prebuild)
             self._prebuild.wait()
             self._prebuild = None
         n = len(self.particles)
