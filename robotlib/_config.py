@@ -1,6 +1,7 @@
 """Numba options shared by every kernel in robotlib (one place to change them).
 
-Also `serial_and_parallel`, which compiles one kernel body both ways. Only
+Also `serial_and_parallel`, which compiles one kernel body both ways, and
+`jit_inner` for helpers only kernels call (no Python wrapper). Only
 kernels import this module, and the package's ``__init__`` (first, so that
 numba is imported lean: `_import_numba`); it imports nothing of robotlib's but
 `robotlib._kernel_cache`, which it runs once: cached kernels whose sources
@@ -84,7 +85,7 @@ cone table's build 3.94 -> 3.41 s, the first step 3.31 -> 3.05 s.
 """
 
 
-class _InnerDispatcher(type(nb.njit(lambda: None))):
+class _InnerDispatcher(nb.core.registry.CPUDispatcher):
     """A numba dispatcher that kernels call and Python cannot (`jit_inner`).
 
     numba would hand Python a function at address 0 for a helper compiled

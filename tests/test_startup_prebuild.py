@@ -78,10 +78,14 @@ def _first_step(cache, prebuild: bool) -> dict:
 
 
 def test_the_first_step_compiles_nothing_and_gives_the_same_numbers(tmp_path):
-    """With the helper: no compile on the first step, same estimates, same tables."""
+    """With the helper: the first step compiles at most its tail, same numbers, tables."""
     helped = _first_step(tmp_path / "helped", True)
     assert helped["helper"] and helped["ready"] and helped["exit"] == 0
-    assert helped["first"] == []
+    # nothing but what this process compiles while it waits (`compile_tail`)
+    assert set(helped["first"]) <= {
+        f"robotlib.localization._kernels.resample.{name}"
+        for name in ("gather", "kld_resample", "cumulative", "outside")
+    }
     alone = _first_step(tmp_path / "alone", False)
     assert not alone["helper"]
     assert alone["first"]  # without the helper the first step compiles (else: no test)
