@@ -78,7 +78,7 @@ def _first_step(cache, prebuild: bool) -> dict:
 
 
 def test_the_first_step_compiles_nothing_and_gives_the_same_numbers(tmp_path):
-    """With the helper: the first step compiles at most its tail, same numbers, tables."""
+    """With the helper: the step compiles at most its tail; same numbers, tables."""
     helped = _first_step(tmp_path / "helped", True)
     assert helped["helper"] and helped["ready"] and helped["exit"] == 0
     # nothing but what this process compiles while it waits (`compile_tail`)
