@@ -76,13 +76,9 @@ def _pose_bin(particles, lo, x0, y0, bin_xy, bin_theta, nbx, nby, nbt):
     bx = math.floor((particles[lo, 0] - x0) / bin_xy)
     by = math.floor((particles[lo, 1] - y0) / bin_xy)
     bt = math.floor((particles[lo, 2] + math.pi) / bin_theta)
-    # min(max(b, 0), nb - 1) as selects: no min/max for numba to compile
-    bx = bx if bx > 0 else 0
-    bx = bx if bx < nbx - 1 else nbx - 1
-    by = by if by > 0 else 0
-    by = by if by < nby - 1 else nby - 1
-    bt = bt if bt > 0 else 0
-    bt = bt if bt < nbt - 1 else nbt - 1
+    bx = min(max(bx, 0), nbx - 1)
+    by = min(max(by, 0), nby - 1)
+    bt = min(max(bt, 0), nbt - 1)
     return (by * nbx + bx) * nbt + bt
 
 
