@@ -24,9 +24,10 @@ than that are tried by every ray of their strip. Why it is fast: the walls
 a ray tries lie side by side in memory (their end point and edge vector
 copied into the strip), about five a ray on ``columbia.map``, most ruled
 out by comparing two numbers; and each direction's rays are written to
-their own plane (``scratch``), a cone then being the least of its rays'
-entries (entries grow with the range, so the least entry is the entry of
-the least range: the same number as the cone's nearest echo gives).
+their own plane (a row of cells at a time, in the table's own memory), a
+cone then being the least of its rays' entries (entries grow with the
+range, so the least entry is the entry of the least range: the same number
+as the cone's nearest echo gives).
 
 Numba kernels: contiguous arrays and scalars in; they import nothing of
 robotlib but the JIT options and other kernels.
@@ -372,16 +373,15 @@ def _ray_entry(t, m, bit, max_range, min_range):
 @nb.njit(**JIT)
 def _direction_rays(
     segments, normals, x0, y0, resolution, b, b2, n_bins, max_range, min_range,
-    cos_specular, w, xc, yc, d, n_strips, scratch, table,
+    cos_specular, w, xc, yc, d, n_strips, planes,
 ):  # fmt: skip
     """Every cell's ray along bin ``b`` and its opposite ``b2`` (unless ``b2 < 0``).
 
     Both directions' rays go through one set of strips (`build_strips`,
-    `strip_ray`, `strip_ray_back`); each ray's entry goes to ``scratch[b]``
-    (or ``table``).
+    `strip_ray`, `strip_ray_back`); the entry of cell ``(i, j)``'s ray
+    along ``b`` goes to ``planes[i, b, j]`` (`strip_sweep_table`).
     """
-    ny, nx, _ = table.shape
-    apart = scratch.shape[0] == n_bins
+    ny, _, nx = planes.shape
     dx = math.cos(b * _TWO_PI / n_bins)  # as `cone_echo` computes each ray
     dy = math.sin(b * _TWO_PI / n_bins)
     dx2 = dx
@@ -404,52 +404,27 @@ def _direction_rays(
                 cx, cy, dx, dy, u0, inv_w, start, firsts, entries, ids, reach,
                 finger, max_range,
             )  # fmt: skip
-            entry = _ray_entry(t, m, 1, max_range, min_range)
-            if apart:
-                scratch[b, i, j] = entry
-            else:
-                table[i, j, b] = entry
+            planes[i, b, j] = _ray_entry(t, m, 1, max_range, min_range)
             if b2 < 0:
                 continue
             t, m = strip_ray_back(
                 cx, cy, dx, dy, dx2, dy2, u0, inv_w, start, firsts, entries, ids,
                 reach, finger2, max_range,
             )  # fmt: skip
-            entry = _ray_entry(t, m, 2, max_range, min_range)
-            if apart:
-                scratch[b2, i, j] = entry
-            else:
-                table[i, j, b2] = entry
-
-
-@nb.njit(**JIT)
-def _cone_row(i, n_rays, ray_step, scratch, table):
-    """Row ``i``'s cones, in place: each the least entry of its rays."""
-    _, nx, n_bins = table.shape
-    half = (n_rays - 1) // 2 if n_rays > 1 else 0
-    rays = np.empty(n_bins, dtype=np.uint16)
-    for j in range(nx):
-        for b in range(n_bins):
-            rays[b] = table[i, j, b]
-        for b in range(n_bins):
-            e = rays[b]
-            for q in range(1, half + 1):
-                e = min(e, rays[(b + q * ray_step) % n_bins])
-                e = min(e, rays[(b - q * ray_step) % n_bins])
-            table[i, j, b] = e
+            planes[i, b2, j] = _ray_entry(t, m, 2, max_range, min_range)
 
 
 @nb.njit(**JIT_PARALLEL)
 def _strip_rays(
-    segments, normals, x0, y0, resolution, n_bins, ray_step, n_rays, max_range,
-    min_range, cos_specular, w, scratch, table,
+    segments, normals, x0, y0, resolution, n_bins, max_range, min_range,
+    cos_specular, w, planes,
 ):  # fmt: skip
     """Every cell's ray along every bin (`_direction_rays`), pairs in parallel.
 
     Opposite bins ``b`` and ``b + n_bins / 2`` share their strips (for an
     even ``n_bins``). One parallel loop: the cones follow in `cone_pass`.
     """
-    ny, nx, _ = table.shape
+    ny, _, nx = planes.shape
     xc, yc, d = strip_frame(segments, x0, y0, nx * resolution, ny * resolution)
     n_strips = int(d / w) + 2
     half = n_bins // 2 if n_bins % 2 == 0 else n_bins
@@ -457,64 +432,64 @@ def _strip_rays(
         b2 = b + half if half < n_bins else -1
         _direction_rays(
             segments, normals, x0, y0, resolution, b, b2, n_bins, max_range,
-            min_range, cos_specular, w, xc, yc, d, n_strips, scratch, table,
+            min_range, cos_specular, w, xc, yc, d, n_strips, planes,
         )  # fmt: skip
 
 
 @nb.njit(**JIT)
-def _cone_planes(n_rays, ray_step, scratch, table):
-    """Each cone of ``table``: the least of its rays' entries in ``scratch``.
+def cone_pass(n_rays, ray_step, planes, table):
+    """Each cone of ``table``: the least of its rays' entries in ``planes``.
 
-    Row by row, each row's cones taken plane by plane (runs of one
-    direction's entries), then turned into the table's layout. One thread:
-    on ``columbia.map`` 0.05 s, as fast as two under load, and a parallel
-    loop would cost about 2 s more to compile.
+    ``planes`` (ny, n_bins, nx) and ``table`` (ny, nx, n_bins) are two views
+    of one buffer (row ``i`` of each is the same memory): row by row, the
+    row's rays are copied out, its cones taken plane by plane (runs of one
+    direction's entries) and written back in the table's layout. One
+    thread: on ``columbia.map`` 0.05 s, as fast as two under load, and a
+    parallel loop would cost about 2 s more to compile.
     """
     ny, nx, n_bins = table.shape
     half = (n_rays - 1) // 2 if n_rays > 1 else 0
+    rays = np.empty((n_bins, nx), dtype=np.uint16)
     row = np.empty((n_bins, nx), dtype=np.uint16)
     for i in range(ny):
         for b in range(n_bins):
             for j in range(nx):
-                row[b, j] = scratch[b, i, j]
+                rays[b, j] = planes[i, b, j]
+        for b in range(n_bins):
+            for j in range(nx):
+                row[b, j] = rays[b, j]
             for q in range(1, half + 1):
                 b1 = (b + q * ray_step) % n_bins
                 b2 = (b - q * ray_step) % n_bins
                 for j in range(nx):
-                    row[b, j] = min(row[b, j], scratch[b1, i, j], scratch[b2, i, j])
+                    row[b, j] = min(row[b, j], rays[b1, j], rays[b2, j])
         for j in range(nx):
             for b in range(n_bins):
                 table[i, j, b] = row[b, j]
 
 
-def cone_pass(n_rays, ray_step, scratch, table):
-    """Each cone of ``table``: the least entry of its rays (``scratch`` or in place)."""
-    if scratch.shape[0] == table.shape[2]:
-        _cone_planes(n_rays, ray_step, scratch, table)
-    else:
-        for i in range(table.shape[0]):
-            _cone_row(i, n_rays, ray_step, scratch, table)
-
-
 def strip_sweep_table(
     segments, normals, x0, y0, resolution, n_bins, ray_step, n_rays, max_range,
-    min_range, cos_specular, w, scratch, table,
+    min_range, cos_specular, w, table,
 ):  # fmt: skip
     """Fill ``table`` (ny, nx, n_bins) uint16 mm: shared rays through strips.
 
     The table of `robotlib.localization._kernels.tables.build_cone_table`
     for shared rays (the same bits): pairs of opposite directions in
     parallel, each pair with its own strips (`build_strips`) and every
-    cell's ray along both (`strip_ray`, `strip_ray_back`), the ray's entry
-    written to ``scratch[b]`` (n_bins, ny, nx) uint16, or straight into
-    ``table`` when ``scratch`` is empty (less memory, more time); then each
-    cone is the least entry of its ``n_rays`` rays ``ray_step`` bins apart
-    (`cone_pass`). ``normals`` are
-    the walls' `tables._unit_normals`.
+    cell's ray along both (`strip_ray`, `strip_ray_back`), the entry of
+    cell ``(i, j)``'s ray along bin ``b`` written to ``planes[i, b, j]``,
+    ``planes`` being ``table`` seen as (ny, n_bins, nx): each row of cells
+    holds its rays plane by plane until `cone_pass` turns them into the
+    row's cones, each the least entry of its ``n_rays`` rays ``ray_step``
+    bins apart. No memory beyond the table's own (and the strips). ``table``
+    must be C-contiguous. ``normals`` are the walls' `tables._unit_normals`.
     """
+    ny, nx, _ = table.shape
+    planes = table.reshape(ny, n_bins, nx)  # a view: the same buffer
     with nb.parallel_chunksize(1):  # pairs to whichever thread is free
         _strip_rays(
-            segments, normals, x0, y0, resolution, n_bins, ray_step, n_rays,
-            max_range, min_range, cos_specular, w, scratch, table,
+            segments, normals, x0, y0, resolution, n_bins, max_range, min_range,
+            cos_specular, w, planes,
         )  # fmt: skip
-    cone_pass(n_rays, ray_step, scratch, table)
+    cone_pass(n_rays, ray_step, planes, table)
