@@ -20,6 +20,7 @@ from robotlib.localization.cones import _sweep_builds
 from robotlib.sensing import SonarModel
 from robotlib.sensing import _kernels as sk
 from robotlib.world import World, load_world
+from robotlib.world.index import INDEX_MIN_SEGMENTS
 
 
 def point_grid_map(x0=-4780, y0=-2700, side=3000, step=20) -> str:
@@ -115,11 +116,15 @@ def test_bench_large_map_refuses_a_missing_map_clearly(tmp_path, capsys):
     assert "missing.map" in err and "Traceback" not in err
 
 
-def test_dense_maps_take_the_indexed_builder_sparse_ones_the_sweep(grid_map):
+def test_large_maps_take_the_indexed_builders_small_ones_the_sweep(grid_map):
     sonar = SonarModel()
     assert not _sweep_builds(load_world(grid_map), sonar, 1)  # 1,320 crosses, 9 m2
-    assert _sweep_builds(square_world(50.0), sonar, 1)  # 532 walls, 2,500 m2
+    assert not _sweep_builds(square_world(50.0), sonar, 1)  # 532 walls: strips
     assert not _sweep_builds(square_world(50.0), sonar, 0)  # whole cones: indexed
+    small = square_world(12.0)
+    assert len(small.obstacles) < INDEX_MIN_SEGMENTS and _sweep_builds(small, sonar, 1)
+    building = load_world("building")  # 308 walls: a lab's world keeps the sweep
+    assert _sweep_builds(building, sonar, 1) and not _sweep_builds(building, sonar, 0)
 
 
 @pytest.mark.parametrize("which", ["grid", "building"])
