@@ -126,12 +126,15 @@ class _ExpectedModel:
         return t.table, (t.origin[0], t.origin[1], 1.0 / t.resolution)
 
     def _run(self, particles, weights, motion, noise, key, z, scratch, u,
-             checked=False):  # fmt: skip
+             checked=False, words=None):  # fmt: skip
         """Move, weigh, estimate and (``u >= 0``) resample: `MCL.step`'s fused call.
 
         ``noise`` (N, 3) holds the motion noise, or with ``key`` receives it
         (`stepping.run_step`); ``u`` is the systematic resampling's draw or
-        -1; ``checked``: ``z`` is `checked_scan`'s already. Returns
+        -1; ``checked``: ``z`` is `checked_scan`'s already. With ``words``
+        (below `PARALLEL_MIN` particles: the filter's PCG64 state,
+        `motion.pcg64_words`) the call draws the noise into ``noise`` and,
+        when ``u >= 0``, ``u`` itself, as the generator would. Returns
         ``(out_p, out_w, log_mean, ess, est, new_p, new_w)``: moved
         particles and their weights, and the resampled set (None without
         ``u``).
@@ -151,7 +154,7 @@ class _ExpectedModel:
                 out_w = scratch.take("weights", (n,))
             est = np.empty(3)
             log_mean, ess = self._small(particles, weights, motion, noise, z, u,
-                                        out_p, out_w, *new, est)  # fmt: skip
+                                        out_p, out_w, *new, est, words)  # fmt: skip
         else:
             out_p, out_w, cs, mm = _outputs(scratch, n, len(z))
             out = (out_p, out_w, cs, mm, *new)
@@ -246,8 +249,13 @@ class PaperSensorModel(_ExpectedModel):
         ]
 
     def _small(self, particles, weights, motion, noise, z, u, out_p, out_w, new_p,
-               new_w, est):  # fmt: skip
+               new_w, est, words=None):  # fmt: skip
         sensors, table, where, _ = self._consts()
+        if words is not None:
+            return chunked.paper_small_drawn(
+                words, u >= 0.0, particles, weights, noise, sensors, table, z,
+                *motion, *where, 1.0 / len(particles), out_p, out_w, new_p, new_w, est,
+            )  # fmt: skip
         return chunked.paper_small(
             particles, weights, noise, sensors, table, z, *motion, *where,
             1.0 / len(particles), u, out_p, out_w, new_p, new_w, est,
@@ -403,9 +411,15 @@ class BeamSensorModel(_ExpectedModel):
         ]
 
     def _small(self, particles, weights, motion, noise, z, u, out_p, out_w, new_p,
-               new_w, est):  # fmt: skip
+               new_w, est, words=None):  # fmt: skip
         q = self.params
         sensors, table, where, beam = self._consts(q)
+        if words is not None:
+            return chunked.beam_small_drawn(
+                words, u >= 0.0, particles, weights, noise, sensors, table, z,
+                np.exp(-q.lambda_short * z), *self._norms, *motion, *where, *beam,
+                out_p, out_w, new_p, new_w, est,
+            )  # fmt: skip
         return chunked.beam_small(
             particles, weights, noise, sensors, table, z,
             np.exp(-q.lambda_short * z), *self._norms, *motion, *where, *beam, u,

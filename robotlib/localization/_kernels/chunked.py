@@ -28,6 +28,7 @@ import numpy as np
 
 from ..._config import JIT
 from .fused import _beam_mm_row, _buffers, _paper_mm, move_and_read
+from .pcg64 import fill_normals, next_double
 from .weights import _finish_estimate
 
 
@@ -255,3 +256,39 @@ def paper_small(particles, weights, noise, sensors, table, z, rot1, trans, rot2,
     for j in range(n):
         _paper_row(j, mm, z, inv_n, out_w)
     return _weigh_into(weights, out_p, cs, out_w, u, new_p, new_w, est)
+
+
+# -- the same, drawing the noise and the resampling's draw from the filter's PCG64 --
+
+
+@nb.njit(**JIT)
+def beam_small_drawn(words, resample, particles, weights, noise, sensors, table, z,
+                     e_short, hit, short, rot1, trans, rot2, sd1, sdt, sd2, x0, y0,
+                     inv_res, exponent, max_read, z_max, p_rand, inv_sigma, u2_skip,
+                     out_p, out_w, new_p, new_w, est):  # fmt: skip
+    """`beam_small` with its draws made here from the PCG64 state ``words``.
+
+    ``noise`` (N, 3) receives ``Generator.standard_normal(out=noise)``'s
+    numbers, then (``resample``) ``u`` is ``Generator.random()``'s: the
+    draws `MCL.step` makes before `beam_small`, in the same order.
+    """
+    fill_normals(words, noise)
+    u = next_double(words) if resample else -1.0
+    return beam_small(
+        particles, weights, noise, sensors, table, z, e_short, hit, short, rot1,
+        trans, rot2, sd1, sdt, sd2, x0, y0, inv_res, exponent, max_read, z_max,
+        p_rand, inv_sigma, u2_skip, u, out_p, out_w, new_p, new_w, est,
+    )  # fmt: skip
+
+
+@nb.njit(**JIT)
+def paper_small_drawn(words, resample, particles, weights, noise, sensors, table, z,
+                      rot1, trans, rot2, sd1, sdt, sd2, x0, y0, inv_res, inv_n,
+                      out_p, out_w, new_p, new_w, est):  # fmt: skip
+    """`paper_small` with its draws made here, as `beam_small_drawn`."""
+    fill_normals(words, noise)
+    u = next_double(words) if resample else -1.0
+    return paper_small(
+        particles, weights, noise, sensors, table, z, rot1, trans, rot2, sd1, sdt,
+        sd2, x0, y0, inv_res, inv_n, u, out_p, out_w, new_p, new_w, est,
+    )  # fmt: skip
