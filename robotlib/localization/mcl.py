@@ -522,7 +522,9 @@ class MCL:
 
     def set_particles(self, particles, weights=None) -> None:
         """Replace the particle set (weights default to uniform)."""
-        p = _particles(particles).copy()
+        p = np.array(particles, dtype=np.float64, order="C")  # a copy
+        if p.ndim != 2 or p.shape[1] != 3:
+            _particles(p)  # raises
         w = (
             _uniform(len(p))
             if weights is None

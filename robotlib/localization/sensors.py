@@ -40,16 +40,17 @@ __all__ = [
 
 
 def _scan(z, n_sensors: int) -> np.ndarray:
-    if not (type(z) is np.ndarray and z.dtype == np.float64 and z.flags.c_contiguous):
+    if not (type(z) is np.ndarray and z.dtype is _F64 and z.flags.c_contiguous):
         z = np.ascontiguousarray(z, dtype=np.float64)
     if z.shape != (n_sensors,):
         raise ValueError(f"z must have shape ({n_sensors},), got {z.shape}")
-    if not all(map(_ZERO.__lt__, z.tolist())):  # NaN too; quicker than NumPy for a few
+    r = z.tolist()  # quicker than NumPy for a few; a NaN makes the sum NaN
+    if r and not (min(r) > 0.0 and sum(r) == sum(r)):
         raise ValueError("sonar readings must be positive")
     return z
 
 
-_ZERO = 0.0
+_F64 = np.dtype(np.float64)
 
 
 def innovation_loglik(z, zhat, n: int | None = None) -> np.ndarray:

@@ -163,10 +163,12 @@ def _gather_cum(particles, cum, total, u, out):
     n_cum = cum.shape[0]
     n = out.shape[0]
     j = 0
+    q = cum[0] / total if n_cum > 0 else 0.0  # each entry's quotient once
     for k in range(n):
         position = (k + u) / n
-        while j < n_cum - 1 and cum[j] / total <= position:
+        while j < n_cum - 1 and q <= position:
             j += 1
+            q = cum[j] / total
         out[k, 0] = particles[j, 0]
         out[k, 1] = particles[j, 1]
         out[k, 2] = particles[j, 2]
