@@ -27,6 +27,7 @@ import numba as nb
 import numpy as np
 
 from ..._config import JIT
+from .common import exp
 from .fused import _beam_mm_row, _buffers, _paper_mm, move_and_read
 from .pcg64 import fill_normals, next_double
 from .weights import _finish_estimate
@@ -64,7 +65,7 @@ def paper_rows(mm, terms, inv_n, out_w):
         d = 0.0
         for i in range(s_count):
             d += terms[i, mm[j, i]]
-        v = math.log(math.exp(-d / s_count) + inv_n)
+        v = math.log(exp(-d / s_count) + inv_n)
         out_w[j] = v
         if v > top:
             top = v
@@ -95,7 +96,7 @@ def paper_chunk(particles, normals, motion, sensors, table, where, skip, out_p, 
 def exp_chunk(lo, hi, weights, top, out_w):
     """``out_w[j] = weights[j] exp(out_w[j] - top)`` for rows ``lo:hi``."""
     for j in range(lo, hi):
-        out_w[j] = weights[j] * math.exp(out_w[j] - top)
+        out_w[j] = weights[j] * exp(out_w[j] - top)
 
 
 @nb.njit(**JIT)
@@ -115,7 +116,7 @@ def lut_part(lo, hi, z, e_short, is_max, hit, short, z_max, p_rand, inv_sigma, l
         for mm in range(lo, hi):
             zhat = mm * 0.001
             u = (zi - zhat) * inv_sigma
-            p = hit[mm] * math.exp(-0.5 * u * u) + p_rand
+            p = hit[mm] * exp(-0.5 * u * u) + p_rand
             if zi <= zhat:
                 p += short[mm] * ei
             lut[i, mm] = p
@@ -205,7 +206,7 @@ def _weigh_into(weights, out_p, cs, out_w, u, new_p, new_w, est):
         if out_w[j] > top:
             top = out_w[j]
     for j in range(out_w.shape[0]):
-        out_w[j] = weights[j] * math.exp(out_w[j] - top)
+        out_w[j] = weights[j] * exp(out_w[j] - top)
     return _finish_into(weights, top, out_w, out_p, cs, u, new_p, new_w, est)
 
 

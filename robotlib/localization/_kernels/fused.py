@@ -10,7 +10,7 @@ import numba as nb
 import numpy as np
 
 from ..._config import JIT, JIT_PARALLEL, serial_and_parallel
-from .common import _TWO_PI, wrap
+from .common import _TWO_PI, exp, wrap
 from .motion import _odometry_one
 from .normals import normal, sfc64_state
 from .weights import _finish_estimate
@@ -68,7 +68,7 @@ def _weigh_estimate(weights, particles, cs, out_w):
     """`update_weights` with ``out_w`` holding log-likelihoods, then the estimate."""
     top = _top(out_w)
     for j in nb.prange(out_w.shape[0]):
-        out_w[j] = weights[j] * math.exp(out_w[j] - top)
+        out_w[j] = weights[j] * exp(out_w[j] - top)
     est = np.empty(3)
     no_cum = np.empty(0)
     log_mean, ess, _ = _finish_estimate(weights, top, out_w, particles, cs, est, no_cum)
@@ -206,7 +206,7 @@ def _paper_mm(j, mm, z, inv_n, out):
     d = 0.0
     for i in range(mm.shape[1]):
         d += abs((z[i] - mm[j, i] * 0.001) / z[i])
-    out[j] = math.log(math.exp(-d / mm.shape[1]) + inv_n)
+    out[j] = math.log(exp(-d / mm.shape[1]) + inv_n)
 
 
 @nb.njit(**JIT)
@@ -228,7 +228,7 @@ def _beam_mm_row(
         zhat = k * 0.001
         u = (z[i] - zhat) * inv_sigma
         if u * u < u2_skip:
-            p = hit[k] * math.exp(-0.5 * u * u) + p_rand
+            p = hit[k] * exp(-0.5 * u * u) + p_rand
         else:
             p = p_rand
         # a select, not a branch (about half the readings are short); p >= +0
@@ -287,7 +287,7 @@ def _paper_weigh_parallel(terms, mm, inv_n, out_w):
         d = 0.0
         for i in range(s_count):
             d += terms[i, mm[j, i]]
-        out_w[j] = math.log(math.exp(-d / s_count) + inv_n)
+        out_w[j] = math.log(exp(-d / s_count) + inv_n)
 
 
 @nb.njit(**JIT)  # its passes are threaded kernels
