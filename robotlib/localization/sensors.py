@@ -101,6 +101,7 @@ def _outputs(scratch, n: int, s: int) -> tuple:
 
 
 _NONE_P = np.empty((0, 3))
+_NO_WORDS = np.zeros(4, dtype=np.uint64)  # no PCG64 state: the caller drew
 _NONE_W = np.empty(0)
 
 
@@ -252,12 +253,8 @@ class PaperSensorModel(_ExpectedModel):
     def _small(self, particles, weights, motion, noise, z, u, out_p, out_w, new_p,
                new_w, est, words=None):  # fmt: skip
         sensors, table, where, _ = self._consts()
-        if words is not None:
-            return chunked.paper_small_drawn(
-                words, u >= 0.0, particles, weights, noise, sensors, table, z,
-                *motion, *where, 1.0 / len(particles), out_p, out_w, new_p, new_w, est,
-            )  # fmt: skip
         return chunked.paper_small(
+            _NO_WORDS if words is None else words, words is not None,
             particles, weights, noise, sensors, table, z, *motion, *where,
             1.0 / len(particles), u, out_p, out_w, new_p, new_w, est,
         )  # fmt: skip
@@ -415,13 +412,8 @@ class BeamSensorModel(_ExpectedModel):
                new_w, est, words=None):  # fmt: skip
         q = self.params
         sensors, table, where, beam = self._consts(q)
-        if words is not None:
-            return chunked.beam_small_drawn(
-                words, u >= 0.0, particles, weights, noise, sensors, table, z,
-                np.exp(-q.lambda_short * z), *self._norms, *motion, *where, *beam,
-                out_p, out_w, new_p, new_w, est,
-            )  # fmt: skip
         return chunked.beam_small(
+            _NO_WORDS if words is None else words, words is not None,
             particles, weights, noise, sensors, table, z,
             np.exp(-q.lambda_short * z), *self._norms, *motion, *where, *beam, u,
             out_p, out_w, new_p, new_w, est,

@@ -210,11 +210,26 @@ def _weigh_into(weights, out_p, cs, out_w, u, new_p, new_w, est):
     return _finish_into(weights, top, out_w, out_p, cs, u, new_p, new_w, est)
 
 
+@nb.njit(**JIT, inline="always")
+def _draw(words, draw, noise, u):
+    """With ``draw``: ``noise`` := the PCG64's normals, then (``u >= 0``) ``u``.
+
+    The draws `MCL.step` makes before the call, in the same order, as
+    ``Generator.standard_normal(out=noise)`` and ``Generator.random()``
+    (`robotlib.localization._kernels.pcg64`). Returns ``u``.
+    """
+    if draw:
+        fill_normals(words, noise)
+        if u >= 0.0:
+            u = next_double(words)
+    return u
+
+
 @nb.njit(**JIT)
-def beam_small(particles, weights, noise, sensors, table, z, e_short, hit, short,
-               rot1, trans, rot2, sd1, sdt, sd2, x0, y0, inv_res, exponent, max_read,
-               z_max, p_rand, inv_sigma, u2_skip, u, out_p, out_w, new_p, new_w,
-               est):  # fmt: skip
+def beam_small(words, draw, particles, weights, noise, sensors, table, z, e_short,
+               hit, short, rot1, trans, rot2, sd1, sdt, sd2, x0, y0, inv_res, exponent,
+               max_read, z_max, p_rand, inv_sigma, u2_skip, u, out_p, out_w, new_p,
+               new_w, est):  # fmt: skip
     """`fused.beam_table_step`, then (``u >= 0``) resampling as in `finish`.
 
     The same passes, with the per-particle model written in (a call per
@@ -225,7 +240,13 @@ def beam_small(particles, weights, noise, sensors, table, z, e_short, hit, short
     `BeamSensorModel._model`'s ``is_max``), ``z_max, p_rand, inv_sigma,
     u2_skip``, and the resampling draw ``u``. The estimate goes to ``est``
     (3,); returns ``(log_mean, ess)``.
+
+    With ``draw``, the call makes the filter's draws itself from its PCG64
+    state ``words`` (4,) uint64 (`_draw`): ``noise`` (N, 3) receives the
+    motion noise and, when ``u >= 0``, ``u`` is drawn after it. Otherwise
+    ``noise`` and ``u`` are the caller's (``words`` unused).
     """
+    u = _draw(words, draw, noise, u)
     n = particles.shape[0]
     s_count = sensors.shape[0]
     is_max = np.empty(s_count, dtype=np.bool_)
@@ -245,10 +266,11 @@ def beam_small(particles, weights, noise, sensors, table, z, e_short, hit, short
 
 
 @nb.njit(**JIT)
-def paper_small(particles, weights, noise, sensors, table, z, rot1, trans, rot2, sd1,
-                sdt, sd2, x0, y0, inv_res, inv_n, u, out_p, out_w, new_p, new_w,
-                est):  # fmt: skip
+def paper_small(words, draw, particles, weights, noise, sensors, table, z, rot1,
+                trans, rot2, sd1, sdt, sd2, x0, y0, inv_res, inv_n, u, out_p, out_w,
+                new_p, new_w, est):  # fmt: skip
     """`fused.paper_table_step`, then (``u >= 0``) resampling, as `beam_small`."""
+    u = _draw(words, draw, noise, u)
     n = particles.shape[0]
     skip = np.zeros(sensors.shape[0], dtype=np.bool_)
     cs, mm = _buffers(n, sensors.shape[0])
@@ -259,39 +281,3 @@ def paper_small(particles, weights, noise, sensors, table, z, rot1, trans, rot2,
     for j in range(n):
         _paper_row(j, mm, z, inv_n, out_w)
     return _weigh_into(weights, out_p, cs, out_w, u, new_p, new_w, est)
-
-
-# -- the same, drawing the noise and the resampling's draw from the filter's PCG64 --
-
-
-@nb.njit(**JIT)
-def beam_small_drawn(words, resample, particles, weights, noise, sensors, table, z,
-                     e_short, hit, short, rot1, trans, rot2, sd1, sdt, sd2, x0, y0,
-                     inv_res, exponent, max_read, z_max, p_rand, inv_sigma, u2_skip,
-                     out_p, out_w, new_p, new_w, est):  # fmt: skip
-    """`beam_small` with its draws made here from the PCG64 state ``words``.
-
-    ``noise`` (N, 3) receives ``Generator.standard_normal(out=noise)``'s
-    numbers, then (``resample``) ``u`` is ``Generator.random()``'s: the
-    draws `MCL.step` makes before `beam_small`, in the same order.
-    """
-    fill_normals(words, noise)
-    u = next_double(words) if resample else -1.0
-    return beam_small(
-        particles, weights, noise, sensors, table, z, e_short, hit, short, rot1,
-        trans, rot2, sd1, sdt, sd2, x0, y0, inv_res, exponent, max_read, z_max,
-        p_rand, inv_sigma, u2_skip, u, out_p, out_w, new_p, new_w, est,
-    )  # fmt: skip
-
-
-@nb.njit(**JIT)
-def paper_small_drawn(words, resample, particles, weights, noise, sensors, table, z,
-                      rot1, trans, rot2, sd1, sdt, sd2, x0, y0, inv_res, inv_n,
-                      out_p, out_w, new_p, new_w, est):  # fmt: skip
-    """`paper_small` with its draws made here, as `beam_small_drawn`."""
-    fill_normals(words, noise)
-    u = next_double(words) if resample else -1.0
-    return paper_small(
-        particles, weights, noise, sensors, table, z, rot1, trans, rot2, sd1, sdt,
-        sd2, x0, y0, inv_res, inv_n, u, out_p, out_w, new_p, new_w, est,
-    )  # fmt: skip
