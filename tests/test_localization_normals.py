@@ -206,3 +206,22 @@ def test_kernels_exp_is_math_exp():
     a, b = np.empty_like(x), np.empty_like(x)
     both(x, a, b)
     np.testing.assert_array_equal(a.view(np.uint64), b.view(np.uint64))
+
+
+@pytest.mark.parametrize("how", ["deepcopy", "pickle"])
+def test_a_copied_filter_draws_from_its_own_generator(corridor, how):
+    """A copy's step draws from the copy's generator (not a view of the original's)."""
+    import copy
+    import pickle
+
+    from robotlib.localization import MCL
+
+    a = MCL.paper(corridor, n=300, fast=True, rng=2)
+    z = np.linspace(0.5, 2.5, len(a.sensor.sonar.sensors))
+    odo = np.array(corridor.start)
+    a.step(odo, odo + [0.2, 0.0, 0.02], z)  # the view is made
+    b = copy.deepcopy(a) if how == "deepcopy" else pickle.loads(pickle.dumps(a))
+    for m in (a, b):
+        m.step(odo + [0.2, 0.0, 0.02], odo + [0.4, 0.0, 0.04], z)
+    np.testing.assert_array_equal(a.particles, b.particles)
+    assert a.rng.bit_generator.state == b.rng.bit_generator.state

@@ -357,6 +357,12 @@ class MCL:
         self._weighed(weights, log_mean, ess)
         return None if new_p is None else (new_p, new_w)
 
+    def __getstate__(self) -> dict:
+        """Pickled and copied without `_pcg_words`' view of this generator's memory."""
+        state = self.__dict__.copy()
+        state.pop("_pcg", None)
+        return state
+
     def _pcg_words(self):
         """``(words, lock)`` of the filter's PCG64 (`motion.pcg64_words`), or None.
 

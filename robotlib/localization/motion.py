@@ -137,7 +137,11 @@ def pcg64_words(rng: np.random.Generator) -> np.ndarray | None:
     use. None when the bit generator is not exactly PCG64 or the check fails.
     """
     bg = rng.bit_generator
-    if type(bg) is not np.random.PCG64 or sys.byteorder != "little":
+    if (
+        type(bg) is not np.random.PCG64
+        or sys.byteorder != "little"
+        or not "1.17.0" <= np.lib.NumpyVersion(np.__version__) < "3.0.0"
+    ):  # the layout read below is that of NumPy 1.17 to 2
         return None
     pair = ctypes.c_uint64.from_address(bg.ctypes.state_address).value
     if not pair:
