@@ -12,7 +12,7 @@ import numpy as np
 from ..._config import JIT, JIT_PARALLEL, serial_and_parallel
 from .common import _TWO_PI, exp, wrap
 from .motion import _odometry_one
-from .normals import normal, sfc64_state
+from .normals import fill, sfc64_state
 from .weights import _finish_estimate
 
 
@@ -151,8 +151,9 @@ def move_and_read_keyed_parallel(
 
     The noise of rows ``c * rows`` on is chunk ``c`` of the step keyed
     ``key`` (`normals.fill_chunks`: `motion.standard_normals`' numbers),
-    drawn where it is used instead of stored: the threads take whole chunks
-    (a chunk's numbers come one after the other). The same numbers as
+    drawn by the thread that uses it instead of stored for the step: the
+    threads take whole chunks, each drawn into a buffer of its own in one
+    loop (`normals.fill`) and then used. The same numbers as
     `move_and_read_parallel` on `normals.fill_chunks`' noise.
     """
     rot1, trans, rot2, sd1, sdt, sd2 = motion
@@ -166,11 +167,16 @@ def move_and_read_keyed_parallel(
     for ch in nb.prange(n_chunks):
         st = np.empty(4, dtype=np.uint64)
         sfc64_state(key, ch, st)
-        for j in range(ch * rows, min(ch * rows + rows, n)):
-            # `_odometry_one` on the three numbers just drawn
-            r1 = rot1 + sd1 * normal(st)
-            t = trans + sdt * normal(st)
-            r2 = rot2 + sd2 * normal(st)
+        lo = ch * rows
+        hi = min(lo + rows, n)
+        draws = np.empty(3 * (hi - lo))  # the chunk's noise, drawn in one loop
+        fill(st, draws)
+        for j in range(lo, hi):
+            # `_odometry_one` on the chunk's three numbers for the row
+            d = 3 * (j - lo)
+            r1 = rot1 + sd1 * draws[d]
+            t = trans + sdt * draws[d + 1]
+            r2 = rot2 + sd2 * draws[d + 2]
             th0 = particles[j, 2]
             x = particles[j, 0] + t * math.cos(th0 + r1)
             y = particles[j, 1] + t * math.sin(th0 + r1)

@@ -13,7 +13,7 @@ advances the Python generator exactly as NumPy's would):
   increment) and output (XSL-RR of the new state);
 - ``next_double``: the top 53 bits times 2^-53 (``Generator.random``);
 - NumPy's ziggurat (``random_standard_normal`` in ``distributions.c``,
-  numba's tables, as `normals.normal`), filled in C order as
+  numba's tables, as `normals.fill`), filled in C order as
   ``Generator.standard_normal(out=...)`` fills.
 
 ``tests/test_localization_normals.py`` checks them against NumPy.
