@@ -125,8 +125,10 @@ class MCL:
     """
 
     _prebuild = None
-    _pcg = (None, None)
     """`robotlib.localization._prebuild.Prebuild` compiling the first step, or None."""
+
+    _pcg = (None, None)
+    """``(bit generator, (words, lock) or None)``: `_pcg_words`' view, kept."""
 
     def __init__(
         self,
