@@ -176,3 +176,40 @@ def _near_end(sx, sy, sth, segments, n_rays, cone):
         if np.any(np.abs(ends[:, 0] * d[1] - ends[:, 1] * d[0]) < 1e-6):
             return True
     return False
+
+
+@pytest.mark.parametrize("n", [40, 300])
+def test_fused_exact_weighing_equals_cast_then_weigh(n):
+    """`exact_models`' kernels: the casts and the weights of the two kernels in turn."""
+    from robotlib.localization import _kernels
+    from robotlib.localization._kernels import exact_models
+    from robotlib.localization.cones import exact_arguments
+
+    world = load_world("office")
+    sonar = SonarModel()
+    rng = np.random.default_rng(3)
+    x0, y0, x1, y1 = world.bounds
+    poses = np.concatenate([
+        world.sample_free_poses(n, rng),
+        np.column_stack([rng.uniform(x0 - 1, x1 + 1, n), rng.uniform(y0 - 1, y1 + 1, n),
+                         rng.uniform(-4, 4, n)]),
+    ])  # fmt: skip
+    args = exact_arguments(world, sonar)
+    zhat = np.empty((len(poses), 8))
+    _kernels.expected_scan_blocks(poses, *args, zhat)
+    z = np.array([0.3, 1.0, 2.2, 4.999, 5.0, 0.1, 3.3, 1.7])
+    beam = (0.75, 0.1, 0.05, 0.1, 0.15, 0.5)
+    ref_beam = np.empty(len(poses))
+    _kernels.beam_loglik(z, zhat, 5.0, *beam, ref_beam)
+    ref_paper = np.empty(len(poses))
+    _kernels.paper_loglik(z, zhat, float(len(poses)), ref_paper)
+    for fused in (exact_models.exact_beam, exact_models.exact_beam_parallel):
+        got, got_z = np.empty(len(poses)), np.empty_like(zhat)
+        fused(poses, *args, got_z, z, *beam, got)
+        np.testing.assert_array_equal(got_z, zhat)
+        np.testing.assert_array_equal(got, ref_beam)
+    for fused in (exact_models.exact_paper, exact_models.exact_paper_parallel):
+        got, got_z = np.empty(len(poses)), np.empty_like(zhat)
+        fused(poses, *args, got_z, z, float(len(poses)), got)
+        np.testing.assert_array_equal(got_z, zhat)
+        np.testing.assert_array_equal(got, ref_paper)

@@ -436,11 +436,25 @@ def expected_readings(
     out = np.empty((len(p), len(sonar.sensors)))
     kernel = (
         _kernels.expected_scan_blocks_parallel
-        if len(p) >= 64
+        if len(p) >= EXACT_PARALLEL_MIN
         else _kernels.expected_scan_blocks
     )
-    kernel(
-        p,
+    kernel(p, *exact_arguments(world, sonar), out)
+    return out
+
+
+EXACT_PARALLEL_MIN = 64
+"""Poses from which the exact casts run over threads."""
+
+
+def exact_arguments(world: World, sonar: SonarModel) -> tuple:
+    """Return the arguments of `_kernels.expected_scan_blocks` after the poses.
+
+    ``(sensors, walls, start, items, grid, n_rays, cone, max_range,
+    min_range, cos_specular)``: the sonar's and `_wall_blocks`' (the fused
+    exact kernels of `_kernels.exact_models` take the same).
+    """
+    return (
         sonar.sensors,
         *_wall_blocks(world, float(sonar.max_range), float(sonar.cone)),
         int(sonar.n_rays),
@@ -448,9 +462,7 @@ def expected_readings(
         float(sonar.max_range),
         float(sonar.min_range),
         sonar.cos_specular,
-        out,
     )
-    return out
 
 
 _BLOCKS: dict = {}

@@ -27,8 +27,8 @@ import numpy as np
 
 from ..sensing import SonarModel
 from . import _kernels, stepping
-from ._kernels import chunked
-from .cones import cone_table, expected_readings
+from ._kernels import chunked, exact_models
+from .cones import EXACT_PARALLEL_MIN, cone_table, exact_arguments, expected_readings
 from .motion import PARALLEL_MIN, _particles
 
 __all__ = [
@@ -210,8 +210,18 @@ class PaperSensorModel(_ExpectedModel):
 
     def log_likelihood(self, particles, z) -> np.ndarray:
         """Per-particle ``log w_j`` for readings ``z`` (S,), m."""
-        if self.table is None:
-            return innovation_loglik(z, self.expected(particles))
+        if self.table is None:  # cast and weigh in one kernel (the same numbers)
+            p = _particles(particles)
+            z = _scan(z, len(self.sonar.sensors))
+            out = np.empty(len(p))
+            kernel = (
+                exact_models.exact_paper_parallel
+                if len(p) >= EXACT_PARALLEL_MIN
+                else exact_models.exact_paper
+            )
+            kernel(p, *exact_arguments(self.world, self.sonar),
+                   np.empty((len(p), len(z))), z, float(len(p)), out)  # fmt: skip
+            return out
         p = _particles(particles)
         z = _scan(z, len(self.sonar.sensors))
         out = np.empty(len(p))
@@ -350,25 +360,20 @@ class BeamSensorModel(_ExpectedModel):
         """
         if self.table is not None:
             return self._table_log_likelihood(particles, z)
-        zhat = self.expected(particles)
-        z = _scan(z, zhat.shape[1])
+        p = _particles(particles)  # cast and weigh in one kernel (the same numbers)
+        z = _scan(z, len(self.sonar.sensors))
         q = self.params
-        out = np.empty(len(zhat))
-        kernel = (  # as many threads as the cone casts (erf and exp per beam)
-            _kernels.beam_loglik_parallel if len(zhat) >= 64 else _kernels.beam_loglik
+        out = np.empty(len(p))
+        kernel = (
+            exact_models.exact_beam_parallel
+            if len(p) >= EXACT_PARALLEL_MIN
+            else exact_models.exact_beam
         )
         kernel(
-            z,
-            zhat,
-            float(self.sonar.max_range),
-            q.z_hit,
-            q.z_short,
-            q.z_max,
-            q.z_rand,
-            q.sigma_hit,
-            q.lambda_short,
+            p, *exact_arguments(self.world, self.sonar), np.empty((len(p), len(z))),
+            z, q.z_hit, q.z_short, q.z_max, q.z_rand, q.sigma_hit, q.lambda_short,
             out,
-        )
+        )  # fmt: skip
         if q.exponent != 1.0:
             out *= q.exponent
         return out
