@@ -38,6 +38,7 @@ def _echoes_both(cones, walls, counts, n_rays, cone, max_range, cos_specular):
     offs = _offsets(n_rays, cone)
     ray = np.empty((3, _lanes(n_rays)))
     cand = np.empty(((walls.shape[1] + 63) // 64, _lanes(n_rays)), dtype=np.uint64)
+    pas = np.empty(walls.shape[1], dtype=np.uint64)
     items = np.empty(0, dtype=np.int32)
     for k in range(cones.shape[0]):
         w = walls[k, : counts[k]]
@@ -48,7 +49,7 @@ def _echoes_both(cones, walls, counts, n_rays, cone, max_range, cos_specular):
         table = wall_table(w)
         out[k, 1] = cone_echo_pruned(
             sx, sy, sth, math.cos(sth), math.sin(sth), table, items, True, 0,
-            counts[k], n_rays, cone, max_range, cos_specular, offs, ray, cand,
+            counts[k], n_rays, cone, max_range, cos_specular, offs, ray, cand, pas,
         )  # fmt: skip
     return out
 

@@ -33,10 +33,11 @@ def _exact_beam(
     for q in nb.prange((n + _EXACT_CHUNK - 1) // _EXACT_CHUNK):
         ray = np.empty((3, _lanes(n_rays)))
         cand = np.empty(((walls.shape[0] + 63) // 64, _lanes(n_rays)), dtype=np.uint64)
+        pas = np.empty(walls.shape[0], dtype=np.uint64)
         for k in range(q * _EXACT_CHUNK, min(n, (q + 1) * _EXACT_CHUNK)):
             _expected_pose_blocks(
                 k, poses, sensors, turns, walls, start, items, grid, n_rays, cone,
-                max_range, min_range, cos_specular, offs, ray, cand, zhat,
+                max_range, min_range, cos_specular, offs, ray, cand, pas, zhat,
             )  # fmt: skip
             beam_one(
                 k, z, zhat, max_range, z_hit, z_short, z_max, z_rand, sigma,
@@ -61,10 +62,11 @@ def _exact_paper(
     for q in nb.prange((n + _EXACT_CHUNK - 1) // _EXACT_CHUNK):
         ray = np.empty((3, _lanes(n_rays)))
         cand = np.empty(((walls.shape[0] + 63) // 64, _lanes(n_rays)), dtype=np.uint64)
+        pas = np.empty(walls.shape[0], dtype=np.uint64)
         for k in range(q * _EXACT_CHUNK, min(n, (q + 1) * _EXACT_CHUNK)):
             _expected_pose_blocks(
                 k, poses, sensors, turns, walls, start, items, grid, n_rays, cone,
-                max_range, min_range, cos_specular, offs, ray, cand, zhat,
+                max_range, min_range, cos_specular, offs, ray, cand, pas, zhat,
             )  # fmt: skip
             paper_one(k, z, zhat, n_weight, out)
 
