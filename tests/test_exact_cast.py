@@ -214,3 +214,55 @@ def test_fused_exact_weighing_equals_cast_then_weigh(n):
         fused(poses, *args, got_z, z, float(len(poses)), got)
         np.testing.assert_array_equal(got_z, zhat)
         np.testing.assert_array_equal(got, ref_paper)
+
+
+@pytest.mark.parametrize(
+    "kind, n, policy",
+    [("beam", 40, "every"), ("beam", 300, "every"), ("beam1", 300, "threshold"),
+     ("paper", 40, "threshold"), ("paper", 300, "every")],
+)  # fmt: skip
+def test_exact_step_in_one_call_equals_its_parts(kind, n, policy):
+    """`MCL.step` on the exact path (`exact_models.exact_step`): the four stages' bits.
+
+    40 particles: the serial call; 300: the threaded one. "every": resampled
+    in the call; "threshold": by the policy afterwards (when the ESS is low).
+    """
+    from robotlib.localization import (
+        MCL,
+        BeamParameters,
+        BeamSensorModel,
+        PaperSensorModel,
+        ThresholdResampling,
+    )
+
+    world = load_world("office")
+
+    def make():
+        sensor = (
+            PaperSensorModel(world)
+            if kind == "paper"
+            else BeamSensorModel(
+                world, params=BeamParameters(exponent=0.2 if kind == "beam" else 1.0)
+            )
+        )
+        resampling = (
+            ThresholdResampling("systematic", 1.0)
+            if policy == "every"
+            else ThresholdResampling("systematic", 0.5)
+        )
+        return MCL(world, sensor, resampling=resampling, n=n, rng=5, check=True)
+
+    z = expected_readings(world, np.array([world.start]))[0]
+    z[2] = 5.0  # a max reading
+    odo = [np.array(world.start) + k * np.array([0.3, 0.1, 0.2]) for k in range(5)]
+    a, b = make(), make()
+    for k in range(4):
+        est = a.step(odo[k], odo[k + 1], z).copy()
+        b.predict(odo[k], odo[k + 1])
+        b.update(z)
+        np.testing.assert_array_equal(est, b.estimate())
+        assert a.ess == b.ess and a._log_mean == b._log_mean
+        b.resample()
+        np.testing.assert_array_equal(a.particles, b.particles)
+        np.testing.assert_array_equal(a.weights, b.weights)
+    assert a.info.n_after == n

@@ -143,6 +143,10 @@ class _ExpectedModel:
             new = (np.empty((n, 3)), np.empty(n))
         else:
             new = (_NONE_P, _NONE_W)
+        if self.table is None:  # the exact path: one call, threaded from 64
+            return self._exact_run(
+                particles, weights, motion, noise, z, scratch, u, new
+            )
         if n < PARALLEL_MIN:  # one serial call, its scalars one by one
             if scratch is None:
                 out_p, out_w = np.empty((n, 3)), np.empty(n)
@@ -162,6 +166,35 @@ class _ExpectedModel:
                 self.name, particles, weights, prm, noise, key, self.sonar.sensors,
                 skip, t.table, lut, out, u,
             )  # fmt: skip
+        got = (None, None) if u < 0.0 else new
+        return (out_p, out_w, log_mean, ess, est, *got)
+
+    def _exact_run(self, particles, weights, motion, noise, z, scratch, u, new):
+        """`_run` on the exact path (``noise`` drawn): `exact_models.exact_step`.
+
+        The model's own arguments come from its ``_exact_model(n)``: ``(beam,
+        z_hit, z_short, z_max, z_rand, sigma, lam_short, exponent, n_weight)``.
+        """
+        n = len(particles)
+        if scratch is None:
+            out_p, out_w, cs = np.empty((n, 3)), np.empty(n), np.empty((n, 2))
+            zhat = np.empty((n, len(z)))
+        else:
+            out_p = scratch.take("particles", (n, 3))
+            out_w = scratch.take("weights", (n,))
+            cs = scratch.take("cs", (n, 2))
+            zhat = scratch.take("zhat", (n, len(z)))
+        est = np.empty(3)
+        kernel = (
+            exact_models.exact_step_parallel
+            if n >= EXACT_PARALLEL_MIN
+            else exact_models.exact_step
+        )
+        args = exact_arguments(self.world, self.sonar)
+        log_mean, ess = kernel(
+            particles, weights, noise, *motion, *args, z, *self._exact_model(n), u,
+            out_p, out_w, *new, est, cs, zhat,
+        )  # fmt: skip
         got = (None, None) if u < 0.0 else new
         return (out_p, out_w, log_mean, ess, est, *got)
 
@@ -262,6 +295,9 @@ class PaperSensorModel(_ExpectedModel):
             particles, weights, noise, sensors, table, z, *motion, *where,
             1.0 / len(particles), u, out_p, out_w, new_p, new_w, est,
         )  # fmt: skip
+
+    def _exact_model(self, n: int) -> tuple:
+        return (False, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 1.0, float(n))
 
     def _large(self, z, motion, where, n):
         k = getattr(self, "_mm", None)
@@ -416,6 +452,11 @@ class BeamSensorModel(_ExpectedModel):
             np.exp(-q.lambda_short * z), *self._norms, *motion, *where, *beam, u,
             out_p, out_w, new_p, new_w, est,
         )  # fmt: skip
+
+    def _exact_model(self, n: int) -> tuple:
+        q = self.params
+        return (True, q.z_hit, q.z_short, q.z_max, q.z_rand, q.sigma_hit,
+                q.lambda_short, float(q.exponent), 0.0)  # fmt: skip
 
     def _extra(self, q) -> tuple:
         max_range = float(self.sonar.max_range)
