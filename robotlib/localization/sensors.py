@@ -8,7 +8,8 @@ compute them in one of two ways:
 - exact (``fast=False``): every particle casts its sonar cones against the
   walls as `robotlib.sensing._kernels.sonar_cone` does, the simulator's own model
   (the same numbers; each cone casts only the rays that can lower its echo,
-  against the walls they may reach: `_kernels.exact.cone_echo_pruned`);
+  against the walls they may reach: `_kernels.exact.cone_echo_pruned`; cast
+  and weighed in one kernel, `_kernels.exact_models`);
 - fast (``fast=True``): a `ConeTable` precomputed once per world holds, per
   grid cell and per direction bin, the cone range from the cell's centre, in
   millimetres; a particle's reading is looked up at its sensor's cell and
@@ -278,7 +279,7 @@ class PaperSensorModel(_ExpectedModel):
         return out
 
     def _step(self, particles, weights, motion, normals, z, scratch=None):
-        """Move, weigh, estimate in one kernel (see `MCL.step`; fast path only).
+        """Move, weigh, estimate in one kernel (see `MCL.step`).
 
         ``scratch`` (a `robotlib.localization.motion.Scratch`) lends the
         output and work arrays; None makes new ones. Returns ``(out_p, out_w,
@@ -435,7 +436,7 @@ class BeamSensorModel(_ExpectedModel):
         return lut
 
     def _step(self, particles, weights, motion, normals, z, scratch=None):
-        """Move, weigh, estimate in one kernel (see `MCL.step`; fast path only).
+        """Move, weigh, estimate in one kernel (see `MCL.step`).
 
         ``scratch`` and the result as for `PaperSensorModel._step`.
         """
