@@ -338,8 +338,7 @@ class MCL:
             and policy.threshold >= 1.0
             and policy.method in ("systematic", "low_variance")
         )
-        fast = getattr(sensor, "fast", False)  # the exact path draws here
-        words = self._pcg_words() if n < PARALLEL_MIN and fast else None
+        words = self._pcg_words() if n < PARALLEL_MIN else None
         if words is not None:  # the call draws the noise, then u, from the PCG64
             with words[1]:
                 moved, weights, log_mean, ess, self.last_estimate, new_p, new_w = (

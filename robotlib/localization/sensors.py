@@ -151,7 +151,7 @@ class _ExpectedModel:
             new = (_NONE_P, _NONE_W)
         if self.table is None:  # the exact path: one call, threaded from 64
             return self._exact_run(
-                particles, weights, motion, noise, z, scratch, u, new
+                particles, weights, motion, noise, z, scratch, u, new, words
             )
         if n < PARALLEL_MIN:  # one serial call, its scalars one by one
             if scratch is None:
@@ -175,8 +175,9 @@ class _ExpectedModel:
         got = (None, None) if u < 0.0 else new
         return (out_p, out_w, log_mean, ess, est, *got)
 
-    def _exact_run(self, particles, weights, motion, noise, z, scratch, u, new):
-        """`_run` on the exact path (``noise`` drawn): `exact_models.exact_step`.
+    def _exact_run(self, particles, weights, motion, noise, z, scratch, u, new,
+                   words=None):  # fmt: skip
+        """`_run` on the exact path: `exact_models.exact_step`.
 
         The model's own arguments come from its ``_exact_model(n)``: ``(beam,
         z_hit, z_short, z_max, z_rand, sigma, lam_short, exponent, n_weight)``.
@@ -198,8 +199,9 @@ class _ExpectedModel:
         )
         args = exact_arguments(self.world, self.sonar)
         log_mean, ess = kernel(
-            particles, weights, noise, *motion, *args, z, *self._exact_model(n), u,
-            out_p, out_w, *new, est, cs, zhat,
+            _NO_WORDS if words is None else words, words is not None, particles,
+            weights, noise, *motion, *args, z, *self._exact_model(n), u, out_p, out_w,
+            *new, est, cs, zhat,
         )  # fmt: skip
         got = (None, None) if u < 0.0 else new
         return (out_p, out_w, log_mean, ess, est, *got)

@@ -16,7 +16,7 @@ import numba as nb
 import numpy as np
 
 from ..._config import serial_and_parallel
-from .chunked import _weigh_into
+from .chunked import _draw, _weigh_into
 from .exact import _EXACT_CHUNK, _expected_pose_blocks, _lanes, _offsets, _turns
 from .models import beam_one, paper_one
 from .motion import _odometry_one
@@ -83,10 +83,10 @@ exact_paper, exact_paper_parallel = serial_and_parallel(_exact_paper)
 
 
 def _exact_step(
-    particles, weights, noise, rot1, trans, rot2, sd1, sdt, sd2, sensors, walls,
-    start, items, grid, n_rays, cone, max_range, min_range, cos_specular, z, beam,
-    z_hit, z_short, z_max, z_rand, sigma, lam_short, exponent, n_weight, u, out_p,
-    out_w, new_p, new_w, est, cs, zhat,
+    words, draw, particles, weights, noise, rot1, trans, rot2, sd1, sdt, sd2,
+    sensors, walls, start, items, grid, n_rays, cone, max_range, min_range,
+    cos_specular, z, beam, z_hit, z_short, z_max, z_rand, sigma, lam_short, exponent,
+    n_weight, u, out_p, out_w, new_p, new_w, est, cs, zhat,
 ):  # fmt: skip
     """`MCL.step` on the exact path in one call: the numbers of its four stages.
 
@@ -100,8 +100,11 @@ def _exact_step(
     (3,) and, when ``u >= 0``, resamples systematically with the draw ``u``
     into ``new_p``, ``new_w`` (`chunked`'s `_weigh_into`, the same sums in
     the same order). ``cs`` (N, 2) is scratch (the headings' cosines and
-    sines). Returns ``(log_mean, ess)``.
+    sines). With ``draw``, ``noise`` and ``u`` are first drawn from the
+    PCG64 state ``words`` (`chunked._draw`, as the filter's generator would).
+    Returns ``(log_mean, ess)``.
     """
+    u = _draw(words, draw, noise, u)
     turns = _turns(sensors)
     offs = _offsets(n_rays, cone)
     n = particles.shape[0]
