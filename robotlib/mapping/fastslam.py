@@ -201,12 +201,16 @@ class GridFastSLAM:
         window: int = 0,
         window_weigh: str = "window",
         sonar_incidence: float | None = None,
+        best_by: str = "weight",
         rng: np.random.Generator | int | None = None,
     ):
         if sensor not in ("laser", "sonar"):
             raise ValueError(f"sensor must be 'laser' or 'sonar', got {sensor!r}")
         if n_particles < 1:
             raise ValueError("n_particles must be at least 1")
+        if best_by not in ("weight", "path"):
+            raise ValueError("best_by must be 'weight' or 'path'")
+        self.best_by = best_by
         if sonar_likelihood not in ("beam", "endpoint"):
             raise ValueError("sonar_likelihood must be 'beam' or 'endpoint'")
         self.sensor = sensor
@@ -247,6 +251,7 @@ class GridFastSLAM:
         self.maps = np.zeros((n, *(int(v) for v in shape)), dtype=np.float32)
         self.particles = np.tile(np.asarray(start, dtype=float), (n, 1))
         self.logw = np.zeros(n)
+        self.path_loglik = np.zeros(n)
         self.resampled = 0
         self._poses: list[np.ndarray] = [self.particles.copy()]
         self._parents: list[np.ndarray] = [np.arange(n)]
@@ -462,12 +467,14 @@ class GridFastSLAM:
             else:
                 ll = self.weigh_sonar(self.particles, scan)
             self.logw = self.logw + self.temperature * ll
+            self.path_loglik = self.path_loglik + ll
             self.logw -= self.logw.max()
             if effective_sample_size(self.weights) < self.resample_below * self.n:
                 idx = systematic_resample(self.weights, rng=self.rng)
                 parents = resample_parents(idx, self.n)
                 self.copied += self._tracked_diff().resample(self.maps, parents)
                 self.particles = self.particles[parents]
+                self.path_loglik = self.path_loglik[parents]
                 self._win = self._win[parents]
                 self.logw = np.zeros(self.n)
                 self.resampled += 1
@@ -481,7 +488,9 @@ class GridFastSLAM:
 
     # -- results ------------------------------------------------------------
     def best(self) -> int:
-        """Index of the particle with the largest weight."""
+        """Index of the particle with the largest weight (or path likelihood)."""
+        if self.best_by == "path":
+            return int(np.argmax(self.path_loglik))
         return int(np.argmax(self.logw))
 
     def best_map(self) -> OccupancyGrid:
