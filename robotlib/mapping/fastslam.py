@@ -202,6 +202,7 @@ class GridFastSLAM:
         window_weigh: str = "window",
         sonar_incidence: float | None = None,
         best_by: str = "weight",
+        sonar_range_to: str = "entry",
         rng: np.random.Generator | int | None = None,
     ):
         if sensor not in ("laser", "sonar"):
@@ -211,6 +212,9 @@ class GridFastSLAM:
         if best_by not in ("weight", "path"):
             raise ValueError("best_by must be 'weight' or 'path'")
         self.best_by = best_by
+        if sonar_range_to not in ("entry", "centre"):
+            raise ValueError("sonar_range_to must be 'entry' or 'centre'")
+        self.sonar_range_to = sonar_range_to
         if sonar_likelihood not in ("beam", "endpoint"):
             raise ValueError("sonar_likelihood must be 'beam' or 'endpoint'")
         self.sensor = sensor
@@ -325,6 +329,7 @@ class GridFastSLAM:
                 self.sonar.sensors, np.ascontiguousarray(ranges, dtype=float),
                 self.sonar.cone / 2, self.sonar.max_range, 5, self.sonar_sigma,
                 self.p_rand, self.sonar_occ, self.sonar_unknown, out,
+                self.sonar_range_to == "centre",
             )  # fmt: skip
             return out
         self._kernel("sonar_loglik_many")(
@@ -441,7 +446,7 @@ class GridFastSLAM:
             self.maps, *self._geometry(), wins, self.sonar.sensors, scans,
             self.sonar.cone / 2,
             self.sonar.max_range, 5, self.sonar_sigma, self.p_rand, self.sonar_occ,
-            self.sonar_unknown, ll,
+            self.sonar_unknown, ll, self.sonar_range_to == "centre",
         )  # fmt: skip
         return ll
 
