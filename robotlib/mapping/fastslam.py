@@ -26,8 +26,6 @@ kernels; never plots.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
 from .._random import as_rng
@@ -37,7 +35,6 @@ from ..sensing.laser import LaserModel, laser_poses
 from ..sim import OdometryNoise
 from ..world import World
 from . import _kernels, _kernels_copy, _kernels_window
-from .metrics import MapScore, map_score, trajectory_rms
 from .motion import sample_arc_motion
 from .occupancy import InverseLaserModel, InverseSonarModel, OccupancyGrid
 from .resampling import normalise_log_weights, resample_maps, resample_parents
@@ -62,6 +59,8 @@ SONAR_DEFAULTS = {
     "p_rand": 0.2,
     "sonar_sigma": 0.1,
     "sonar_walls": SONAR_WALL_SENSORS,
+    "best_by": "path",
+    "estimate": "mean",
 }
 """`run_fastslam`'s defaults for the sonar (measured on the loop world: eight
 wide cones tell little per record, so each weighs little; only the sonars
@@ -82,8 +81,6 @@ __all__ = [
     "SONAR_PARTICLES",
     "SONAR_WALL_SENSORS",
     "GridFastSLAM",
-    "FastSLAMResult",
-    "run_fastslam",
     "normalise_log_weights",
     "resample_maps",
     "resample_parents",
@@ -166,6 +163,17 @@ class GridFastSLAM:
     window_weigh : {"window", "last"}
         Weigh by every record of the window (their log-likelihoods summed)
         or by the newest only.
+    best_by : {"weight", "path"}
+        Which particle `best` picks: the largest weight (the evidence since
+        the last resampling) or the largest summed log-likelihood of every
+        reading along its lineage (``path_loglik``, the whole run's evidence).
+    sonar_range_to : {"entry", "centre"}
+        Sonar beam model: a ray's expected range is where it enters its
+        first wall cell, or that cell's centre (`_kernels.sonar_beam_loglik`).
+    estimate : {"best", "mean"}
+        What `run_fastslam` reports: the best particle's lineage and map, or
+        the posterior mean trajectory (`mean_path`, the weighted mean of
+        every particle's lineage) and its map (`mean_map`).
     rng : numpy.random.Generator, int or None
         Motion noise and resampling.
     """
@@ -203,6 +211,7 @@ class GridFastSLAM:
         sonar_incidence: float | None = None,
         best_by: str = "weight",
         sonar_range_to: str = "entry",
+        estimate: str = "best",
         rng: np.random.Generator | int | None = None,
     ):
         if sensor not in ("laser", "sonar"):
@@ -215,6 +224,9 @@ class GridFastSLAM:
         if sonar_range_to not in ("entry", "centre"):
             raise ValueError("sonar_range_to must be 'entry' or 'centre'")
         self.sonar_range_to = sonar_range_to
+        if estimate not in ("best", "mean"):
+            raise ValueError("estimate must be 'best' or 'mean'")
+        self.estimate = estimate
         if sonar_likelihood not in ("beam", "endpoint"):
             raise ValueError("sonar_likelihood must be 'beam' or 'endpoint'")
         self.sensor = sensor
@@ -521,91 +533,40 @@ class GridFastSLAM:
         return out
 
     def paths(self) -> np.ndarray:
-        """Return every particle's lineage, (N, T, 3) (for plots)."""
-        paths = []
-        for k0 in range(self.n):
-            k = k0
-            rows = []
-            for t in range(len(self._poses) - 1, -1, -1):
-                rows.append(self._poses[t][k])
-                k = int(self._parents[t][k])
-            paths.append(rows[::-1])
-        return np.array(paths)
+        """Return every particle's lineage, (N, T, 3); row 0 is the start pose."""
+        out = np.empty((self.n, len(self._poses), 3))
+        k = np.arange(self.n)
+        for t in range(len(self._poses) - 1, -1, -1):
+            out[:, t] = self._poses[t][k]
+            k = self._parents[t][k]
+        return out
 
+    def mean_path(self) -> np.ndarray:
+        """Return the posterior mean trajectory, (T, 3), row 0 the start pose.
 
-@dataclass(frozen=True, eq=False)
-class FastSLAMResult:
-    """What `run_fastslam` returns.
+        At every record, the mean of the particles' lineages (`paths`)
+        weighted by the particles' weights now: each lineage is a sample of
+        the whole trajectory given every reading, so this is the filter's
+        smoothed estimate (positions averaged, headings by their mean
+        direction), not the filtered pose of the time.
+        """
+        p = self.paths()
+        w = self.weights
+        out = np.empty(p.shape[1:])
+        out[:, :2] = np.einsum("n,ntk->tk", w, p[:, :, :2])
+        out[:, 2] = np.arctan2(w @ np.sin(p[:, :, 2]), w @ np.cos(p[:, :, 2]))
+        return out
 
-    Attributes
-    ----------
-    path : numpy.ndarray, shape (T, 3)
-        The best particle's trajectory, one row per record.
-    map : OccupancyGrid
-        The best particle's map.
-    rms : float
-        Position RMS error of ``path`` against the true poses, m.
-    score : MapScore
-        ``map`` against the world.
-    odometry_rms : float
-        The odometry's RMS error on the same log, m.
-    filter : GridFastSLAM
-        The filter after the run.
-    """
+    def mean_map(self, scans) -> OccupancyGrid:
+        """Return the map of `mean_path` from the run's readings (T, ...).
 
-    path: np.ndarray
-    map: OccupancyGrid
-    rms: float
-    score: MapScore
-    odometry_rms: float
-    filter: GridFastSLAM
-
-
-def run_fastslam(
-    log, n_particles: int = 30, sensor: str = "laser", resolution=None, rng=0, **kw
-) -> FastSLAMResult:
-    """Run grid FastSLAM over a `robotlib.mapping.drive.DriveLog`.
-
-    Parameters
-    ----------
-    log : DriveLog
-        The drive (its world gives only the grid's cells and the start pose).
-    n_particles : int
-        Particles.
-    sensor : {"laser", "sonar"}
-        Which readings to use.
-    resolution : float, optional
-        Cell side, m (default 0.05 for the laser, 0.1 for the sonar).
-    rng : numpy.random.Generator, int or None
-        The filter's randomness.
-    **kw
-        More `GridFastSLAM` parameters (for the sonar, `SONAR_DEFAULTS`
-        unless given).
-
-    Returns
-    -------
-    FastSLAMResult
-    """
-    res = (0.05 if sensor == "laser" else 0.1) if resolution is None else resolution
-    if sensor == "sonar":
-        walls_given = "sonar_walls" in kw
-        kw = {**SONAR_DEFAULTS, **kw}
-        if not walls_given and len(log.sonar_model.sensors) != 8:
-            kw["sonar_walls"] = None  # (the default names a P3-DX ring's sonars)
-    f = GridFastSLAM.for_world(
-        log.world, res, start=log.odometry[0], n_particles=n_particles,
-        sensor=sensor, laser=log.laser_model, sonar=log.sonar_model, rng=rng, **kw,
-    )  # fmt: skip
-    scans = log.laser if sensor == "laser" else log.sonar
-    for t in range(len(log)):
-        f.step(log.odometry[t], scans[t])
-    path = f.best_path()[1:]
-    m = f.best_map()
-    return FastSLAMResult(
-        path=path,
-        map=m,
-        rms=trajectory_rms(path, log.truth),
-        score=map_score(m, log.world, res),
-        odometry_rms=trajectory_rms(log.odometry, log.truth),
-        filter=f,
-    )
+        ``scans`` are the readings `step` took, in order; each is added at
+        its record's mean pose with the particles' own map update.
+        """
+        path = self.mean_path()[1:]
+        if len(scans) != len(path):
+            raise ValueError(f"{len(path)} records were taken, got {len(scans)} scans")
+        g = OccupancyGrid(self.maps.shape[1:], self.origin, self.resolution)
+        for t in range(len(path)):
+            self.update_maps(scans[t], path[t : t + 1], g.logodds[None])
+        return g
