@@ -31,6 +31,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ._ipython import in_kernel, ipython_shell
+
 __all__ = [
     "setup",
     "warm_up",
@@ -252,7 +254,7 @@ def progress(iterable=None, desc: str = "", total: int | None = None, **kw):
     -------
     tqdm.tqdm
     """
-    if _in_kernel():
+    if in_kernel():
         from tqdm.notebook import tqdm
     else:
         from tqdm import tqdm
@@ -356,18 +358,6 @@ def warm_up(parts: Iterable[str] = ("sim",), show: bool = True) -> dict[str, flo
     return spent
 
 
-def _in_kernel() -> bool:
-    shell = _shell()
-    return shell is not None and getattr(shell, "kernel", None) is not None
-
-
-def _shell():
-    try:
-        return get_ipython()  # type: ignore[name-defined]  # noqa: F821
-    except NameError:
-        return None
-
-
 def setup(
     seed: int = 0, warm: Iterable[str] = ("sim",), style: bool = True
 ) -> np.random.Generator:
@@ -397,7 +387,7 @@ def setup(
         from .plotting import style as course_style
 
         if not os.environ.get("DISPLAY") and "MPLBACKEND" not in os.environ:
-            if _shell() is None:
+            if ipython_shell() is None:
                 mpl.use("Agg")
         course_style.use()
     random.seed(seed)
@@ -422,7 +412,7 @@ def _notice_compiling() -> None:
     nothing shows; a kernel that must compile names itself in a bar below
     the running cell, with how many compiled so far and for how long.
     """
-    shell = _shell()
+    shell = ipython_shell()
     if shell is None or _NOTICE:
         return
     from numba.core import event
@@ -486,7 +476,7 @@ def explain_unsolved(shell=None) -> bool:
     """
     from ._unsolved import install
 
-    shell = _shell() if shell is None else shell
+    shell = ipython_shell() if shell is None else shell
     return shell is not None and install(shell)
 
 

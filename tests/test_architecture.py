@@ -35,6 +35,7 @@ LAYERS = {
     "robotlib.widgets": 7,
     "robotlib.notebook": 7,
     "robotlib._unsolved": 0,  # a leaf: the notebook set-up's IPython handler
+    "robotlib._ipython": 0,  # a leaf: which shell runs us (notebook, widgets)
     "robotlib.course": 7,
     "robotlib.cli": 8,
     "robotlib": 8,

@@ -10,15 +10,17 @@ coalesced into one run of the newest. Without a Jupyter kernel (tests,
 scripts) or with ``background=False`` it runs the job inline, so a test
 that sets a slider can read the result on the next line.
 
-Imports nothing of robotlib; panels in this package use it.
+Imports nothing of robotlib but the leaf `robotlib._ipython` (whose
+`in_kernel` and `ipython_shell` it re-exports); panels in this package use it.
 """
 
 from __future__ import annotations
 
-import sys
 import threading
 import traceback
 from collections.abc import Callable
+
+from .._ipython import in_kernel, ipython_shell
 
 __all__ = [
     "STALE_CSS",
@@ -38,21 +40,6 @@ shows greyed while a newer one computes."""
 
 class Cancelled(Exception):
     """Raised inside a job by `LiveRunner.check` when a newer run was asked for."""
-
-
-def ipython_shell():
-    """Return the running IPython shell, or None.
-
-    Also from a widget's callback or a worker thread, where the builtin
-    ``get_ipython`` is gone (IPython adds it only while a cell runs).
-    """
-    ipython = sys.modules.get("IPython")
-    return None if ipython is None else ipython.get_ipython()
-
-
-def in_kernel() -> bool:
-    """Return True inside a Jupyter kernel (where a frontend can send changes)."""
-    return getattr(ipython_shell(), "kernel", None) is not None
 
 
 class LiveRunner:
