@@ -79,8 +79,9 @@ SONAR_PARTICLES = 200
 """Particles the bench gives sonar FastSLAM. With `SONAR_DEFAULTS`, the loop
 world's seeds 0-9, mean position RMS and map error over odometry mapping's,
 filter seeds ``seed + 1000 k``, k = 0-3: 100 particles 0.33 m, 0.46; 200
-particles 0.29 m, 0.43 (session 7; with the best particle instead of the
-mean, session 6: 100 particles 0.45-0.58 m)."""
+particles 0.29 m, 0.43; held-out seeds 10-19, 200 particles, k = 0-1:
+0.23 m, 0.39 (session 7; with the best particle instead of the mean,
+session 6: 100 particles 0.45-0.58 m, 0.57-0.59)."""
 
 __all__ = [
     "PARALLEL_MIN",
