@@ -20,6 +20,7 @@ from robotlib.localization.cones import _sweep_builds
 from robotlib.sensing import SonarModel
 from robotlib.sensing import _kernels as sk
 from robotlib.world import World, load_world
+from robotlib.world.index import INDEX_MIN_SEGMENTS
 
 
 def point_grid_map(x0=-4780, y0=-2700, side=3000, step=20) -> str:
@@ -115,11 +116,15 @@ def test_bench_large_map_refuses_a_missing_map_clearly(tmp_path, capsys):
     assert "missing.map" in err and "Traceback" not in err
 
 
-def test_dense_maps_take_the_indexed_builder_sparse_ones_the_sweep(grid_map):
+def test_large_maps_take_the_indexed_builders_small_ones_the_sweep(grid_map):
     sonar = SonarModel()
     assert not _sweep_builds(load_world(grid_map), sonar, 1)  # 1,320 crosses, 9 m2
-    assert _sweep_builds(square_world(50.0), sonar, 1)  # 532 walls, 2,500 m2
+    assert not _sweep_builds(square_world(50.0), sonar, 1)  # 532 walls: strips
     assert not _sweep_builds(square_world(50.0), sonar, 0)  # whole cones: indexed
+    small = square_world(12.0)
+    assert len(small.obstacles) < INDEX_MIN_SEGMENTS and _sweep_builds(small, sonar, 1)
+    building = load_world("building")  # 308 walls: a lab's world keeps the sweep
+    assert _sweep_builds(building, sonar, 1) and not _sweep_builds(building, sonar, 0)
 
 
 @pytest.mark.parametrize("which", ["grid", "building"])
@@ -191,19 +196,12 @@ def near_parallel_walls(rng, n=24):
 
 
 @pytest.mark.parametrize("seed", [0, 1])
-@pytest.mark.parametrize("scratch", [True, False], ids=["scratch", "in-place"])
-def test_strip_rays_equal_the_every_wall_kernel_on_random_walls(
-    seed, scratch, monkeypatch
-):
+def test_strip_rays_equal_the_every_wall_kernel_on_random_walls(seed):
     """The strips builder (`table_strips`) on 300 walls, some nearly parallel."""
-    from robotlib.localization._kernels import tables
-
     rng = np.random.default_rng(seed + 10)
     walls = np.concatenate([random_walls(seed, 300), near_parallel_walls(rng)])
     world = World(walls, bounds=(0.0, 0.0, 4.0, 4.0))
-    shape, origin = (40, 40), (0.0, 0.0)
-    if not scratch:
-        monkeypatch.setattr(tables, "SCRATCH_MAX_BYTES", 0)
+    shape, origin = (36, 40), (0.0, 0.0)  # not square: rows and columns apart
     for ray_step, n_rays in ((1, 1), (3, 7)):  # single rays; the Pioneer's cones
         sonar = SonarModel(max_range=3.0, n_rays=n_rays)
         ref = every_wall(world, sonar, 0.1, ray_step, shape, origin)

@@ -125,3 +125,103 @@ def test_keyed_threaded_step_equals_the_step_on_drawn_noise(corridor, kind):
     np.testing.assert_array_equal(got[2], ref[2])
     for a, b in zip(got_o, ref_o, strict=True):
         np.testing.assert_array_equal(a, b)
+
+
+# -- the filter's own PCG64, drawn in the small step's kernel (`_kernels.pcg64`) --
+
+
+@pytest.mark.parametrize("seed", [0, 1, 12345, 2**64 - 1])
+def test_pcg64_draws_are_numpys_and_advance_the_generator(seed):
+    """Normals then a uniform, as `Generator.standard_normal(out=)` and `random()`."""
+    from robotlib.localization._kernels import pcg64
+    from robotlib.localization.motion import pcg64_words
+
+    mine, ref = np.random.default_rng(seed), np.random.default_rng(seed)
+    words = pcg64_words(mine)
+    assert words is not None
+    for n in (1, 7, 300, 20_000):  # 60,000 normals reach the ziggurat's tail
+        out = np.empty((n, 3))
+        pcg64.fill_normals(words, out)
+        want = ref.standard_normal((n, 3))
+        np.testing.assert_array_equal(out.view(np.uint64), want.view(np.uint64))
+        assert pcg64.next_double(words) == ref.random()
+        # the Python generator was advanced in place: it goes on as NumPy's
+        assert mine.random() == ref.random()
+        assert mine.bit_generator.state == ref.bit_generator.state
+
+
+def test_pcg64_words_only_for_pcg64():
+    from robotlib.localization.motion import pcg64_words
+
+    assert pcg64_words(np.random.Generator(np.random.SFC64(0))) is None
+    assert pcg64_words(np.random.Generator(np.random.PCG64DXSM(0))) is None
+
+
+def test_small_step_draws_as_numpy_would(corridor):
+    """The step's in-kernel draws leave the filter's generator where NumPy's would."""
+    from robotlib.localization import (
+        MCL,
+        BeamParameters,
+        BeamSensorModel,
+        ThresholdResampling,
+        expected_readings,
+    )
+
+    def make():
+        sensor = BeamSensorModel(corridor, fast=True, params=BeamParameters())
+        return MCL(corridor, sensor, n=300, rng=5, check=False,
+                   resampling=ThresholdResampling("systematic", 1.0))  # fmt: skip
+
+    a, b = make(), make()
+    b._pcg = (b.rng.bit_generator, None)  # b draws with NumPy's methods
+    z = expected_readings(corridor, np.array([corridor.start]))[0]
+    odo = np.array(corridor.start)
+    for k in range(3):
+        step = (odo + [0.2 * k, 0.0, 0.03 * k], odo + [0.2 * k + 0.2, 0.0, 0.03 * k])
+        np.testing.assert_array_equal(a.step(*step, z), b.step(*step, z))
+        np.testing.assert_array_equal(a.particles, b.particles)
+        assert a.rng.bit_generator.state == b.rng.bit_generator.state
+
+
+def test_kernels_exp_is_math_exp():
+    """`_kernels.common.exp` (the C library's, called directly) = numba's math.exp."""
+    import math
+
+    import numba as nb
+
+    from robotlib.localization._kernels.common import exp
+
+    @nb.njit
+    def both(x, a, b):
+        for i in range(x.shape[0]):
+            a[i] = exp(x[i])
+            b[i] = math.exp(x[i])
+
+    rng = np.random.default_rng(0)
+    x = np.concatenate([
+        rng.uniform(-800.0, 800.0, 200_000), -rng.exponential(2.0, 100_000),
+        [np.inf, -np.inf, np.nan, 0.0, -0.0, 709.78, 709.79, -745.13, -745.14,
+         5e-324, -5e-324, 1e-300],
+    ])  # fmt: skip
+    a, b = np.empty_like(x), np.empty_like(x)
+    both(x, a, b)
+    np.testing.assert_array_equal(a.view(np.uint64), b.view(np.uint64))
+
+
+@pytest.mark.parametrize("how", ["deepcopy", "pickle"])
+def test_a_copied_filter_draws_from_its_own_generator(corridor, how):
+    """A copy's step draws from the copy's generator (not a view of the original's)."""
+    import copy
+    import pickle
+
+    from robotlib.localization import MCL
+
+    a = MCL.paper(corridor, n=300, fast=True, rng=2)
+    z = np.linspace(0.5, 2.5, len(a.sensor.sonar.sensors))
+    odo = np.array(corridor.start)
+    a.step(odo, odo + [0.2, 0.0, 0.02], z)  # the view is made
+    b = copy.deepcopy(a) if how == "deepcopy" else pickle.loads(pickle.dumps(a))
+    for m in (a, b):
+        m.step(odo + [0.2, 0.0, 0.02], odo + [0.4, 0.0, 0.04], z)
+    np.testing.assert_array_equal(a.particles, b.particles)
+    assert a.rng.bit_generator.state == b.rng.bit_generator.state

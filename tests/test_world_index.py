@@ -92,3 +92,31 @@ def test_large_map_field_free_space_and_table_are_unchanged_bit_for_bit():
         sonar.cos_specular, 16, old,
     )  # fmt: skip
     np.testing.assert_array_equal(table.table, old)
+
+
+def test_free_space_without_the_field_is_the_fields_own_mask():
+    """`World.free_space` on a large map measures only the unsettled blocks."""
+    world = many_point_world(seed=1, n=600)
+    assert len(world.obstacles) >= INDEX_MIN_SEGMENTS
+    fresh = many_point_world(seed=1, n=600)
+    field = world.distance_field(0.05)  # cached: its free space uses the field
+    for radius in (0.0, 0.05, 0.2, 0.35):
+        np.testing.assert_array_equal(
+            fresh.free_space(0.05, radius).data, world.free_space(0.05, radius).data
+        )
+    assert ("distance", 0.05) not in fresh._cache  # the whole field was not made
+    # cuts at the field's own values: the strict side of each cell is kept
+    index = fresh.segment_index()
+    values = field.data[np.isfinite(field.data)]
+    cuts = np.quantile(values, [0.02, 0.3, 0.6, 0.97], method="nearest")
+    settled = 0
+    for cut in cuts:
+        out = np.empty(field.data.shape)
+        wk.indexed_distance_field(
+            *field.origin, 0.05, 4, index.segments, *index.args, float(cut), out
+        )
+        np.testing.assert_array_equal(out > cut, field.data > cut)
+        measured = np.isfinite(out)
+        np.testing.assert_array_equal(out[measured], field.data[measured])
+        settled += int((~measured).sum())
+    assert settled > field.data.size  # most blocks were settled by their bound

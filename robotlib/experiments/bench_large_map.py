@@ -1,16 +1,19 @@
 """``robotlib bench large-map``: how fast a large map becomes ready for MCL.
 
 ``robotlib bench large-map [--map FILE] [--resolution M]`` loads a map and times
-what MCL needs before its first step: the distance field, the admissible
-free space and the cone table (`robotlib.localization.ConeTable`), each in
-wall time and in CPU time, and the same work by the plain kernels that
+what MCL needs before its first step: the admissible free space (which on
+a large map no longer makes the whole distance field) and the cone table
+(`robotlib.localization.ConeTable`), each in wall time and in CPU time;
+then the whole distance field (only the likelihood-field sensor model
+needs it); and the same work by the plain kernels that
 measure against every wall (on a sample of cells, scaled up), with the
 ratio; the table's entries on those cells must equal the every-wall
 kernel's (`cone_table_cells`, at the very cell centres the builders use).
 The default map is `large_map` of ``worlds/make_worlds.py`` (24 m x 52 m,
 about 60,000 DATA points, MobileSim's ``columbia.map`` in size), generated
 into a temporary file when the repository's ``worlds/`` is at hand. The
-target (issue 13): at most 3 s for all three on 2 cores. Asserts nothing.
+target (issue 13): at most 3 s for the map ready for MCL on 2 cores (also
+printed with the field). Asserts nothing.
 """
 
 from __future__ import annotations
@@ -72,9 +75,9 @@ def bench_maps(path: Path, resolution: float = 0.05, sample: int = 40) -> dict:
     warm_small = type(warm)(warm.obstacles[:300], bounds=warm.bounds)
     ConeTable(warm_small, resolution=1.0)  # the sweep
     ConeTable(warm, resolution=2.0)  # the dense-map builder (strips)
+    warm_small.free_space(1.0)  # the field's kernel (it has 300 segments: indexed)
     world, t_load, _ = _timed(lambda: load_world(path))
-    field, t_field, c_field = _timed(lambda: world.distance_field(resolution))
-    _, t_free, c_free = _timed(lambda: world.free_space(resolution))
+    _, t_free, c_free = _timed(lambda: world.free_space(resolution))  # no field
     saved = os.environ.get("ROBOTLIB_TABLE_CACHE")
     with tempfile.TemporaryDirectory() as cache:  # built, kept, then read back
         os.environ["ROBOTLIB_TABLE_CACHE"] = cache
@@ -90,6 +93,7 @@ def bench_maps(path: Path, resolution: float = 0.05, sample: int = 40) -> dict:
                 os.environ["ROBOTLIB_TABLE_CACHE"] = saved
     disk_ok = again.from_disk and np.array_equal(again.table, table.table)
     del again
+    field, t_field, c_field = _timed(lambda: world.distance_field(resolution))
     # the plain kernels, against every wall, on a sample of cells, scaled up
     rng = np.random.default_rng(0)
     cells = field.centres().reshape(-1, 2)
@@ -129,7 +133,7 @@ def bench_maps(path: Path, resolution: float = 0.05, sample: int = 40) -> dict:
         "free_cpu": c_free,
         "table": t_table,
         "table_cpu": c_table,
-        "ready": t_field + t_free + t_table,
+        "ready": t_free + t_table,
         "table_disk": t_disk if disk_ok else math.nan,
         "reference_field": t_ref_field,
         "reference_table": t_ref_table,
@@ -155,12 +159,16 @@ def run(args: argparse.Namespace) -> int:
         return 2
     out = [f"map {r['map']}: {r['segments']} obstacle segments, {r['cells']} cells"]
     out.append(f"  load           {r['load']:8.2f} s")
-    for key in ("field", "free", "table"):
+    for key in ("free", "table", "field"):
         out.append(f"  {key:<14} {r[key]:8.2f} s wall  {r[key + '_cpu']:8.2f} s CPU")
-    out.append(f"  ready for MCL  {r['ready']:8.2f} s (target 3 s on 2 cores)")
+    ready = r["load"] + r["ready"]
+    out.append(
+        f"  ready for MCL  {ready:8.2f} s with the load (target 3 s on 2 cores); "
+        f"{ready + r['field']:.2f} s with the whole field"
+    )
     out.append(
         f"  table from the disk cache {r['table_disk']:6.2f} s (the same table): "
-        f"ready in {r['field'] + r['free'] + r['table_disk']:.2f} s on later runs"
+        f"ready in {r['load'] + r['free'] + r['table_disk']:.2f} s on later runs"
     )
     for key in ("field", "table"):
         ref = r[f"reference_{key}"]

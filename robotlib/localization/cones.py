@@ -185,47 +185,33 @@ class ConeTable:
         return out
 
 
-SWEEP_MAX_NEAR = 128
-"""Walls within reach of a cell (on average) up to which shared rays are swept.
+STRIPS_MIN_WALLS = 400
+"""Walls from which shared rays go through strips instead of the sweep.
 
-The sweep of `_kernels.build_cone_table` tries every wall near a block of
-cells on every cell; the indexed builder casts each ray through the walls'
-buckets. Measured on one thread (processor time per cell, middle rows, the
-default sonar at 5 cm): a 50 m building of 532 walls (about 21 near a cell)
-sweep 6.3 us, indexed 11.9 us; ``sauljabin_columbia2.map`` (495 walls, 44
-near) 7.4 and 11.2 us; ``amrisim_AMROffice.map`` (46,625 segments, 8,800
-near) 425 and 35 us; ``columbia.map`` (127,092, 9,950 near) 962 and 48 us.
-The sweep grows by about 0.05 us a near wall: the two meet near 130.
-(Since then dense maps take `_kernels.build_cone_table_strips` for shared
-rays: ``columbia.map`` about half the processor time of the bucket walks it
-replaced, interleaved; the crossover with the sweep was not measured again.
-On a 50 m building the two are within 10 % of each other.)
+Processor time of the two for shared rays at 5 cm, the default sonar, the
+same tables (session 7, load 5-8, two runs each): the shipped ``office``
+(113 walls) sweep 0.41 s, strips 0.27-0.31 s; ``building`` (308) 1.06-1.15
+and 0.48-0.52 s; ``sauljabin_columbia2.map`` (495) 2.6-2.8 and 1.2-1.4 s;
+a 50 m building of 532 walls 3.2-3.8 and 2.3-3.0 s; ``columbia.map``
+(127,092 segments) a sweep of about 480 s against about 4 s. The strips
+are faster everywhere, but their kernels are not among the labs' warm-ups
+(2.4-3.7 s to compile on an empty numba cache): the labs' worlds, up to
+``building``, keep the sweep.
 """
 
 
-def _near_walls(world: World, max_range: float) -> float:
-    """Mean number of walls within ``max_range`` (+ 0.6 m) of a cell, estimated.
-
-    The walls' density over the bounds times the area of the reach's disc
-    (the sweep's reach grows ``max_range`` by 0.6 m, its blocks' half
-    diagonal).
-    """
-    w, h = world.size
-    return len(world.obstacles) / max(w * h, 1e-9) * math.pi * (max_range + 0.6) ** 2
-
-
 def _sweep_builds(world: World, sonar: SonarModel, ray_step: int) -> bool:
-    """Whether `ConeTable` takes the sweep (else the indexed builder): same table.
+    """Whether `ConeTable` takes the sweep (else the indexed builders): same table.
 
-    The sweep for small maps, and for shared rays (``ray_step > 0``) on maps
-    of at most `SWEEP_MAX_NEAR` walls near a cell; the indexed builder for
-    the rest (whole cones on a map of `INDEX_MIN_SEGMENTS` or more, dense
-    maps such as MobileSim's ``columbia.map``: about 24 s against 480 s of
-    processor time, from the per-cell times above).
+    The sweep (`_kernels.build_cone_table`: every wall near a block of
+    cells tried on every cell) for maps of fewer than `INDEX_MIN_SEGMENTS`
+    walls, and for shared rays (``ray_step > 0``) on maps of fewer than
+    `STRIPS_MIN_WALLS`; the indexed builders for the rest: shared rays
+    through strips (`_kernels.build_cone_table_strips`), whole cones
+    through the walls' buckets. ``sonar`` is not used.
     """
-    if len(world.obstacles) < INDEX_MIN_SEGMENTS:
-        return True
-    return ray_step > 0 and _near_walls(world, sonar.max_range) <= SWEEP_MAX_NEAR
+    n = len(world.obstacles)
+    return n < INDEX_MIN_SEGMENTS or (ray_step > 0 and n < STRIPS_MIN_WALLS)
 
 
 _INDEXES: dict = {}

@@ -36,6 +36,7 @@ from .motion import (
     _noise_std,
     _particles,
     odometry_increment,
+    pcg64_words,
 )
 from .paper import (
     ADMISSIBLE_RADIUS,
@@ -125,6 +126,9 @@ class MCL:
 
     _prebuild = None
     """`robotlib.localization._prebuild.Prebuild` compiling the first step, or None."""
+
+    _pcg = (None, None)
+    """``(bit generator, (words, lock) or None)``: `_pcg_words`' view, kept."""
 
     def __init__(
         self,
@@ -328,25 +332,50 @@ class MCL:
         n = len(p)
         scratch = self._scratch
         noise = scratch.take("normals", (n, 3))
-        key = None
-        if n <= NORMALS_CHUNK:  # as `standard_normals`
-            self.rng.standard_normal(out=noise)
-        else:  # drawn chunk by chunk in the step
-            key = int(self.rng.integers(np.iinfo(np.int64).max))
         policy = self.resampling
-        u = -1.0
-        if (
+        every = (  # resampled in the call: `ThresholdResampling._resample`'s draw
             type(policy) is ThresholdResampling
             and policy.threshold >= 1.0
             and policy.method in ("systematic", "low_variance")
-        ):
-            u = self.rng.random()  # `ThresholdResampling._resample`'s draw
-        moved, weights, log_mean, ess, self.last_estimate, new_p, new_w = sensor._run(
-            p, w, motion, noise, key, z, scratch, u, checked
         )
+        words = self._pcg_words() if n < PARALLEL_MIN else None
+        if words is not None:  # the call draws the noise, then u, from the PCG64
+            with words[1]:
+                moved, weights, log_mean, ess, self.last_estimate, new_p, new_w = (
+                    sensor._run(p, w, motion, noise, None, z, scratch,
+                                0.0 if every else -1.0, checked, words[0])
+                )  # fmt: skip
+        else:
+            key = None
+            if n <= NORMALS_CHUNK:  # as `standard_normals`
+                self.rng.standard_normal(out=noise)
+            else:  # drawn chunk by chunk in the step
+                key = int(self.rng.integers(np.iinfo(np.int64).max))
+            u = self.rng.random() if every else -1.0
+            moved, weights, log_mean, ess, self.last_estimate, new_p, new_w = (
+                sensor._run(p, w, motion, noise, key, z, scratch, u, checked)
+            )
         self.particles = moved
         self._weighed(weights, log_mean, ess)
         return None if new_p is None else (new_p, new_w)
+
+    def __getstate__(self) -> dict:
+        """Pickled and copied without `_pcg_words`' view of this generator's memory."""
+        state = self.__dict__.copy()
+        state.pop("_pcg", None)
+        return state
+
+    def _pcg_words(self):
+        """``(words, lock)`` of the filter's PCG64 (`motion.pcg64_words`), or None.
+
+        Kept while ``self.rng``'s bit generator is the same object.
+        """
+        bg = self.rng.bit_generator
+        kept = self._pcg
+        if kept[0] is not bg:
+            words = pcg64_words(self.rng)
+            kept = self._pcg = (bg, None if words is None else (words, bg.lock))
+        return kept[1]
 
     def estimate(self) -> np.ndarray:
         """Weighted mean pose (circular mean of the heading), shape (3,)."""
@@ -501,7 +530,9 @@ class MCL:
 
     def set_particles(self, particles, weights=None) -> None:
         """Replace the particle set (weights default to uniform)."""
-        p = _particles(particles).copy()
+        p = np.array(particles, dtype=np.float64, order="C")  # a copy
+        if p.ndim != 2 or p.shape[1] != 3:
+            _particles(p)  # raises
         w = (
             _uniform(len(p))
             if weights is None

@@ -16,8 +16,10 @@ half turn.
 
 from __future__ import annotations
 
+import ctypes
 import math
 import os
+import sys
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
@@ -121,6 +123,35 @@ def standard_normals(
         for future in [_executor(threads).submit(_fill, *c) for c in chunks]:
             future.result(timeout=60)
     return out
+
+
+def pcg64_words(rng: np.random.Generator) -> np.ndarray | None:
+    """Return the four words of ``rng``'s PCG64 state as an array over its memory.
+
+    ``(state low, state high, increment low, increment high)``, uint64: the
+    generator's own memory, so `_kernels.pcg64`'s kernels draw from it and
+    advance it as NumPy's methods would (hold ``rng.bit_generator.lock``
+    meanwhile). NumPy's ``pcg64_state`` begins with a pointer to the
+    ``(state, increment)`` pair of unsigned 128-bit integers, low word
+    first; the words are checked against ``bit_generator.state`` before
+    use. None when the bit generator is not exactly PCG64 or the check fails.
+    """
+    bg = rng.bit_generator
+    if (
+        type(bg) is not np.random.PCG64
+        or sys.byteorder != "little"
+        or not "1.17.0" <= np.lib.NumpyVersion(np.__version__) < "3.0.0"
+    ):  # the layout read below is that of NumPy 1.17 to 2
+        return None
+    pair = ctypes.c_uint64.from_address(bg.ctypes.state_address).value
+    if not pair:
+        return None
+    words = np.ctypeslib.as_array((ctypes.c_uint64 * 4).from_address(pair))
+    st = bg.state["state"]
+    w = [int(v) for v in words]
+    if w[0] | w[1] << 64 != st["state"] or w[2] | w[3] << 64 != st["inc"]:
+        return None
+    return words
 
 
 def _floats(pose) -> list:

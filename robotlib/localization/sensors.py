@@ -40,16 +40,17 @@ __all__ = [
 
 
 def _scan(z, n_sensors: int) -> np.ndarray:
-    if not (type(z) is np.ndarray and z.dtype == np.float64 and z.flags.c_contiguous):
+    if not (type(z) is np.ndarray and z.dtype is _F64 and z.flags.c_contiguous):
         z = np.ascontiguousarray(z, dtype=np.float64)
     if z.shape != (n_sensors,):
         raise ValueError(f"z must have shape ({n_sensors},), got {z.shape}")
-    if not all(map(_ZERO.__lt__, z.tolist())):  # NaN too; quicker than NumPy for a few
+    r = z.tolist()  # quicker than NumPy for a few; a NaN makes the sum NaN
+    if r and not (min(r) > 0.0 and sum(r) == sum(r)):
         raise ValueError("sonar readings must be positive")
     return z
 
 
-_ZERO = 0.0
+_F64 = np.dtype(np.float64)
 
 
 def innovation_loglik(z, zhat, n: int | None = None) -> np.ndarray:
@@ -100,6 +101,7 @@ def _outputs(scratch, n: int, s: int) -> tuple:
 
 
 _NONE_P = np.empty((0, 3))
+_NO_WORDS = np.zeros(4, dtype=np.uint64)  # no PCG64 state: the caller drew
 _NONE_W = np.empty(0)
 
 
@@ -126,12 +128,15 @@ class _ExpectedModel:
         return t.table, (t.origin[0], t.origin[1], 1.0 / t.resolution)
 
     def _run(self, particles, weights, motion, noise, key, z, scratch, u,
-             checked=False):  # fmt: skip
+             checked=False, words=None):  # fmt: skip
         """Move, weigh, estimate and (``u >= 0``) resample: `MCL.step`'s fused call.
 
         ``noise`` (N, 3) holds the motion noise, or with ``key`` receives it
         (`stepping.run_step`); ``u`` is the systematic resampling's draw or
-        -1; ``checked``: ``z`` is `checked_scan`'s already. Returns
+        -1; ``checked``: ``z`` is `checked_scan`'s already. With ``words``
+        (below `PARALLEL_MIN` particles: the filter's PCG64 state,
+        `motion.pcg64_words`) the call draws the noise into ``noise`` and,
+        when ``u >= 0``, ``u`` itself, as the generator would. Returns
         ``(out_p, out_w, log_mean, ess, est, new_p, new_w)``: moved
         particles and their weights, and the resampled set (None without
         ``u``).
@@ -151,7 +156,7 @@ class _ExpectedModel:
                 out_w = scratch.take("weights", (n,))
             est = np.empty(3)
             log_mean, ess = self._small(particles, weights, motion, noise, z, u,
-                                        out_p, out_w, *new, est)  # fmt: skip
+                                        out_p, out_w, *new, est, words)  # fmt: skip
         else:
             out_p, out_w, cs, mm = _outputs(scratch, n, len(z))
             out = (out_p, out_w, cs, mm, *new)
@@ -246,9 +251,10 @@ class PaperSensorModel(_ExpectedModel):
         ]
 
     def _small(self, particles, weights, motion, noise, z, u, out_p, out_w, new_p,
-               new_w, est):  # fmt: skip
+               new_w, est, words=None):  # fmt: skip
         sensors, table, where, _ = self._consts()
         return chunked.paper_small(
+            _NO_WORDS if words is None else words, words is not None,
             particles, weights, noise, sensors, table, z, *motion, *where,
             1.0 / len(particles), u, out_p, out_w, new_p, new_w, est,
         )  # fmt: skip
@@ -403,10 +409,11 @@ class BeamSensorModel(_ExpectedModel):
         ]
 
     def _small(self, particles, weights, motion, noise, z, u, out_p, out_w, new_p,
-               new_w, est):  # fmt: skip
+               new_w, est, words=None):  # fmt: skip
         q = self.params
         sensors, table, where, beam = self._consts(q)
         return chunked.beam_small(
+            _NO_WORDS if words is None else words, words is not None,
             particles, weights, noise, sensors, table, z,
             np.exp(-q.lambda_short * z), *self._norms, *motion, *where, *beam, u,
             out_p, out_w, new_p, new_w, est,

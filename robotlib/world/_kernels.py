@@ -239,8 +239,9 @@ def indexed_min_distance(points, segments, x0, y0, size, nbx, nby, start, items,
 
 @nb.njit(**JIT_PARALLEL)
 def indexed_distance_field(
-    x0, y0, resolution, block, segments, bx0, by0, bsize, nbx, nby, start, items, out
-):
+    x0, y0, resolution, block, segments, bx0, by0, bsize, nbx, nby, start, items,
+    cut, out,
+):  # fmt: skip
     """Distance from each cell centre of ``out`` (ny, nx) to the nearest segment.
 
     The same numbers as `min_distance_to_segments` on the centres, computed
@@ -249,6 +250,15 @@ def indexed_distance_field(
     to within ``dc + 2 r`` of that centre (``r`` the block's half-diagonal),
     so each cell is measured only against the few segments there, which the
     bucket index finds.
+
+    With a finite ``cut`` (m; NaN for the whole field) only the cells'
+    side of ``cut`` is kept where a block's bound settles it: a block whose
+    cells all lie farther than ``cut`` (``dc - r`` beyond it, by more than
+    1e-9 m, far above the rounding of the distances) is filled with
+    ``inf``, one whose cells all lie nearer (``dc + r`` short of it) with
+    ``-inf``; the others get their distances. ``out > cut`` is then the
+    same mask as on the whole field, without measuring the cells of open
+    space, whose blocks have the most segments in reach.
     """
     ny, nx = out.shape
     nbj = (nx + block - 1) // block
@@ -264,10 +274,15 @@ def indexed_distance_field(
         i_hi = min((bi + 1) * block, ny)
         j_lo = bj * block
         j_hi = min((bj + 1) * block, nx)
-        if not math.isfinite(dc):
+        fill = np.nan  # the block's cells all on one side of `cut`: their side
+        if not math.isfinite(dc) or dc - r - 1e-9 > cut:
+            fill = np.inf
+        elif dc + r + 1e-9 < cut:
+            fill = -np.inf
+        if fill == fill:
             for i in range(i_lo, i_hi):
                 for j in range(j_lo, j_hi):
-                    out[i, j] = np.inf
+                    out[i, j] = fill
             continue
         reach = dc + 2.0 * r + 1e-9
         ja = min(max(int(math.floor((cx - reach - bx0) / bsize)), 0), nbx - 1)

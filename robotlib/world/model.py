@@ -263,7 +263,7 @@ class World:
                 index = self.segment_index()
                 _kernels.indexed_distance_field(
                     origin[0], origin[1], float(resolution), _FIELD_BLOCK,
-                    index.segments, *index.args, dist,
+                    index.segments, *index.args, np.nan, dist,
                 )  # fmt: skip
             else:
                 grid = Grid(np.zeros(shape), origin, float(resolution))
@@ -295,7 +295,7 @@ class World:
         """
         key = ("free", float(resolution), float(radius))
         if key not in self._cache:
-            dist = self.distance_field(resolution)
+            dist = self._clearance(resolution, radius)
             # is_free at the centres, with the distances already measured (the
             # centres' rows and columns, not a (ny, nx, 2) array of them)
             ny, nx = dist.shape
@@ -311,6 +311,29 @@ class World:
             free.setflags(write=False)
             self._cache[key] = Grid(free, dist.origin, dist.resolution)
         return self._cache[key]
+
+    def _clearance(self, resolution: float, radius: float) -> Grid:
+        """Return the distance field, or a grid with its side of ``radius`` per cell.
+
+        The field when it is at hand or the map is small; on a large map
+        one that measures only the cells whose side of ``radius`` their
+        block's bound does not settle (the others are ``inf`` or ``-inf``:
+        `_kernels.indexed_distance_field` with a ``cut``), so ``data >
+        radius`` is the field's own mask. On ``columbia.map`` at 5 cm and
+        0.2 m: 0.24 s of processor time against the field's 0.77 s.
+        """
+        if ("distance", float(resolution)) in self._cache or len(
+            self.obstacles
+        ) < INDEX_MIN_SEGMENTS:
+            return self.distance_field(resolution)
+        shape, origin = self._empty_grid(resolution)
+        dist = np.empty(shape)
+        index = self.segment_index()
+        _kernels.indexed_distance_field(
+            origin[0], origin[1], float(resolution), _FIELD_BLOCK, index.segments,
+            *index.args, float(radius), dist,
+        )  # fmt: skip
+        return Grid(dist, origin, float(resolution))
 
     def sample_free_poses(
         self,

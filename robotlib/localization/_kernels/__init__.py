@@ -14,12 +14,16 @@
   one call with the resampling for a few particles
 - `normals`: NumPy's keyed motion noise (SeedSequence, SFC64, ziggurat)
   in compiled code, for the threaded steps that draw their own
+- `pcg64`: NumPy's PCG64 and its normals on a generator's own state, for
+  the one-call step of a few particles (`chunked.beam_small`) that draws
+  its noise and resampling draw itself
 
 Every kernel takes contiguous arrays and scalars only; random numbers are
 drawn by the caller's ``numpy.random.Generator`` and passed in, or (the
 threaded steps from 65,536 particles) drawn in the kernel from a key the
-caller's generator drew, as NumPy would draw them, so a seed reproduces a
-run bit for bit. A kernel wanted both serially and over threads
+caller's generator drew, or (the one-call step below 4,096) drawn from the
+caller's PCG64 state itself, as NumPy would draw them, so a seed
+reproduces a run bit for bit. A kernel wanted both serially and over threads
 is written once, looping with ``numba.prange``, and compiled twice
 (`robotlib._config.serial_and_parallel`): its iterations write only their
 own slots and its sums run serially, so both forms give identical results.

@@ -27,7 +27,9 @@ import numba as nb
 import numpy as np
 
 from ..._config import JIT
+from .common import exp
 from .fused import _beam_mm_row, _buffers, _paper_mm, move_and_read
+from .pcg64 import fill_normals, next_double
 from .weights import _finish_estimate
 
 
@@ -63,7 +65,7 @@ def paper_rows(mm, terms, inv_n, out_w):
         d = 0.0
         for i in range(s_count):
             d += terms[i, mm[j, i]]
-        v = math.log(math.exp(-d / s_count) + inv_n)
+        v = math.log(exp(-d / s_count) + inv_n)
         out_w[j] = v
         if v > top:
             top = v
@@ -94,7 +96,7 @@ def paper_chunk(particles, normals, motion, sensors, table, where, skip, out_p, 
 def exp_chunk(lo, hi, weights, top, out_w):
     """``out_w[j] = weights[j] exp(out_w[j] - top)`` for rows ``lo:hi``."""
     for j in range(lo, hi):
-        out_w[j] = weights[j] * math.exp(out_w[j] - top)
+        out_w[j] = weights[j] * exp(out_w[j] - top)
 
 
 @nb.njit(**JIT)
@@ -114,7 +116,7 @@ def lut_part(lo, hi, z, e_short, is_max, hit, short, z_max, p_rand, inv_sigma, l
         for mm in range(lo, hi):
             zhat = mm * 0.001
             u = (zi - zhat) * inv_sigma
-            p = hit[mm] * math.exp(-0.5 * u * u) + p_rand
+            p = hit[mm] * exp(-0.5 * u * u) + p_rand
             if zi <= zhat:
                 p += short[mm] * ei
             lut[i, mm] = p
@@ -162,10 +164,12 @@ def _gather_cum(particles, cum, total, u, out):
     n_cum = cum.shape[0]
     n = out.shape[0]
     j = 0
+    q = cum[0] / total if n_cum > 0 else 0.0  # each entry's quotient once
     for k in range(n):
         position = (k + u) / n
-        while j < n_cum - 1 and cum[j] / total <= position:
+        while j < n_cum - 1 and q <= position:
             j += 1
+            q = cum[j] / total
         out[k, 0] = particles[j, 0]
         out[k, 1] = particles[j, 1]
         out[k, 2] = particles[j, 2]
@@ -202,15 +206,30 @@ def _weigh_into(weights, out_p, cs, out_w, u, new_p, new_w, est):
         if out_w[j] > top:
             top = out_w[j]
     for j in range(out_w.shape[0]):
-        out_w[j] = weights[j] * math.exp(out_w[j] - top)
+        out_w[j] = weights[j] * exp(out_w[j] - top)
     return _finish_into(weights, top, out_w, out_p, cs, u, new_p, new_w, est)
 
 
+@nb.njit(**JIT, inline="always")
+def _draw(words, draw, noise, u):
+    """With ``draw``: ``noise`` := the PCG64's normals, then (``u >= 0``) ``u``.
+
+    The draws `MCL.step` makes before the call, in the same order, as
+    ``Generator.standard_normal(out=noise)`` and ``Generator.random()``
+    (`robotlib.localization._kernels.pcg64`). Returns ``u``.
+    """
+    if draw:
+        fill_normals(words, noise)
+        if u >= 0.0:
+            u = next_double(words)
+    return u
+
+
 @nb.njit(**JIT)
-def beam_small(particles, weights, noise, sensors, table, z, e_short, hit, short,
-               rot1, trans, rot2, sd1, sdt, sd2, x0, y0, inv_res, exponent, max_read,
-               z_max, p_rand, inv_sigma, u2_skip, u, out_p, out_w, new_p, new_w,
-               est):  # fmt: skip
+def beam_small(words, draw, particles, weights, noise, sensors, table, z, e_short,
+               hit, short, rot1, trans, rot2, sd1, sdt, sd2, x0, y0, inv_res, exponent,
+               max_read, z_max, p_rand, inv_sigma, u2_skip, u, out_p, out_w, new_p,
+               new_w, est):  # fmt: skip
     """`fused.beam_table_step`, then (``u >= 0``) resampling as in `finish`.
 
     The same passes, with the per-particle model written in (a call per
@@ -221,7 +240,13 @@ def beam_small(particles, weights, noise, sensors, table, z, e_short, hit, short
     `BeamSensorModel._model`'s ``is_max``), ``z_max, p_rand, inv_sigma,
     u2_skip``, and the resampling draw ``u``. The estimate goes to ``est``
     (3,); returns ``(log_mean, ess)``.
+
+    With ``draw``, the call makes the filter's draws itself from its PCG64
+    state ``words`` (4,) uint64 (`_draw`): ``noise`` (N, 3) receives the
+    motion noise and, when ``u >= 0``, ``u`` is drawn after it. Otherwise
+    ``noise`` and ``u`` are the caller's (``words`` unused).
     """
+    u = _draw(words, draw, noise, u)
     n = particles.shape[0]
     s_count = sensors.shape[0]
     is_max = np.empty(s_count, dtype=np.bool_)
@@ -241,10 +266,11 @@ def beam_small(particles, weights, noise, sensors, table, z, e_short, hit, short
 
 
 @nb.njit(**JIT)
-def paper_small(particles, weights, noise, sensors, table, z, rot1, trans, rot2, sd1,
-                sdt, sd2, x0, y0, inv_res, inv_n, u, out_p, out_w, new_p, new_w,
-                est):  # fmt: skip
+def paper_small(words, draw, particles, weights, noise, sensors, table, z, rot1,
+                trans, rot2, sd1, sdt, sd2, x0, y0, inv_res, inv_n, u, out_p, out_w,
+                new_p, new_w, est):  # fmt: skip
     """`fused.paper_table_step`, then (``u >= 0``) resampling, as `beam_small`."""
+    u = _draw(words, draw, noise, u)
     n = particles.shape[0]
     skip = np.zeros(sensors.shape[0], dtype=np.bool_)
     cs, mm = _buffers(n, sensors.shape[0])

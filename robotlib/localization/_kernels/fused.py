@@ -10,9 +10,9 @@ import numba as nb
 import numpy as np
 
 from ..._config import JIT, JIT_PARALLEL, serial_and_parallel
-from .common import _TWO_PI, wrap
+from .common import _TWO_PI, exp, wrap
 from .motion import _odometry_one
-from .normals import normal, sfc64_state
+from .normals import fill, sfc64_state
 from .weights import _finish_estimate
 
 
@@ -68,7 +68,7 @@ def _weigh_estimate(weights, particles, cs, out_w):
     """`update_weights` with ``out_w`` holding log-likelihoods, then the estimate."""
     top = _top(out_w)
     for j in nb.prange(out_w.shape[0]):
-        out_w[j] = weights[j] * math.exp(out_w[j] - top)
+        out_w[j] = weights[j] * exp(out_w[j] - top)
     est = np.empty(3)
     no_cum = np.empty(0)
     log_mean, ess, _ = _finish_estimate(weights, top, out_w, particles, cs, est, no_cum)
@@ -151,8 +151,9 @@ def move_and_read_keyed_parallel(
 
     The noise of rows ``c * rows`` on is chunk ``c`` of the step keyed
     ``key`` (`normals.fill_chunks`: `motion.standard_normals`' numbers),
-    drawn where it is used instead of stored: the threads take whole chunks
-    (a chunk's numbers come one after the other). The same numbers as
+    drawn by the thread that uses it instead of stored for the step: the
+    threads take whole chunks, each drawn into a buffer of its own in one
+    loop (`normals.fill`) and then used. The same numbers as
     `move_and_read_parallel` on `normals.fill_chunks`' noise.
     """
     rot1, trans, rot2, sd1, sdt, sd2 = motion
@@ -166,11 +167,16 @@ def move_and_read_keyed_parallel(
     for ch in nb.prange(n_chunks):
         st = np.empty(4, dtype=np.uint64)
         sfc64_state(key, ch, st)
-        for j in range(ch * rows, min(ch * rows + rows, n)):
-            # `_odometry_one` on the three numbers just drawn
-            r1 = rot1 + sd1 * normal(st)
-            t = trans + sdt * normal(st)
-            r2 = rot2 + sd2 * normal(st)
+        lo = ch * rows
+        hi = min(lo + rows, n)
+        draws = np.empty(3 * (hi - lo))  # the chunk's noise, drawn in one loop
+        fill(st, draws)
+        for j in range(lo, hi):
+            # `_odometry_one` on the chunk's three numbers for the row
+            d = 3 * (j - lo)
+            r1 = rot1 + sd1 * draws[d]
+            t = trans + sdt * draws[d + 1]
+            r2 = rot2 + sd2 * draws[d + 2]
             th0 = particles[j, 2]
             x = particles[j, 0] + t * math.cos(th0 + r1)
             y = particles[j, 1] + t * math.sin(th0 + r1)
@@ -206,7 +212,7 @@ def _paper_mm(j, mm, z, inv_n, out):
     d = 0.0
     for i in range(mm.shape[1]):
         d += abs((z[i] - mm[j, i] * 0.001) / z[i])
-    out[j] = math.log(math.exp(-d / mm.shape[1]) + inv_n)
+    out[j] = math.log(exp(-d / mm.shape[1]) + inv_n)
 
 
 @nb.njit(**JIT)
@@ -228,7 +234,7 @@ def _beam_mm_row(
         zhat = k * 0.001
         u = (z[i] - zhat) * inv_sigma
         if u * u < u2_skip:
-            p = hit[k] * math.exp(-0.5 * u * u) + p_rand
+            p = hit[k] * exp(-0.5 * u * u) + p_rand
         else:
             p = p_rand
         # a select, not a branch (about half the readings are short); p >= +0
@@ -287,7 +293,7 @@ def _paper_weigh_parallel(terms, mm, inv_n, out_w):
         d = 0.0
         for i in range(s_count):
             d += terms[i, mm[j, i]]
-        out_w[j] = math.log(math.exp(-d / s_count) + inv_n)
+        out_w[j] = math.log(exp(-d / s_count) + inv_n)
 
 
 @nb.njit(**JIT)  # its passes are threaded kernels

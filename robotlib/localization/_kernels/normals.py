@@ -110,36 +110,71 @@ def _next_double(s):
 
 
 @nb.njit(**JIT)
-def normal(s):
-    """One standard normal from the SFC64 state ``s``: NumPy's ziggurat.
+def fill(s, flat):
+    """``flat`` (m,) := the SFC64 state ``s``'s next normals (NumPy's ziggurat).
 
-    A call, not inlined: three copies in a threaded kernel's loop cost
-    seconds of compile time.
+    The state lives in registers through the loop and is written back at
+    the end; the rare draws that miss the ziggurat's boxes (about one in a
+    hundred) call `_rest`. The same numbers as NumPy's
+    ``Generator(SFC64).standard_normal``, in order.
     """
-    while True:
-        r = _next(s)
-        idx = r & np.uint64(0xFF)
-        r = r >> np.uint64(8)
-        sign = r & np.uint64(1)
-        rabs = (r >> np.uint64(1)) & np.uint64(0x000FFFFFFFFFFFFF)
-        x = np.float64(rabs) * _WI[idx]
-        if sign & np.uint64(1):
-            x = -x
-        if rabs < _KI[idx]:
-            return x
-        if idx == np.uint64(0):
-            while True:
-                xx = -_INV_R * np.log1p(-_next_double(s))
-                yy = -np.log1p(-_next_double(s))
-                if yy + yy > xx * xx:
-                    if (rabs >> np.uint64(8)) & np.uint64(1):
-                        return -(_R + xx)
-                    return _R + xx
-        else:
-            if (_FI[idx - np.uint64(1)] - _FI[idx]) * _next_double(s) + _FI[
-                idx
-            ] < np.exp(-0.5 * x * x):
-                return x
+    a = s[0]
+    b = s[1]
+    c = s[2]
+    w = s[3]
+    for k in range(flat.shape[0]):
+        while True:
+            r = a + b + w  # `_next`
+            w += np.uint64(1)
+            a = b ^ (b >> np.uint64(11))
+            b = c + (c << np.uint64(3))
+            c = ((c << np.uint64(24)) | (c >> np.uint64(40))) + r
+            idx = r & np.uint64(0xFF)
+            r = r >> np.uint64(8)
+            sign = r & np.uint64(1)
+            rabs = (r >> np.uint64(1)) & np.uint64(0x000FFFFFFFFFFFFF)
+            x = np.float64(rabs) * _WI[idx]
+            if sign & np.uint64(1):
+                x = -x
+            if rabs < _KI[idx]:
+                break
+            s[0] = a
+            s[1] = b
+            s[2] = c
+            s[3] = w
+            x, done = _rest(s, idx, rabs, x)
+            a = s[0]
+            b = s[1]
+            c = s[2]
+            w = s[3]
+            if done:
+                break
+        flat[k] = x
+    s[0] = a
+    s[1] = b
+    s[2] = c
+    s[3] = w
+
+
+@nb.njit(**JIT)
+def _rest(s, idx, rabs, x):
+    """Finish a draw past the ziggurat's box ``idx``: ``(x, done)`` (else draw again).
+
+    A call, not inlined into `fill`: it is rare, and a second copy of the
+    tail in a threaded kernel costs compile time.
+    """
+    if idx == np.uint64(0):
+        while True:
+            xx = -_INV_R * np.log1p(-_next_double(s))
+            yy = -np.log1p(-_next_double(s))
+            if yy + yy > xx * xx:
+                if (rabs >> np.uint64(8)) & np.uint64(1):
+                    return -(_R + xx), True
+                return _R + xx, True
+    done = (_FI[idx - np.uint64(1)] - _FI[idx]) * _next_double(s) + _FI[idx] < np.exp(
+        -0.5 * x * x
+    )
+    return x, done
 
 
 @nb.njit(**JIT)
@@ -147,9 +182,7 @@ def fill_chunk(key, chunk, out):
     """``out`` (m, 3) := chunk ``chunk`` of the step keyed ``key``'s normals."""
     s = np.empty(4, dtype=np.uint64)
     sfc64_state(key, chunk, s)
-    flat = out.reshape(out.size)  # one call site: a fifth of the compile time
-    for j in range(flat.shape[0]):
-        flat[j] = normal(s)
+    fill(s, out.reshape(out.size))
 
 
 @nb.njit(**JIT)

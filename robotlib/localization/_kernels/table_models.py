@@ -13,7 +13,7 @@ import numba as nb
 import numpy as np
 
 from ..._config import JIT, JIT_PARALLEL, serial_and_parallel
-from .common import _LOG_SQRT_2PI
+from .common import _LOG_SQRT_2PI, exp
 from .tables import _table_mm
 
 
@@ -53,7 +53,7 @@ def _beam_mm(i, mm, z, e_short, is_max, hit, short, z_max, p_rand, inv_sigma):
         return z_max
     zhat = mm * 0.001
     u = (z[i] - zhat) * inv_sigma
-    p = hit[mm] * math.exp(-0.5 * u * u) + p_rand
+    p = hit[mm] * exp(-0.5 * u * u) + p_rand
     if z[i] <= zhat:
         p += short[mm] * e_short[i]
     return p
@@ -83,7 +83,7 @@ def _beam_table_cs(
         zhat = mm * 0.001
         u = (z[i] - zhat) * inv_sigma
         if u * u < u2_skip:
-            p = hit[mm] * math.exp(-0.5 * u * u) + p_rand
+            p = hit[mm] * exp(-0.5 * u * u) + p_rand
         else:
             p = p_rand
         if z[i] <= zhat:
@@ -188,7 +188,7 @@ def _paper_cs(j, particles, c, s, sensors, table, x0, y0, inv_res, z, inv_n, out
     for i in range(sensors.shape[0]):
         mm = _table_mm(particles, j, c, s, sensors, i, table, x0, y0, inv_res)
         d += abs((z[i] - mm * 0.001) / z[i])
-    out[j] = math.log(math.exp(-d / sensors.shape[0]) + inv_n)
+    out[j] = math.log(exp(-d / sensors.shape[0]) + inv_n)
 
 
 def _paper_table_loglik(particles, sensors, table, x0, y0, inv_res, z, inv_n, out):

@@ -24,9 +24,10 @@ than that are tried by every ray of their strip. Why it is fast: the walls
 a ray tries lie side by side in memory (their end point and edge vector
 copied into the strip), about five a ray on ``columbia.map``, most ruled
 out by comparing two numbers; and each direction's rays are written to
-their own plane (``scratch``), a cone then being the least of its rays'
-entries (entries grow with the range, so the least entry is the entry of
-the least range: the same number as the cone's nearest echo gives).
+their own plane (a row of cells at a time, in the table's own memory), a
+cone then being the least of its rays' entries (entries grow with the
+range, so the least entry is the entry of the least range: the same number
+as the cone's nearest echo gives).
 
 Numba kernels: contiguous arrays and scalars in; they import nothing of
 robotlib but the JIT options and other kernels.
@@ -41,8 +42,14 @@ from ..._config import JIT, JIT_PARALLEL
 from ...sensing._kernels import _EPS
 from .common import _TWO_PI
 
-STRIP = 0.05
-"""Width of the strips, m (on ``columbia.map`` 0.025 m and 0.1 m are slower)."""
+STRIP = 0.025
+"""Width of the strips, m.
+
+On ``columbia.map`` (points as 2 cm crosses) 0.025 m takes about a tenth
+less processor time than 0.05 m (fewer walls of a strip miss the ray's
+offset), 0.015-0.035 m about the same, 0.01 m more; likewise on the
+generated large map.
+"""
 
 _MU = 1e-7  # m: a wall also goes into strips it misses by this little
 _MV = 1e-3  # m: the span along the direction is widened by this much
@@ -113,20 +120,27 @@ def _unseen(segments, m, c, s, c2, s2):
 
 
 @nb.njit(**JIT)
-def build_strips(segments, c, s, c2, s2, u0, w, n_strips):
-    """Sort the walls into strips across ``(c, s)``: start, firsts, entries, ids, reach.
+def build_strips(segments, c, s, c2, s2, u0, w, n_strips, normals, cos_specular):
+    """Sort the walls into strips across ``(c, s)``: start, firsts, entries, ....
+
+    Returns ``start, firsts, entries, codes, reach``.
 
     Strip ``k`` covers offsets ``u = -s x + c y`` in ``[u0 + k w, u0 + (k + 1)
     w)`` and holds ``entries[start[k]:start[k + 1]]`` (8 columns: the
     wall's span ``vmin, vmax`` along the direction within the strip, its
     offsets ``ulo, uhi``, all widened, then its first end point and edge
-    vector as `ray_segments` computes them) and their wall indexes
-    ``ids``: first the walls nearly parallel to the direction (spanning the
-    whole line, ``vmin = -inf``; up to ``firsts[k]``), then the others by
-    ``vmin``. ``reach[k]``
-    is the longest finite span in the strip. Walls that no ray along ``(c,
-    s)`` or ``(c2, s2)`` can hit (`_unseen`: on a map of points, one arm of
-    every cross along the axes) are left out.
+    vector as `ray_segments` computes them) and their ``codes``: first the
+    walls nearly parallel to the direction (spanning the whole line, ``vmin
+    = -inf``; up to ``firsts[k]``), then the others by ``vmin``.
+    ``reach[k]`` is the longest finite span in the strip. Walls that no ray
+    along ``(c, s)`` or ``(c2, s2)`` can hit (`_unseen`: on a map of
+    points, one arm of every cross along the axes) are left out.
+
+    A wall ``m``'s code is ``4 m + f``: bit 1 of ``f`` set when a ray along
+    ``(c, s)`` that hits it returns an echo (``|c nx + s ny| >=
+    cos_specular`` with ``normals[m] = (nx, ny)``, the test `_ray_entry`
+    made per ray before), bit 2 likewise along ``(c2, s2)``. Codes order
+    as the indexes do, so the rays' tie rule is unchanged.
     """
     n_walls = segments.shape[0]
     count = np.zeros(n_strips + 1, dtype=np.int64)
@@ -187,7 +201,12 @@ def build_strips(segments, c, s, c2, s2, u0, w, n_strips):
             raw[f, _PY] = py
             raw[f, _EX] = ex
             raw[f, _EY] = ey
-            raw_ids[f] = m
+            code = 4 * m
+            if abs(c * normals[m, 0] + s * normals[m, 1]) >= cos_specular:
+                code += 1
+            if abs(c2 * normals[m, 0] + s2 * normals[m, 1]) >= cos_specular:
+                code += 2
+            raw_ids[f] = code
     entries = np.empty((n, 8))
     ids = np.empty(n, dtype=np.int64)
     reach = np.zeros(n_strips)
@@ -223,7 +242,8 @@ def strip_ray(
 ):  # fmt: skip
     """Nearest hit ``(t, m)`` of the ray ``o + t d`` on the walls of its strip.
 
-    The very ``(t, m)`` of `ray_segments` against every wall whenever the
+    ``m`` is the wall's code (`build_strips`), -1 for none. The very ``t``
+    and wall of `ray_segments` against every wall whenever the
     nearest hit is nearer than ``limit`` (else a hit beyond it, or none).
     ``finger[k]`` remembers where strip ``k``'s last ray started its search
     (rays of nearby cells start nearby).
@@ -335,11 +355,16 @@ def strip_ray_back(
 
 
 @nb.njit(inline="always", **JIT)  # ~12 % sooner, +0.4 s to compile
-def _ray_entry(t, m, dx, dy, normals, max_range, min_range, cos_specular):
-    """Table entry (uint16, mm) of one ray's first hit ``(t, m)``, as a cone of one."""
+def _ray_entry(t, m, bit, max_range, min_range):
+    """Table entry (uint16, mm) of one ray's first hit ``(t, m)``, as a cone of one.
+
+    ``m`` is the wall's code (`build_strips`, -1 for none), ``bit`` the
+    direction's bit in it: a hit of a wall seen too obliquely reads as no
+    echo, as in `_cone`.
+    """
     z = max_range
     if m >= 0 and t < max_range:
-        if abs(dx * normals[m, 0] + dy * normals[m, 1]) >= cos_specular:
+        if m & bit:
             z = t
     z = min(max(z, min_range), max_range)
     return np.uint16(round(z * 1000.0))
@@ -348,16 +373,15 @@ def _ray_entry(t, m, dx, dy, normals, max_range, min_range, cos_specular):
 @nb.njit(**JIT)
 def _direction_rays(
     segments, normals, x0, y0, resolution, b, b2, n_bins, max_range, min_range,
-    cos_specular, w, xc, yc, d, n_strips, scratch, table,
+    cos_specular, w, xc, yc, d, n_strips, planes,
 ):  # fmt: skip
     """Every cell's ray along bin ``b`` and its opposite ``b2`` (unless ``b2 < 0``).
 
     Both directions' rays go through one set of strips (`build_strips`,
-    `strip_ray`, `strip_ray_back`); each ray's entry goes to ``scratch[b]``
-    (or ``table``).
+    `strip_ray`, `strip_ray_back`); the entry of cell ``(i, j)``'s ray
+    along ``b`` goes to ``planes[i, b, j]`` (`strip_sweep_table`).
     """
-    ny, nx, _ = table.shape
-    apart = scratch.shape[0] == n_bins
+    ny, _, nx = planes.shape
     dx = math.cos(b * _TWO_PI / n_bins)  # as `cone_echo` computes each ray
     dy = math.sin(b * _TWO_PI / n_bins)
     dx2 = dx
@@ -367,7 +391,7 @@ def _direction_rays(
         dy2 = math.sin(b2 * _TWO_PI / n_bins)
     u0 = -dy * xc + dx * yc - 0.5 * d
     start, firsts, entries, ids, reach = build_strips(
-        segments, dx, dy, dx2, dy2, u0, w, n_strips
+        segments, dx, dy, dx2, dy2, u0, w, n_strips, normals, cos_specular
     )
     inv_w = 1.0 / w
     finger = start[:n_strips].copy()
@@ -380,56 +404,27 @@ def _direction_rays(
                 cx, cy, dx, dy, u0, inv_w, start, firsts, entries, ids, reach,
                 finger, max_range,
             )  # fmt: skip
-            entry = _ray_entry(
-                t, m, dx, dy, normals, max_range, min_range, cos_specular
-            )
-            if apart:
-                scratch[b, i, j] = entry
-            else:
-                table[i, j, b] = entry
+            planes[i, b, j] = _ray_entry(t, m, 1, max_range, min_range)
             if b2 < 0:
                 continue
             t, m = strip_ray_back(
                 cx, cy, dx, dy, dx2, dy2, u0, inv_w, start, firsts, entries, ids,
                 reach, finger2, max_range,
             )  # fmt: skip
-            entry = _ray_entry(
-                t, m, dx2, dy2, normals, max_range, min_range, cos_specular
-            )
-            if apart:
-                scratch[b2, i, j] = entry
-            else:
-                table[i, j, b2] = entry
-
-
-@nb.njit(**JIT)
-def _cone_row(i, n_rays, ray_step, scratch, table):
-    """Row ``i``'s cones, in place: each the least entry of its rays."""
-    _, nx, n_bins = table.shape
-    half = (n_rays - 1) // 2 if n_rays > 1 else 0
-    rays = np.empty(n_bins, dtype=np.uint16)
-    for j in range(nx):
-        for b in range(n_bins):
-            rays[b] = table[i, j, b]
-        for b in range(n_bins):
-            e = rays[b]
-            for q in range(1, half + 1):
-                e = min(e, rays[(b + q * ray_step) % n_bins])
-                e = min(e, rays[(b - q * ray_step) % n_bins])
-            table[i, j, b] = e
+            planes[i, b2, j] = _ray_entry(t, m, 2, max_range, min_range)
 
 
 @nb.njit(**JIT_PARALLEL)
 def _strip_rays(
-    segments, normals, x0, y0, resolution, n_bins, ray_step, n_rays, max_range,
-    min_range, cos_specular, w, scratch, table,
+    segments, normals, x0, y0, resolution, n_bins, max_range, min_range,
+    cos_specular, w, planes,
 ):  # fmt: skip
     """Every cell's ray along every bin (`_direction_rays`), pairs in parallel.
 
     Opposite bins ``b`` and ``b + n_bins / 2`` share their strips (for an
     even ``n_bins``). One parallel loop: the cones follow in `cone_pass`.
     """
-    ny, nx, _ = table.shape
+    ny, _, nx = planes.shape
     xc, yc, d = strip_frame(segments, x0, y0, nx * resolution, ny * resolution)
     n_strips = int(d / w) + 2
     half = n_bins // 2 if n_bins % 2 == 0 else n_bins
@@ -437,64 +432,64 @@ def _strip_rays(
         b2 = b + half if half < n_bins else -1
         _direction_rays(
             segments, normals, x0, y0, resolution, b, b2, n_bins, max_range,
-            min_range, cos_specular, w, xc, yc, d, n_strips, scratch, table,
+            min_range, cos_specular, w, xc, yc, d, n_strips, planes,
         )  # fmt: skip
 
 
 @nb.njit(**JIT)
-def _cone_planes(n_rays, ray_step, scratch, table):
-    """Each cone of ``table``: the least of its rays' entries in ``scratch``.
+def cone_pass(n_rays, ray_step, planes, table):
+    """Each cone of ``table``: the least of its rays' entries in ``planes``.
 
-    Row by row, each row's cones taken plane by plane (runs of one
-    direction's entries), then turned into the table's layout. One thread:
-    on ``columbia.map`` 0.05 s, as fast as two under load, and a parallel
-    loop would cost about 2 s more to compile.
+    ``planes`` (ny, n_bins, nx) and ``table`` (ny, nx, n_bins) are two views
+    of one buffer (row ``i`` of each is the same memory): row by row, the
+    row's rays are copied out, its cones taken plane by plane (runs of one
+    direction's entries) and written back in the table's layout. One
+    thread: on ``columbia.map`` 0.05 s, as fast as two under load, and a
+    parallel loop would cost about 2 s more to compile.
     """
     ny, nx, n_bins = table.shape
     half = (n_rays - 1) // 2 if n_rays > 1 else 0
+    rays = np.empty((n_bins, nx), dtype=np.uint16)
     row = np.empty((n_bins, nx), dtype=np.uint16)
     for i in range(ny):
         for b in range(n_bins):
             for j in range(nx):
-                row[b, j] = scratch[b, i, j]
+                rays[b, j] = planes[i, b, j]
+        for b in range(n_bins):
+            for j in range(nx):
+                row[b, j] = rays[b, j]
             for q in range(1, half + 1):
                 b1 = (b + q * ray_step) % n_bins
                 b2 = (b - q * ray_step) % n_bins
                 for j in range(nx):
-                    row[b, j] = min(row[b, j], scratch[b1, i, j], scratch[b2, i, j])
+                    row[b, j] = min(row[b, j], rays[b1, j], rays[b2, j])
         for j in range(nx):
             for b in range(n_bins):
                 table[i, j, b] = row[b, j]
 
 
-def cone_pass(n_rays, ray_step, scratch, table):
-    """Each cone of ``table``: the least entry of its rays (``scratch`` or in place)."""
-    if scratch.shape[0] == table.shape[2]:
-        _cone_planes(n_rays, ray_step, scratch, table)
-    else:
-        for i in range(table.shape[0]):
-            _cone_row(i, n_rays, ray_step, scratch, table)
-
-
 def strip_sweep_table(
     segments, normals, x0, y0, resolution, n_bins, ray_step, n_rays, max_range,
-    min_range, cos_specular, w, scratch, table,
+    min_range, cos_specular, w, table,
 ):  # fmt: skip
     """Fill ``table`` (ny, nx, n_bins) uint16 mm: shared rays through strips.
 
     The table of `robotlib.localization._kernels.tables.build_cone_table`
     for shared rays (the same bits): pairs of opposite directions in
     parallel, each pair with its own strips (`build_strips`) and every
-    cell's ray along both (`strip_ray`, `strip_ray_back`), the ray's entry
-    written to ``scratch[b]`` (n_bins, ny, nx) uint16, or straight into
-    ``table`` when ``scratch`` is empty (less memory, more time); then each
-    cone is the least entry of its ``n_rays`` rays ``ray_step`` bins apart
-    (`cone_pass`). ``normals`` are
-    the walls' `tables._unit_normals`.
+    cell's ray along both (`strip_ray`, `strip_ray_back`), the entry of
+    cell ``(i, j)``'s ray along bin ``b`` written to ``planes[i, b, j]``,
+    ``planes`` being ``table`` seen as (ny, n_bins, nx): each row of cells
+    holds its rays plane by plane until `cone_pass` turns them into the
+    row's cones, each the least entry of its ``n_rays`` rays ``ray_step``
+    bins apart. No memory beyond the table's own (and the strips). ``table``
+    must be C-contiguous. ``normals`` are the walls' `tables._unit_normals`.
     """
+    ny, nx, _ = table.shape
+    planes = table.reshape(ny, n_bins, nx)  # a view: the same buffer
     with nb.parallel_chunksize(1):  # pairs to whichever thread is free
         _strip_rays(
-            segments, normals, x0, y0, resolution, n_bins, ray_step, n_rays,
-            max_range, min_range, cos_specular, w, scratch, table,
+            segments, normals, x0, y0, resolution, n_bins, max_range, min_range,
+            cos_specular, w, planes,
         )  # fmt: skip
-    cone_pass(n_rays, ray_step, scratch, table)
+    cone_pass(n_rays, ray_step, planes, table)

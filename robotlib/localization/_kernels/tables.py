@@ -350,17 +350,6 @@ def indexed_cone_table(
                 table[i, j, b] = _table_entry(echo, max_range, min_range)
 
 
-SCRATCH_MAX_BYTES = 256 << 20
-"""Tables up to this size get a scratch plane per direction while built, bytes.
-
-`build_cone_table_strips` writes each direction's rays to their own plane
-(the table's size again) and then takes each cone's least entry: on
-``columbia.map`` (72 MB) about a fifth less processor time than writing
-them straight into the table, 72 directions apart. Larger tables are
-built in place, to spare the memory.
-"""
-
-
 def build_cone_table_strips(
     segments, x0, y0, resolution, n_bins, ray_step, n_rays, cone, max_range,
     min_range, cos_specular, table,
@@ -376,12 +365,11 @@ def build_cone_table_strips(
     if ray_step <= 0:
         raise ValueError("the strips builder casts shared rays: ray_step > 0")
     segments = np.ascontiguousarray(segments, dtype=np.float64)
-    ny, nx, _ = table.shape
-    shape = (n_bins, ny, nx) if table.nbytes <= SCRATCH_MAX_BYTES else (0, 0, 0)
+    if not table.flags.c_contiguous:
+        raise ValueError("the strips builder fills a C-contiguous table")
     strip_sweep_table(
         segments, _unit_normals(segments), x0, y0, resolution, n_bins, ray_step,
-        n_rays, max_range, min_range, cos_specular, STRIP,
-        np.empty(shape, dtype=np.uint16), table,
+        n_rays, max_range, min_range, cos_specular, STRIP, table,
     )  # fmt: skip
 
 

@@ -10,6 +10,7 @@ import numba as nb
 import numpy as np
 
 from ..._config import JIT, serial_and_parallel
+from .common import exp
 
 
 @nb.njit(**JIT)
@@ -80,7 +81,7 @@ def _update_weights(weights, loglik, out):
         if loglik[j] > top:
             top = loglik[j]
     for j in nb.prange(n):
-        out[j] = weights[j] * math.exp(loglik[j] - top)
+        out[j] = weights[j] * exp(loglik[j] - top)
     return _finish_weights(weights, top, out)
 
 
