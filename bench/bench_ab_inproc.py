@@ -30,17 +30,17 @@ import time
 import numpy as np
 
 
-def _filter(pkg: str, n: int, model: str):
+def _filter(pkg: str, n: int, model: str, world_name="corridor", fast=True):
     loc = importlib.import_module(pkg + ".localization")
-    world = importlib.import_module(pkg + ".world").load_world("corridor")
+    world = importlib.import_module(pkg + ".world").load_world(world_name)
     z = loc.expected_readings(world, np.array([world.start]))[0]
     odo0 = np.array(world.start)
     odo1 = odo0 + [0.5, 0.0, 0.05]
     start = world.sample_free_poses(n, 0)
     sensor = (
-        loc.BeamSensorModel(world, fast=True, params=loc.BeamParameters(exponent=0.2))
+        loc.BeamSensorModel(world, fast=fast, params=loc.BeamParameters(exponent=0.2))
         if model == "beam"
-        else loc.PaperSensorModel(world, fast=True)
+        else loc.PaperSensorModel(world, fast=fast)
     )
     mcl = loc.MCL(world, sensor, resampling=loc.ThresholdResampling("systematic", 1.0),
                   n=n, rng=0, check=False)  # fmt: skip
@@ -58,6 +58,10 @@ def main() -> int:
     parser.add_argument("old")
     parser.add_argument("specs", nargs="+", help="n:reps[:model]")
     parser.add_argument("--blocks", type=int, default=10)
+    parser.add_argument("--world", default="corridor", help="world of the filters")
+    parser.add_argument(
+        "--exact", action="store_true", help="the exact path (cone casts, no table)"
+    )
     args = parser.parse_args()
     old = os.path.abspath(args.old)
     tag = hashlib.sha1(old.encode()).hexdigest()[:12]
@@ -74,13 +78,14 @@ def main() -> int:
         n, reps = int(parts[0]), int(parts[1])
         model = parts[2] if len(parts) > 2 else "beam"
         trees = {
-            "old": _filter("robotlib_old", n, model),
-            "new": _filter("robotlib", n, model),
+            "old": _filter("robotlib_old", n, model, args.world, not args.exact),
+            "new": _filter("robotlib", n, model, args.world, not args.exact),
         }
         for _, step in trees.values():
             for _ in range(3):
                 step()
-        clock = time.thread_time if n < 4096 else time.process_time
+        threaded = n >= (64 if args.exact else 4096)  # the exact casts' threads
+        clock = time.process_time if threaded else time.thread_time
         times = {k: [] for k in trees}
         cpu = {k: [] for k in trees}
         for b in range(args.blocks):

@@ -175,9 +175,14 @@ def sonar_loglik(
 
 def sonar_beam_loglik(
     L, origin, res, pose, sensors, ranges, half_cone, max_range, n_rays, sigma,
-    p_rand, occ, c_unknown,
+    p_rand, occ, c_unknown, centre=False,
 ):  # fmt: skip
-    """The sonar beam model, one ray point at a time (see the kernel's docstring)."""
+    """The sonar beam model, one ray point at a time (see the kernel's docstring).
+
+    ``centre``: each ray marches to its first wall cell (up to ``z + 3
+    sigma``) and reports the distance to that cell's centre; the nearest
+    over the rays is the expected range.
+    """
     ny, nx = L.shape
 
     def cell(px, py):
@@ -201,10 +206,15 @@ def sonar_beam_loglik(
                 + (half_cone * (2.0 * k / (n_rays - 1) - 1.0) if n_rays > 1 else o)
             )
             d = 0.5 * res
-            while d < z + 3 * sigma and d < zhat:
+            while d < z + 3 * sigma and (centre or d < zhat):
                 i, j = cell(sx + d * math.cos(a), sy + d * math.sin(a))
                 if 0 <= i < ny and 0 <= j < nx and L[i, j] > occ:
-                    zhat = d
+                    if centre:
+                        cx = origin[0] + (j + 0.5) * res
+                        cy = origin[1] + (i + 0.5) * res
+                        zhat = min(zhat, math.hypot(cx - sx, cy - sy))
+                    else:
+                        zhat = d
                     break
                 d += 0.5 * res
             i, j = cell(sx + z * math.cos(a), sy + z * math.sin(a))

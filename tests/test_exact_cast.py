@@ -38,6 +38,7 @@ def _echoes_both(cones, walls, counts, n_rays, cone, max_range, cos_specular):
     offs = _offsets(n_rays, cone)
     ray = np.empty((3, _lanes(n_rays)))
     cand = np.empty(((walls.shape[1] + 63) // 64, _lanes(n_rays)), dtype=np.uint64)
+    pas = np.empty(walls.shape[1], dtype=np.uint64)
     items = np.empty(0, dtype=np.int32)
     for k in range(cones.shape[0]):
         w = walls[k, : counts[k]]
@@ -48,7 +49,7 @@ def _echoes_both(cones, walls, counts, n_rays, cone, max_range, cos_specular):
         table = wall_table(w)
         out[k, 1] = cone_echo_pruned(
             sx, sy, sth, math.cos(sth), math.sin(sth), table, items, True, 0,
-            counts[k], n_rays, cone, max_range, cos_specular, offs, ray, cand,
+            counts[k], n_rays, cone, max_range, cos_specular, offs, ray, cand, pas,
         )  # fmt: skip
     return out
 
@@ -176,3 +177,92 @@ def _near_end(sx, sy, sth, segments, n_rays, cone):
         if np.any(np.abs(ends[:, 0] * d[1] - ends[:, 1] * d[0]) < 1e-6):
             return True
     return False
+
+
+@pytest.mark.parametrize("n", [40, 300])
+def test_fused_exact_weighing_equals_cast_then_weigh(n):
+    """`exact_models`' kernels: the casts and the weights of the two kernels in turn."""
+    from robotlib.localization import _kernels
+    from robotlib.localization._kernels import exact_models
+    from robotlib.localization.cones import exact_arguments
+
+    world = load_world("office")
+    sonar = SonarModel()
+    rng = np.random.default_rng(3)
+    x0, y0, x1, y1 = world.bounds
+    poses = np.concatenate([
+        world.sample_free_poses(n, rng),
+        np.column_stack([rng.uniform(x0 - 1, x1 + 1, n), rng.uniform(y0 - 1, y1 + 1, n),
+                         rng.uniform(-4, 4, n)]),
+    ])  # fmt: skip
+    args = exact_arguments(world, sonar)
+    zhat = np.empty((len(poses), 8))
+    _kernels.expected_scan_blocks(poses, *args, zhat)
+    z = np.array([0.3, 1.0, 2.2, 4.999, 5.0, 0.1, 3.3, 1.7])
+    beam = (0.75, 0.1, 0.05, 0.1, 0.15, 0.5)
+    ref_beam = np.empty(len(poses))
+    _kernels.beam_loglik(z, zhat, 5.0, *beam, ref_beam)
+    ref_paper = np.empty(len(poses))
+    _kernels.paper_loglik(z, zhat, float(len(poses)), ref_paper)
+    for fused in (exact_models.exact_beam, exact_models.exact_beam_parallel):
+        got, got_z = np.empty(len(poses)), np.empty_like(zhat)
+        fused(poses, *args, got_z, z, *beam, got)
+        np.testing.assert_array_equal(got_z, zhat)
+        np.testing.assert_array_equal(got, ref_beam)
+    for fused in (exact_models.exact_paper, exact_models.exact_paper_parallel):
+        got, got_z = np.empty(len(poses)), np.empty_like(zhat)
+        fused(poses, *args, got_z, z, float(len(poses)), got)
+        np.testing.assert_array_equal(got_z, zhat)
+        np.testing.assert_array_equal(got, ref_paper)
+
+
+@pytest.mark.parametrize(
+    "kind, n, policy",
+    [("beam", 40, "every"), ("beam", 300, "every"), ("beam1", 300, "threshold"),
+     ("paper", 40, "threshold"), ("paper", 300, "every")],
+)  # fmt: skip
+def test_exact_step_in_one_call_equals_its_parts(kind, n, policy):
+    """`MCL.step` on the exact path (`exact_models.exact_step`): the four stages' bits.
+
+    40 particles: the serial call; 300: the threaded one. "every": resampled
+    in the call; "threshold": by the policy afterwards (when the ESS is low).
+    """
+    from robotlib.localization import (
+        MCL,
+        BeamParameters,
+        BeamSensorModel,
+        PaperSensorModel,
+        ThresholdResampling,
+    )
+
+    world = load_world("office")
+
+    def make():
+        sensor = (
+            PaperSensorModel(world)
+            if kind == "paper"
+            else BeamSensorModel(
+                world, params=BeamParameters(exponent=0.2 if kind == "beam" else 1.0)
+            )
+        )
+        resampling = (
+            ThresholdResampling("systematic", 1.0)
+            if policy == "every"
+            else ThresholdResampling("systematic", 0.5)
+        )
+        return MCL(world, sensor, resampling=resampling, n=n, rng=5, check=True)
+
+    z = expected_readings(world, np.array([world.start]))[0]
+    z[2] = 5.0  # a max reading
+    odo = [np.array(world.start) + k * np.array([0.3, 0.1, 0.2]) for k in range(5)]
+    a, b = make(), make()
+    for k in range(4):
+        est = a.step(odo[k], odo[k + 1], z).copy()
+        b.predict(odo[k], odo[k + 1])
+        b.update(z)
+        np.testing.assert_array_equal(est, b.estimate())
+        assert a.ess == b.ess and a._log_mean == b._log_mean
+        b.resample()
+        np.testing.assert_array_equal(a.particles, b.particles)
+        np.testing.assert_array_equal(a.weights, b.weights)
+    assert a.info.n_after == n

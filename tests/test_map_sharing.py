@@ -124,11 +124,14 @@ def test_window_loglik_sums_the_beam_model_over_the_window():
     )  # fmt: skip
     scans = rng.uniform(0.3, 5.0, (4, 8))
     scans[1, 2] = 5.0
-    for kernel in (kw.window_loglik_many, kw.window_loglik_many_parallel):
+    for kernel, centre in (
+        (kw.window_loglik_many, False), (kw.window_loglik_many_parallel, False),
+        (kw.window_loglik_many, True),
+    ):  # fmt: skip
         out = np.empty(3)
         kernel(
             Ls, *ORIGIN, RES, wins, sonar.sensors, scans, sonar.cone / 2, 5.0, 5,
-            0.15, 0.2, 0.5, 0.5, out,
+            0.15, 0.2, 0.5, 0.5, out, centre,
         )  # fmt: skip
         for n in range(3):
             want = sum(
@@ -146,6 +149,7 @@ def test_window_loglik_sums_the_beam_model_over_the_window():
                     0.2,
                     0.5,
                     0.5,
+                    centre,
                 )  # fmt: skip
                 for k in range(4)
             )

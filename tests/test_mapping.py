@@ -265,15 +265,15 @@ def test_many_particle_kernels_match_single_map_kernels_and_references():
             0.05,
         )
         assert out[k] == pytest.approx(want, rel=1e-9)
-    for c_unknown in (0.0, 0.5):
+    for c_unknown, centre in ((0.0, False), (0.5, False), (0.0, True), (0.5, True)):
         kern.sonar_beam_loglik_many(
             Ls, *origin, res, poses, sonar.sensors, zs, sonar.cone / 2, 5.0, 5,
-            0.15, 0.2, 0.5, c_unknown, out,
+            0.15, 0.2, 0.5, c_unknown, out, centre,
         )  # fmt: skip
         for k in range(n):
             want = naive.sonar_beam_loglik(
                 Ls[k], origin, res, poses[k], sonar.sensors, zs, sonar.cone / 2,
-                5.0, 5, 0.15, 0.2, 0.5, c_unknown,
+                5.0, 5, 0.15, 0.2, 0.5, c_unknown, centre,
             )  # fmt: skip
             assert out[k] == pytest.approx(want, rel=1e-9)
     many = Ls.copy()
@@ -406,3 +406,24 @@ def test_scan_fitting_kernel_matches_the_reference():
         pinned,
     )  # fmt: skip
     np.testing.assert_array_equal(pinned, poses)
+
+
+def test_sonar_beam_range_to_cell_centres_is_unbiased_on_a_mapped_wall():
+    # a wall one cell thick whose cell centres lie 1.0 m ahead of a sonar at the
+    # origin facing +x: an echo at 1.0 m is where the inverse model put the wall
+    res, origin = 0.1, (-0.05, -1.05)
+    L = np.zeros((21, 21), dtype=np.float32)
+    L[:, 10] = 4.0  # column 10: centres at x = 1.0
+    sensors = np.zeros((1, 3))
+    args = (sensors, np.array([1.0]), math.radians(1.0), 5.0, 5, 0.05, 0.0, 2.0, 0.0)
+    entry = kern.sonar_beam_loglik(L, *origin, res, 0.0, 0.0, 0.0, *args, False)
+    centre = kern.sonar_beam_loglik(L, *origin, res, 0.0, 0.0, 0.0, *args, True)
+    assert centre == pytest.approx(0.0, abs=1e-3)  # zhat = 1.0 (cos 1 deg off)
+    assert entry < -0.3  # the ray enters the cell 5 cm short: zhat = 0.95 m
+    for c in (False, True):
+        want = naive.sonar_beam_loglik(
+            L, origin, res, (0.0, 0.0, 0.0), *args[:-1], 0.0, c
+        )
+        assert kern.sonar_beam_loglik(
+            L, *origin, res, 0.0, 0.0, 0.0, *args, c
+        ) == pytest.approx(want, rel=1e-9)

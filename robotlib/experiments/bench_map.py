@@ -256,7 +256,9 @@ def quality(out: dict, seeds: int, ekf_seeds: int, first: int = 0,
     _out(f"FastSLAM loop, {seeds} seeds: laser RMS max {r[:, 0].max():.3f} m, F1 min "
           f"{r[:, 1].min():.3f}; sonar RMS mean {r[:, 3].mean():.2f} m, map error "
           f"{r[:, 4].mean():.3f} m vs {r[:, 5].mean():.3f} m (odometry), ratio "
-          f"{r[:, 4].mean() / r[:, 5].mean():.3f}")  # fmt: skip
+          f"{r[:, 4].mean() / r[:, 5].mean():.3f} (odometry mapped as FastSLAM "
+          f"maps: {r[:, 6].mean():.3f} m, ratio "
+          f"{r[:, 4].mean() / r[:, 6].mean():.3f})")  # fmt: skip
     if streams > 1:
         rms_k, err_k = ps[:, :, 0].mean(axis=0), ps[:, :, 1].mean(axis=0)
         _out(f"  sonar, {sonar_particles} particles, {streams} filter streams: RMS "

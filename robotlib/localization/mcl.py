@@ -316,8 +316,8 @@ class MCL:
         """
         sensor = self.sensor
         if not (
-            getattr(sensor, "fast", False)
-            and hasattr(sensor, "_run")
+            hasattr(sensor, "_run")  # the exact path with its noise drawn here
+            and (getattr(sensor, "fast", False) or len(self.particles) <= NORMALS_CHUNK)
             and type(self.motion).sample is OdometryMotionModel.sample
         ):
             return False

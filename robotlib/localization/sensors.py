@@ -8,7 +8,8 @@ compute them in one of two ways:
 - exact (``fast=False``): every particle casts its sonar cones against the
   walls as `robotlib.sensing._kernels.sonar_cone` does, the simulator's own model
   (the same numbers; each cone casts only the rays that can lower its echo,
-  against the walls they may reach: `_kernels.exact.cone_echo_pruned`);
+  against the walls they may reach: `_kernels.exact.cone_echo_pruned`; cast
+  and weighed in one kernel, `_kernels.exact_models`);
 - fast (``fast=True``): a `ConeTable` precomputed once per world holds, per
   grid cell and per direction bin, the cone range from the cell's centre, in
   millimetres; a particle's reading is looked up at its sensor's cell and
@@ -27,8 +28,8 @@ import numpy as np
 
 from ..sensing import SonarModel
 from . import _kernels, stepping
-from ._kernels import chunked
-from .cones import cone_table, expected_readings
+from ._kernels import chunked, exact_models
+from .cones import EXACT_PARALLEL_MIN, cone_table, exact_arguments, expected_readings
 from .motion import PARALLEL_MIN, _particles
 
 __all__ = [
@@ -148,6 +149,10 @@ class _ExpectedModel:
             new = (np.empty((n, 3)), np.empty(n))
         else:
             new = (_NONE_P, _NONE_W)
+        if self.table is None:  # the exact path: one call, threaded from 64
+            return self._exact_run(
+                particles, weights, motion, noise, z, scratch, u, new, words
+            )
         if n < PARALLEL_MIN:  # one serial call, its scalars one by one
             if scratch is None:
                 out_p, out_w = np.empty((n, 3)), np.empty(n)
@@ -167,6 +172,37 @@ class _ExpectedModel:
                 self.name, particles, weights, prm, noise, key, self.sonar.sensors,
                 skip, t.table, lut, out, u,
             )  # fmt: skip
+        got = (None, None) if u < 0.0 else new
+        return (out_p, out_w, log_mean, ess, est, *got)
+
+    def _exact_run(self, particles, weights, motion, noise, z, scratch, u, new,
+                   words=None):  # fmt: skip
+        """`_run` on the exact path: `exact_models.exact_step`.
+
+        The model's own arguments come from its ``_exact_model(n)``: ``(beam,
+        z_hit, z_short, z_max, z_rand, sigma, lam_short, exponent, n_weight)``.
+        """
+        n = len(particles)
+        if scratch is None:
+            out_p, out_w, cs = np.empty((n, 3)), np.empty(n), np.empty((n, 2))
+            zhat = np.empty((n, len(z)))
+        else:
+            out_p = scratch.take("particles", (n, 3))
+            out_w = scratch.take("weights", (n,))
+            cs = scratch.take("cs", (n, 2))
+            zhat = scratch.take("zhat", (n, len(z)))
+        est = np.empty(3)
+        kernel = (
+            exact_models.exact_step_parallel
+            if n >= EXACT_PARALLEL_MIN
+            else exact_models.exact_step
+        )
+        args = exact_arguments(self.world, self.sonar)
+        log_mean, ess = kernel(
+            _NO_WORDS if words is None else words, words is not None, particles,
+            weights, noise, *motion, *args, z, *self._exact_model(n), u, out_p, out_w,
+            *new, est, cs, zhat,
+        )  # fmt: skip
         got = (None, None) if u < 0.0 else new
         return (out_p, out_w, log_mean, ess, est, *got)
 
@@ -215,8 +251,18 @@ class PaperSensorModel(_ExpectedModel):
 
     def log_likelihood(self, particles, z) -> np.ndarray:
         """Per-particle ``log w_j`` for readings ``z`` (S,), m."""
-        if self.table is None:
-            return innovation_loglik(z, self.expected(particles))
+        if self.table is None:  # cast and weigh in one kernel (the same numbers)
+            p = _particles(particles)
+            z = _scan(z, len(self.sonar.sensors))
+            out = np.empty(len(p))
+            kernel = (
+                exact_models.exact_paper_parallel
+                if len(p) >= EXACT_PARALLEL_MIN
+                else exact_models.exact_paper
+            )
+            kernel(p, *exact_arguments(self.world, self.sonar),
+                   np.empty((len(p), len(z))), z, float(len(p)), out)  # fmt: skip
+            return out
         p = _particles(particles)
         z = _scan(z, len(self.sonar.sensors))
         out = np.empty(len(p))
@@ -240,7 +286,7 @@ class PaperSensorModel(_ExpectedModel):
         return out
 
     def _step(self, particles, weights, motion, normals, z, scratch=None):
-        """Move, weigh, estimate in one kernel (see `MCL.step`; fast path only).
+        """Move, weigh, estimate in one kernel (see `MCL.step`).
 
         ``scratch`` (a `robotlib.localization.motion.Scratch`) lends the
         output and work arrays; None makes new ones. Returns ``(out_p, out_w,
@@ -258,6 +304,9 @@ class PaperSensorModel(_ExpectedModel):
             particles, weights, noise, sensors, table, z, *motion, *where,
             1.0 / len(particles), u, out_p, out_w, new_p, new_w, est,
         )  # fmt: skip
+
+    def _exact_model(self, n: int) -> tuple:
+        return (False, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 1.0, float(n))
 
     def _large(self, z, motion, where, n):
         k = getattr(self, "_mm", None)
@@ -356,25 +405,20 @@ class BeamSensorModel(_ExpectedModel):
         """
         if self.table is not None:
             return self._table_log_likelihood(particles, z)
-        zhat = self.expected(particles)
-        z = _scan(z, zhat.shape[1])
+        p = _particles(particles)  # cast and weigh in one kernel (the same numbers)
+        z = _scan(z, len(self.sonar.sensors))
         q = self.params
-        out = np.empty(len(zhat))
-        kernel = (  # as many threads as the cone casts (erf and exp per beam)
-            _kernels.beam_loglik_parallel if len(zhat) >= 64 else _kernels.beam_loglik
+        out = np.empty(len(p))
+        kernel = (
+            exact_models.exact_beam_parallel
+            if len(p) >= EXACT_PARALLEL_MIN
+            else exact_models.exact_beam
         )
         kernel(
-            z,
-            zhat,
-            float(self.sonar.max_range),
-            q.z_hit,
-            q.z_short,
-            q.z_max,
-            q.z_rand,
-            q.sigma_hit,
-            q.lambda_short,
+            p, *exact_arguments(self.world, self.sonar), np.empty((len(p), len(z))),
+            z, q.z_hit, q.z_short, q.z_max, q.z_rand, q.sigma_hit, q.lambda_short,
             out,
-        )
+        )  # fmt: skip
         if q.exponent != 1.0:
             out *= q.exponent
         return out
@@ -400,7 +444,7 @@ class BeamSensorModel(_ExpectedModel):
         return lut
 
     def _step(self, particles, weights, motion, normals, z, scratch=None):
-        """Move, weigh, estimate in one kernel (see `MCL.step`; fast path only).
+        """Move, weigh, estimate in one kernel (see `MCL.step`).
 
         ``scratch`` and the result as for `PaperSensorModel._step`.
         """
@@ -418,6 +462,11 @@ class BeamSensorModel(_ExpectedModel):
             np.exp(-q.lambda_short * z), *self._norms, *motion, *where, *beam, u,
             out_p, out_w, new_p, new_w, est,
         )  # fmt: skip
+
+    def _exact_model(self, n: int) -> tuple:
+        q = self.params
+        return (True, q.z_hit, q.z_short, q.z_max, q.z_rand, q.sigma_hit,
+                q.lambda_short, float(q.exponent), 0.0)  # fmt: skip
 
     def _extra(self, q) -> tuple:
         max_range = float(self.sonar.max_range)

@@ -5,13 +5,12 @@ Estimators here never plot: drawing lives in `robotlib.plotting`.
 
 from .drive import ROUTES, DriveLog, perturbed_route, record_drive
 from .fastslam import (
-    FastSLAMResult,
     GridFastSLAM,
     normalise_log_weights,
     resample_maps,
     resample_parents,
-    run_fastslam,
 )
+from .fastslam_run import FastSLAMResult, run_fastslam
 from .metrics import MapScore, dilate, heading_rms, map_score, trajectory_rms
 from .motion import apply_arc, arc_increment, arc_noise_cov, sample_arc_motion
 from .occupancy import (

@@ -16,7 +16,7 @@ from ._kernels import sonar_beam_loglik
 
 def _window_loglik_many(Ls, x0, y0, res, wins, sensors, scans, half_cone,
                         max_range, n_rays, sigma, p_rand, occ, c_unknown,
-                        out):  # fmt: skip
+                        out, centre=False):  # fmt: skip
     """Sum over a window's records of `sonar_beam_loglik` in each map: ``out[n]``."""
     for n in nb.prange(Ls.shape[0]):
         total = 0.0
@@ -24,7 +24,7 @@ def _window_loglik_many(Ls, x0, y0, res, wins, sensors, scans, half_cone,
             total += sonar_beam_loglik(
                 Ls[n], x0, y0, res, wins[n, k, 0], wins[n, k, 1], wins[n, k, 2],
                 sensors, scans[k], half_cone, max_range, n_rays, sigma, p_rand,
-                occ, c_unknown,
+                occ, c_unknown, centre,
             )  # fmt: skip
         out[n] = total
 

@@ -19,14 +19,14 @@ Each particle is a pose and a log-odds occupancy grid of its own. A step
 
 Each step records the particles and who descended from whom, so
 `GridFastSLAM.best_path` is the whole trajectory of the best particle's
-lineage. Seeded: the same ``rng`` gives the same run, bit for bit.
-Imports the sensing models, the localization resampler and this package's
-kernels; never plots.
+lineage, and `GridFastSLAM.mean_path` the weighted mean of every lineage
+(the posterior mean trajectory, smoothed by the later readings), whose map
+`GridFastSLAM.mean_map` builds. Seeded: the same ``rng`` gives the same
+run, bit for bit. Imports the sensing models, the localization resampler
+and this package's kernels; never plots.
 """
 
 from __future__ import annotations
-
-from dataclasses import dataclass
 
 import numpy as np
 
@@ -37,7 +37,6 @@ from ..sensing.laser import LaserModel, laser_poses
 from ..sim import OdometryNoise
 from ..world import World
 from . import _kernels, _kernels_copy, _kernels_window
-from .metrics import MapScore, map_score, trajectory_rms
 from .motion import sample_arc_motion
 from .occupancy import InverseLaserModel, InverseSonarModel, OccupancyGrid
 from .resampling import normalise_log_weights, resample_maps, resample_parents
@@ -62,19 +61,27 @@ SONAR_DEFAULTS = {
     "p_rand": 0.2,
     "sonar_sigma": 0.1,
     "sonar_walls": SONAR_WALL_SENSORS,
+    "best_by": "path",
+    "estimate": "mean",
 }
 """`run_fastslam`'s defaults for the sonar (measured on the loop world: eight
 wide cones tell little per record, so each weighs little; only the sonars
 that meet walls near their normal mark walls, which leaves the known-pose
 map's error at 0.067 m instead of 0.12 m, and an echo's range is then
-trusted to 0.1 m about the map's). The outcome depends much on the
-filter's own draws: see the note of session 5 (``bench slam --streams``)."""
+trusted to 0.1 m about the map's). The run reports the posterior mean
+trajectory and its map (``estimate="mean"``): on seeds 0-9 with 200
+particles it cut the position RMS from 0.39 m (the best particle) to
+0.29 m, filter streams k = 0-3 (session 7). The outcome depends much on
+the filter's own draws: see the note of session 5 (``bench slam
+--streams``)."""
 
-SONAR_PARTICLES = 100
+SONAR_PARTICLES = 200
 """Particles the bench gives sonar FastSLAM. With `SONAR_DEFAULTS`, the loop
-world's seeds 0-9, mean position RMS over filter seeds ``seed + 1000 k``:
-30 particles 0.61-0.77 m (k = 0-2), 100 particles 0.45-0.58 m (k = 0-1);
-held-out seeds 10-19, k = 0: 0.69 m and 0.37 m."""
+world's seeds 0-9, mean position RMS and map error over odometry mapping's,
+filter seeds ``seed + 1000 k``, k = 0-3: 100 particles 0.33 m, 0.46; 200
+particles 0.29 m, 0.43; held-out seeds 10-19, 200 particles, k = 0-1:
+0.23 m, 0.39 (session 7; with the best particle instead of the mean,
+session 6: 100 particles 0.45-0.58 m, 0.57-0.59)."""
 
 __all__ = [
     "PARALLEL_MIN",
@@ -82,8 +89,6 @@ __all__ = [
     "SONAR_PARTICLES",
     "SONAR_WALL_SENSORS",
     "GridFastSLAM",
-    "FastSLAMResult",
-    "run_fastslam",
     "normalise_log_weights",
     "resample_maps",
     "resample_parents",
@@ -166,6 +171,17 @@ class GridFastSLAM:
     window_weigh : {"window", "last"}
         Weigh by every record of the window (their log-likelihoods summed)
         or by the newest only.
+    best_by : {"weight", "path"}
+        Which particle `best` picks: the largest weight (the evidence since
+        the last resampling) or the largest summed log-likelihood of every
+        reading along its lineage (``path_loglik``, the whole run's evidence).
+    sonar_range_to : {"entry", "centre"}
+        Sonar beam model: a ray's expected range is where it enters its
+        first wall cell, or that cell's centre (`_kernels.sonar_beam_loglik`).
+    estimate : {"best", "mean"}
+        What `run_fastslam` reports: the best particle's lineage and map, or
+        the posterior mean trajectory (`mean_path`, the weighted mean of
+        every particle's lineage) and its map (`mean_map`).
     rng : numpy.random.Generator, int or None
         Motion noise and resampling.
     """
@@ -201,12 +217,24 @@ class GridFastSLAM:
         window: int = 0,
         window_weigh: str = "window",
         sonar_incidence: float | None = None,
+        best_by: str = "weight",
+        sonar_range_to: str = "entry",
+        estimate: str = "best",
         rng: np.random.Generator | int | None = None,
     ):
         if sensor not in ("laser", "sonar"):
             raise ValueError(f"sensor must be 'laser' or 'sonar', got {sensor!r}")
         if n_particles < 1:
             raise ValueError("n_particles must be at least 1")
+        if best_by not in ("weight", "path"):
+            raise ValueError("best_by must be 'weight' or 'path'")
+        self.best_by = best_by
+        if sonar_range_to not in ("entry", "centre"):
+            raise ValueError("sonar_range_to must be 'entry' or 'centre'")
+        self.sonar_range_to = sonar_range_to
+        if estimate not in ("best", "mean"):
+            raise ValueError("estimate must be 'best' or 'mean'")
+        self.estimate = estimate
         if sonar_likelihood not in ("beam", "endpoint"):
             raise ValueError("sonar_likelihood must be 'beam' or 'endpoint'")
         self.sensor = sensor
@@ -247,6 +275,7 @@ class GridFastSLAM:
         self.maps = np.zeros((n, *(int(v) for v in shape)), dtype=np.float32)
         self.particles = np.tile(np.asarray(start, dtype=float), (n, 1))
         self.logw = np.zeros(n)
+        self.path_loglik = np.zeros(n)
         self.resampled = 0
         self._poses: list[np.ndarray] = [self.particles.copy()]
         self._parents: list[np.ndarray] = [np.arange(n)]
@@ -320,6 +349,7 @@ class GridFastSLAM:
                 self.sonar.sensors, np.ascontiguousarray(ranges, dtype=float),
                 self.sonar.cone / 2, self.sonar.max_range, 5, self.sonar_sigma,
                 self.p_rand, self.sonar_occ, self.sonar_unknown, out,
+                self.sonar_range_to == "centre",
             )  # fmt: skip
             return out
         self._kernel("sonar_loglik_many")(
@@ -436,7 +466,7 @@ class GridFastSLAM:
             self.maps, *self._geometry(), wins, self.sonar.sensors, scans,
             self.sonar.cone / 2,
             self.sonar.max_range, 5, self.sonar_sigma, self.p_rand, self.sonar_occ,
-            self.sonar_unknown, ll,
+            self.sonar_unknown, ll, self.sonar_range_to == "centre",
         )  # fmt: skip
         return ll
 
@@ -462,12 +492,14 @@ class GridFastSLAM:
             else:
                 ll = self.weigh_sonar(self.particles, scan)
             self.logw = self.logw + self.temperature * ll
+            self.path_loglik = self.path_loglik + ll
             self.logw -= self.logw.max()
             if effective_sample_size(self.weights) < self.resample_below * self.n:
                 idx = systematic_resample(self.weights, rng=self.rng)
                 parents = resample_parents(idx, self.n)
                 self.copied += self._tracked_diff().resample(self.maps, parents)
                 self.particles = self.particles[parents]
+                self.path_loglik = self.path_loglik[parents]
                 self._win = self._win[parents]
                 self.logw = np.zeros(self.n)
                 self.resampled += 1
@@ -481,7 +513,9 @@ class GridFastSLAM:
 
     # -- results ------------------------------------------------------------
     def best(self) -> int:
-        """Index of the particle with the largest weight."""
+        """Index of the particle with the largest weight (or path likelihood)."""
+        if self.best_by == "path":
+            return int(np.argmax(self.path_loglik))
         return int(np.argmax(self.logw))
 
     def best_map(self) -> OccupancyGrid:
@@ -507,91 +541,40 @@ class GridFastSLAM:
         return out
 
     def paths(self) -> np.ndarray:
-        """Return every particle's lineage, (N, T, 3) (for plots)."""
-        paths = []
-        for k0 in range(self.n):
-            k = k0
-            rows = []
-            for t in range(len(self._poses) - 1, -1, -1):
-                rows.append(self._poses[t][k])
-                k = int(self._parents[t][k])
-            paths.append(rows[::-1])
-        return np.array(paths)
+        """Return every particle's lineage, (N, T, 3); row 0 is the start pose."""
+        out = np.empty((self.n, len(self._poses), 3))
+        k = np.arange(self.n)
+        for t in range(len(self._poses) - 1, -1, -1):
+            out[:, t] = self._poses[t][k]
+            k = self._parents[t][k]
+        return out
 
+    def mean_path(self) -> np.ndarray:
+        """Return the posterior mean trajectory, (T, 3), row 0 the start pose.
 
-@dataclass(frozen=True, eq=False)
-class FastSLAMResult:
-    """What `run_fastslam` returns.
+        At every record, the mean of the particles' lineages (`paths`)
+        weighted by the particles' weights now: each lineage is a sample of
+        the whole trajectory given every reading, so this is the filter's
+        smoothed estimate (positions averaged, headings by their mean
+        direction), not the filtered pose of the time.
+        """
+        p = self.paths()
+        w = self.weights
+        out = np.empty(p.shape[1:])
+        out[:, :2] = np.einsum("n,ntk->tk", w, p[:, :, :2])
+        out[:, 2] = np.arctan2(w @ np.sin(p[:, :, 2]), w @ np.cos(p[:, :, 2]))
+        return out
 
-    Attributes
-    ----------
-    path : numpy.ndarray, shape (T, 3)
-        The best particle's trajectory, one row per record.
-    map : OccupancyGrid
-        The best particle's map.
-    rms : float
-        Position RMS error of ``path`` against the true poses, m.
-    score : MapScore
-        ``map`` against the world.
-    odometry_rms : float
-        The odometry's RMS error on the same log, m.
-    filter : GridFastSLAM
-        The filter after the run.
-    """
+    def mean_map(self, scans) -> OccupancyGrid:
+        """Return the map of `mean_path` from the run's readings (T, ...).
 
-    path: np.ndarray
-    map: OccupancyGrid
-    rms: float
-    score: MapScore
-    odometry_rms: float
-    filter: GridFastSLAM
-
-
-def run_fastslam(
-    log, n_particles: int = 30, sensor: str = "laser", resolution=None, rng=0, **kw
-) -> FastSLAMResult:
-    """Run grid FastSLAM over a `robotlib.mapping.drive.DriveLog`.
-
-    Parameters
-    ----------
-    log : DriveLog
-        The drive (its world gives only the grid's cells and the start pose).
-    n_particles : int
-        Particles.
-    sensor : {"laser", "sonar"}
-        Which readings to use.
-    resolution : float, optional
-        Cell side, m (default 0.05 for the laser, 0.1 for the sonar).
-    rng : numpy.random.Generator, int or None
-        The filter's randomness.
-    **kw
-        More `GridFastSLAM` parameters (for the sonar, `SONAR_DEFAULTS`
-        unless given).
-
-    Returns
-    -------
-    FastSLAMResult
-    """
-    res = (0.05 if sensor == "laser" else 0.1) if resolution is None else resolution
-    if sensor == "sonar":
-        walls_given = "sonar_walls" in kw
-        kw = {**SONAR_DEFAULTS, **kw}
-        if not walls_given and len(log.sonar_model.sensors) != 8:
-            kw["sonar_walls"] = None  # (the default names a P3-DX ring's sonars)
-    f = GridFastSLAM.for_world(
-        log.world, res, start=log.odometry[0], n_particles=n_particles,
-        sensor=sensor, laser=log.laser_model, sonar=log.sonar_model, rng=rng, **kw,
-    )  # fmt: skip
-    scans = log.laser if sensor == "laser" else log.sonar
-    for t in range(len(log)):
-        f.step(log.odometry[t], scans[t])
-    path = f.best_path()[1:]
-    m = f.best_map()
-    return FastSLAMResult(
-        path=path,
-        map=m,
-        rms=trajectory_rms(path, log.truth),
-        score=map_score(m, log.world, res),
-        odometry_rms=trajectory_rms(log.odometry, log.truth),
-        filter=f,
-    )
+        ``scans`` are the readings `step` took, in order; each is added at
+        its record's mean pose with the particles' own map update.
+        """
+        path = self.mean_path()[1:]
+        if len(scans) != len(path):
+            raise ValueError(f"{len(path)} records were taken, got {len(scans)} scans")
+        g = OccupancyGrid(self.maps.shape[1:], self.origin, self.resolution)
+        for t in range(len(path)):
+            self.update_maps(scans[t], path[t : t + 1], g.logodds[None])
+        return g

@@ -160,7 +160,9 @@ def _cast_grid_pose(
     cell (0 if it starts in one or outside the grid, the grid's edge counting
     as a wall) or past ``max_range``. The rays of a pose advance together, one
     step each per round, so that their reads of ``field`` overlap in memory;
-    both steps are computed and one selected (no branch to mispredict).
+    both steps are computed and one selected, and a ray's end (a hit, or past
+    ``max_range``) is a select too: its range is written every step and it
+    is dropped from the active list by its count (no branch to mispredict).
     ``ray`` (`_RAY` * R,) float64 and ``active`` (R,) uint64 are scratch: per
     ray its direction, the inverse of each component, the offsets to the
     cell boundary ahead (1 or 0 in x and y) and its distance so far (cells).
@@ -191,9 +193,9 @@ def _cast_grid_pose(
     flat = field.reshape(field.size)
     row = out[k]
     one = np.uint64(1)
-    n = n_rays
+    n = np.uint64(n_rays)
     while n > 0:
-        still = 0
+        still = np.uint64(0)
         for q in range(n):
             r = active[np.uint64(q)]
             b = r * np.uint64(_RAY)
@@ -205,19 +207,17 @@ def _cast_grid_pose(
             j = int(px)
             i = int(py)
             c = flat[np.uint64(i) * stride + np.uint64(j)]
-            if c < 0.0:
-                row[r] = tr * resolution
-                continue
+            hit = c < 0.0  # the ray ends here: entered an occupied cell
             bx = (float(j) + ray[b + np.uint64(4)] - px) * ray[b + np.uint64(2)]
             by = (float(i) + ray[b + np.uint64(5)] - py) * ray[b + np.uint64(3)]
             edge = min(bx, by) + 1e-9
-            tr += c if c >= 1.0 else edge
-            ray[b + np.uint64(6)] = tr
-            if tr >= limit:
-                row[r] = max_range
-                continue
+            t2 = tr + (c if c >= 1.0 else edge)
+            ray[b + np.uint64(6)] = t2
+            over = t2 >= limit  # or past max_range
+            # every ray's range is written each step, the last one stays: no branch
+            row[r] = tr * resolution if hit else max_range
             active[np.uint64(still)] = r
-            still += 1
+            still += np.uint64(not (hit | over))  # the others leave the active list
         n = still
 
 

@@ -5,6 +5,7 @@
 - `tables`: cone tables (expected ranges per cell and heading bin), built and read
 - `table_strips`: the cone-table builder for dense maps (rays through strips)
 - `exact`: expected ranges by cone casts against the walls near each sensor
+- `exact_models`: those casts fused with the weighing, and the whole exact-path step
 - `models`: the paper's, the beam and the likelihood-field models on expected ranges
 - `table_models`: the paper's and the beam model read straight from a cone table
 - `weights`: the Bayes update, normalisation, effective sample size, the estimate

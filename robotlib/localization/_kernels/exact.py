@@ -87,7 +87,7 @@ _TOL_T = 1e-9
 @nb.njit(**JIT, inline="always")
 def cone_echo_pruned(
     sx, sy, sth, ux, uy, walls, items, every, lo, hi, n_rays, cone, max_range,
-    cos_specular, offs, ray, cand,
+    cos_specular, offs, ray, cand, pas,
 ):  # fmt: skip
     """`robotlib.sensing._kernels.cone_echo` on some walls, casting few rays.
 
@@ -106,25 +106,26 @@ def cone_echo_pruned(
     least range of the rays that echo, whatever their order: the rays are
     cast exactly (their own cosine and sine, `ray_segments`' tests against
     their walls in order) from the lowest bound up, until the next bound
-    reaches the least echo so far or ``max_range``. ``ray`` (3, `_lanes`)
-    float64 and ``cand`` (ceil(M / 64), `_lanes`) uint64 (per ray, a bit per
-    wall of the list it may cross) are scratch; the first pass is written as
-    selects over whole vectors of rays (the last ray repeated).
+    reaches the least echo so far or ``max_range``. Before the first pass,
+    the walls beside both outermost rays' lines are dropped (the kept ones,
+    in order, go to ``pas``, counted without a branch). ``ray`` (3, `_lanes`)
+    float64, ``cand`` (ceil(M / 64), `_lanes`) uint64 (per ray, a bit per
+    kept wall it may cross) and ``pas`` (M,) uint64 (the kept walls' rows)
+    are scratch; the first pass is written as selects over whole vectors of
+    rays (the last ray repeated).
     """
-    lanes = ray.shape[1]  # n_rays rounded up to whole vectors
+    lanes = ray.shape[1]
     for r in range(lanes):
         o = min(r, n_rays - 1)
         ray[0, r] = ux * offs[0, o] - uy * offs[1, o]
         ray[1, r] = uy * offs[0, o] + ux * offs[1, o]
         ray[2, r] = np.inf
-    for c in range((hi - lo + 63) // 64):
-        for r in range(lanes):
-            cand[c, r] = 0
     last = max(n_rays - 1, 0)
     d0x = ray[0, 0]
     d0y = ray[1, 0]
     d1x = ray[0, last]
     d1y = ray[1, last]
+    npass = np.uint64(0)
     for q in range(lo, hi):
         m = np.uint64(q if every else items[np.uint64(q)])
         ax = walls[m, 0] - sx
@@ -132,23 +133,35 @@ def cone_echo_pruned(
         bx = walls[m, 2] - sx
         by = walls[m, 3] - sy
         tol = _TOL * (1.0 + abs(ax) + abs(ay) + abs(bx) + abs(by))
-        # beside every ray's line when beside the two outermost rays' lines
         c0 = d0x * ay - d0y * ax
         c1 = d0x * by - d0y * bx
         c2 = d1x * ay - d1y * ax
         c3 = d1x * by - d1y * bx
-        if min(min(c0, c1), min(c2, c3)) > 2.0 * tol:
-            continue
-        if max(max(c0, c1), max(c2, c3)) < -2.0 * tol:
-            continue
+        # beside every ray's line when beside the two outermost rays' lines
+        out = (min(min(c0, c1), min(c2, c3)) > 2.0 * tol) | (
+            max(max(c0, c1), max(c2, c3)) < -2.0 * tol
+        )
+        pas[npass] = m
+        npass += np.uint64(not out)
+    for c in range((npass + np.uint64(63)) // np.uint64(64)):
+        for r in range(lanes):
+            cand[c, r] = 0
+    for jj in range(npass):
+        j = np.uint64(jj)
+        m = pas[j]
+        ax = walls[m, 0] - sx
+        ay = walls[m, 1] - sy
+        bx = walls[m, 2] - sx
+        by = walls[m, 3] - sy
+        tol = _TOL * (1.0 + abs(ax) + abs(ay) + abs(bx) + abs(by))
         ex = walls[m, 4]
         ey = walls[m, 5]
         nxn = walls[m, 6]
         nyn = walls[m, 7]
         flat = 1e-3 * (abs(ex) + abs(ey))
         num = ax * ey - ay * ex
-        word = np.uint64(q - lo) >> np.uint64(6)
-        bit = np.uint64(1) << (np.uint64(q - lo) & np.uint64(63))
+        word = j >> np.uint64(6)
+        bit = np.uint64(1) << (j & np.uint64(63))
         for r in range(lanes):  # as selects: several rays per instruction
             dxa = ray[0, r]
             dya = ray[1, r]
@@ -189,12 +202,12 @@ def cone_echo_pruned(
         best = np.inf
         best_m = np.uint64(0)
         found = False
-        for c in range((hi - lo + 63) // 64):
+        for c in range((npass + np.uint64(63)) // np.uint64(64)):
             bits = cand[c, first]
-            q = lo + 64 * c
+            q = np.uint64(64) * np.uint64(c)
             while bits:
                 if bits & np.uint64(1):  # `ray_segments`' test, in order
-                    m = np.uint64(q if every else items[np.uint64(q)])
+                    m = pas[q]
                     ex = walls[m, 4]
                     ey = walls[m, 5]
                     denom = dx * ey - dy * ex
@@ -208,7 +221,7 @@ def cone_echo_pruned(
                             best_m = m
                             found = True
                 bits >>= np.uint64(1)
-                q += 1
+                q += np.uint64(1)
         if not found or best >= max_range or best >= echo:
             continue
         if abs(dx * walls[best_m, 6] + dy * walls[best_m, 7]) >= cos_specular:
@@ -258,7 +271,7 @@ def _offsets(n_rays, cone):
 @nb.njit(**JIT)
 def _expected_pose_blocks(
     k, poses, sensors, turns, walls, start, items, grid, n_rays, cone,
-    max_range, min_range, cos_specular, offs, ray, cand, out,
+    max_range, min_range, cos_specular, offs, ray, cand, pas, out,
 ):  # fmt: skip
     x0, y0, inv_block, nbx, nby, n_sectors = grid
     inv_sector = n_sectors / _TWO_PI
@@ -284,7 +297,7 @@ def _expected_pose_blocks(
         echo = cone_echo_pruned(
             sx, sy, poses[k, 2] + sensors[i, 2], c * ci - s * si, s * ci + c * si,
             walls, items, every, lo, hi, n_rays, cone, max_range, cos_specular, offs,
-            ray, cand,
+            ray, cand, pas,
         )  # fmt: skip
         z = echo if echo < max_range else max_range
         out[k, i] = min(max(z, min_range), max_range)
@@ -319,10 +332,11 @@ def expected_scan_blocks(
     offs = _offsets(n_rays, cone)
     ray = np.empty((3, _lanes(n_rays)))
     cand = np.empty(((walls.shape[0] + 63) // 64, _lanes(n_rays)), dtype=np.uint64)
+    pas = np.empty(walls.shape[0], dtype=np.uint64)
     for k in range(poses.shape[0]):
         _expected_pose_blocks(
             k, poses, sensors, turns, walls, start, items, grid, n_rays, cone,
-            max_range, min_range, cos_specular, offs, ray, cand, out,
+            max_range, min_range, cos_specular, offs, ray, cand, pas, out,
         )  # fmt: skip
 
 
@@ -342,10 +356,11 @@ def expected_scan_blocks_parallel(
     for q in nb.prange((n + _EXACT_CHUNK - 1) // _EXACT_CHUNK):
         ray = np.empty((3, _lanes(n_rays)))
         cand = np.empty(((walls.shape[0] + 63) // 64, _lanes(n_rays)), dtype=np.uint64)
+        pas = np.empty(walls.shape[0], dtype=np.uint64)
         for k in range(q * _EXACT_CHUNK, min(n, (q + 1) * _EXACT_CHUNK)):
             _expected_pose_blocks(
                 k, poses, sensors, turns, walls, start, items, grid, n_rays, cone,
-                max_range, min_range, cos_specular, offs, ray, cand, out,
+                max_range, min_range, cos_specular, offs, ray, cand, pas, out,
             )  # fmt: skip
 
 

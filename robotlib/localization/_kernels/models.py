@@ -14,18 +14,24 @@ from ...world._kernels import point_segment_distance
 from .common import _LOG_SQRT_2PI
 
 
+@nb.njit(**JIT, inline="always")
+def paper_one(j, z, zhat, n, out):
+    """`paper_loglik` of row ``j`` alone: ``out[j]``."""
+    s_count = z.shape[0]
+    d = 0.0
+    for i in range(s_count):
+        d += abs((z[i] - zhat[j, i]) / z[i])
+    out[j] = math.log(math.exp(-d / s_count) + 1.0 / n)
+
+
 @nb.njit(**JIT)
 def paper_loglik(z, zhat, n, out):
     """Compute the paper's innovation weight as a log: ``log(exp(-d_j) + 1/n)``.
 
     ``d_j = mean_i |(z_i - zhat_ji) / z_i|``; ``z`` (S,), ``zhat`` (N, S).
     """
-    s_count = z.shape[0]
     for j in range(zhat.shape[0]):
-        d = 0.0
-        for i in range(s_count):
-            d += abs((z[i] - zhat[j, i]) / z[i])
-        out[j] = math.log(math.exp(-d / s_count) + 1.0 / n)
+        paper_one(j, z, zhat, n, out)
 
 
 @nb.njit(**JIT)
@@ -56,7 +62,8 @@ def _beam_prob(z, zhat, max_range, z_hit, z_short, z_max, z_rand, sigma, lam_sho
 
 
 @nb.njit(**JIT)
-def _beam_one(j, z, zhat, max_range, z_hit, z_short, z_max, z_rand, sigma, lam, out):
+def beam_one(j, z, zhat, max_range, z_hit, z_short, z_max, z_rand, sigma, lam, out):
+    """`beam_loglik` of row ``j`` alone: ``out[j]``."""
     ll = 0.0
     for i in range(z.shape[0]):
         zi = z[i] if z[i] < max_range - 1e-3 else max_range
@@ -76,7 +83,7 @@ def _beam_loglik(
     A reading at or beyond ``max_range`` (to 1 mm) is a "max" reading.
     """
     for j in nb.prange(zhat.shape[0]):
-        _beam_one(
+        beam_one(
             j, z, zhat, max_range, z_hit, z_short, z_max, z_rand, sigma, lam_short, out
         )
 
