@@ -178,14 +178,16 @@ def unit_normals(segments):
 
     Each entry is the same IEEE operations in the same order (two products,
     a sum, a square root, a division; no fused multiply-add either way), and
-    each is correctly rounded in both.
+    each is correctly rounded in both. A point (a wall of length 0) gets
+    NaN normals, as in the kernel, and no warning.
     """
     ex = segments[:, 2] - segments[:, 0]
     ey = segments[:, 3] - segments[:, 1]
     length = np.sqrt(ex * ex + ey * ey)
     out = np.empty((segments.shape[0], 2))
-    out[:, 0] = -ey / length
-    out[:, 1] = ex / length
+    with np.errstate(invalid="ignore", divide="ignore"):
+        out[:, 0] = -ey / length
+        out[:, 1] = ex / length
     return out
 
 
