@@ -26,7 +26,7 @@ def _exp_address() -> int:
         dlvsym.restype = ctypes.c_void_p
         dlvsym.argtypes = [ctypes.c_void_p, ctypes.c_char_p, ctypes.c_char_p]
         address = dlvsym(ctypes.CDLL("libm.so.6")._handle, b"exp", b"GLIBC_2.29")
-    except (OSError, AttributeError):  # not glibc
+    except (OSError, AttributeError, TypeError):  # not glibc (Windows: no CDLL(None))
         address = None
     return address or _helperlib.c_helpers["exp"]
 
