@@ -19,7 +19,7 @@ advances the Python generator exactly as NumPy's would):
 ``tests/test_localization_normals.py`` checks them against NumPy.
 
 Numba kernels: contiguous arrays and scalars in, no Python objects; they
-import nothing of robotlib but the JIT options.
+import nothing of robotlib but the JIT options and `normals` (the tables).
 """
 
 import numba as nb
@@ -27,15 +27,9 @@ import numpy as np
 from llvmlite import ir
 from numba import types
 from numba.extending import intrinsic
-from numba.np.random import _constants as _zig
 
 from ..._config import JIT
-
-_WI = _zig.wi_double
-_KI = _zig.ki_double
-_FI = _zig.fi_double
-_R = _zig.ziggurat_nor_r
-_INV_R = _zig.ziggurat_nor_inv_r
+from .normals import _FI, _INV_R, _KI, _R, _WI  # the ziggurat's tables, one home
 
 MULTIPLIER = 0x2360ED051FC65DA44385DF649FCCF645
 """PCG's default 128-bit multiplier (``PCG_DEFAULT_MULTIPLIER_128``)."""
