@@ -264,6 +264,25 @@ def test_sample_free_poses_without_free_space_raises():
         w.sample_free_poses(3, rng=0)
 
 
+@pytest.mark.parametrize("block", [1, 7, 64, 1 << 18])
+@pytest.mark.parametrize("shape", [(0,), (1,), (13, 17), (3, 5, 7)])
+def test_flat_true_is_flatnonzero_in_int32(block, shape):
+    from robotlib.world.model import _flat_true
+
+    mask = np.random.default_rng(block).random(shape) < 0.6
+    got = _flat_true(mask, block)
+    assert got.dtype == np.int32
+    np.testing.assert_array_equal(got, np.flatnonzero(mask))
+
+
+def test_sample_free_poses_caches_the_free_cells_as_int32():
+    w = room_world()
+    w.sample_free_poses(3, rng=0, resolution=RES)
+    (cells,) = [v for k, v in w._cache.items() if k[0] == "free cells"]
+    assert cells.dtype == np.int32 and not cells.flags.writeable
+    np.testing.assert_array_equal(cells, np.flatnonzero(w.free_space(RES).data))
+
+
 # --------------------------------------------------------------------------
 # geometry
 

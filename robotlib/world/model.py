@@ -363,10 +363,7 @@ class World:
         grid = self.free_space(resolution, radius)
         key = ("free cells", float(resolution), float(radius))
         if key not in self._cache:  # found once (filters draw every step), int32
-            flat = np.flatnonzero(grid.data)
-            self._cache[key] = flat.astype(
-                np.int32 if grid.data.size < 2**31 else flat.dtype
-            )
+            self._cache[key] = _flat_true(grid.data)
             self._cache[key].setflags(write=False)
         cells = self._cache[key]
         if len(cells) == 0:
@@ -391,6 +388,37 @@ class World:
         centres = grid.centres().reshape(-1, 2)
         out[todo, :2] = centres[pick]
         return out
+
+
+def _flat_true(mask: np.ndarray, block: int = 1 << 18) -> np.ndarray:
+    """Return ``np.flatnonzero(mask)``'s values (int32 below 2**31 cells).
+
+    Found ``block`` cells at a time, so no int64 array of them all is made
+    beside the result: on a 50 m x 50 m building at 5 cm that copy would be
+    7 MB more at the peak of a filter's set-up.
+
+    Parameters
+    ----------
+    mask : numpy.ndarray of bool
+        Any shape; read in C order.
+    block : int
+        Cells read at a time.
+
+    Returns
+    -------
+    numpy.ndarray, shape (mask.sum(),)
+        Flat indexes of the True cells, ascending.
+    """
+    flat = mask.ravel()
+    out = np.empty(
+        np.count_nonzero(flat), dtype=np.int32 if flat.size < 2**31 else np.intp
+    )
+    k = 0
+    for start in range(0, flat.size, block):
+        found = np.flatnonzero(flat[start : start + block])
+        out[k : k + len(found)] = found + start
+        k += len(found)
+    return out
 
 
 def _flood_fill(free: np.ndarray, i0: int, j0: int) -> np.ndarray:
