@@ -76,6 +76,7 @@ if "error" in out:  # what the error says to do: the exact path
     MCL.best(world, fast=False, rng=0)
     mark("mcl_best_exact", t)
 out["ready_peak_mb"] = out.get("fast_peak_mb", out["peak_mb"])
+print(json.dumps(out), flush=True)
 counts = json.loads(sys.argv[2])
 if counts:  # one step of the path set up, as `robotlib bench mcl` times it
     from robotlib.experiments.bench_mcl import _time

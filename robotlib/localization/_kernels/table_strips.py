@@ -207,8 +207,8 @@ def build_strips(segments, c, s, c2, s2, u0, w, n_strips, normals, cos_specular)
             if abs(c2 * normals[m, 0] + s2 * normals[m, 1]) >= cos_specular:
                 code += 2
             raw_ids[f] = code
-    entries = np.empty((n, 8))
-    ids = np.empty(n, dtype=np.int64)
+    # each strip sorted where it lies, through a copy of that strip alone
+    # (not a second (n, 8) array: the build's memory is the table and this)
     reach = np.zeros(n_strips)
     firsts = count[:n_strips].copy()
     most = 0
@@ -216,24 +216,30 @@ def build_strips(segments, c, s, c2, s2, u0, w, n_strips, normals, cos_specular)
         most = max(most, count[k + 1] - count[k])
     order = np.empty(most, dtype=np.int64)
     keys = np.empty(most)
+    rows = np.empty((most, 8))
+    codes = np.empty(most, dtype=np.int64)
     for k in range(n_strips):
         lo = count[k]
         hi = count[k + 1]
         if hi == lo:
             continue
         _sort_by_start(raw, lo, hi, order, keys)
+        for r in range(hi - lo):
+            for col in range(8):
+                rows[r, col] = raw[lo + r, col]
+            codes[r] = raw_ids[lo + r]
         longest = 0.0
         for r in range(hi - lo):
-            q = order[r]
+            q = order[r] - lo
             for col in range(8):
-                entries[lo + r, col] = raw[q, col]
-            ids[lo + r] = raw_ids[q]
-            if raw[q, _VMIN] > -np.inf:
-                longest = max(longest, raw[q, _VMAX] - raw[q, _VMIN])
+                raw[lo + r, col] = rows[q, col]
+            raw_ids[lo + r] = codes[q]
+            if rows[q, _VMIN] > -np.inf:
+                longest = max(longest, rows[q, _VMAX] - rows[q, _VMIN])
             else:
                 firsts[k] = lo + r + 1
         reach[k] = longest
-    return count, firsts, entries, ids, reach
+    return count, firsts, raw, raw_ids, reach
 
 
 @nb.njit(inline="always", **JIT)  # ~12 % sooner, +0.4 s to compile
