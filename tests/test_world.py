@@ -264,23 +264,41 @@ def test_sample_free_poses_without_free_space_raises():
         w.sample_free_poses(3, rng=0)
 
 
-@pytest.mark.parametrize("block", [1, 7, 64, 1 << 18])
-@pytest.mark.parametrize("shape", [(0,), (1,), (13, 17), (3, 5, 7)])
-def test_flat_true_is_flatnonzero_in_int32(block, shape):
-    from robotlib.world.model import _flat_true
+@pytest.mark.parametrize("shape", [(1, 1), (1, 9), (13, 17), (40, 3)])
+def test_nth_true_is_flatnonzero_at_the_ranks(shape):
+    from robotlib.world.model import _nth_true
 
-    mask = np.random.default_rng(block).random(shape) < 0.6
-    got = _flat_true(mask, block)
-    assert got.dtype == np.int32
-    np.testing.assert_array_equal(got, np.flatnonzero(mask))
+    rng = np.random.default_rng(shape[0] * 100 + shape[1])
+    mask = rng.random(shape) < 0.4
+    mask[shape[0] // 2] = False  # an empty row
+    mask.flat[-1] = True  # and at least one True cell
+    starts = np.concatenate([[0], np.cumsum(mask.sum(axis=1))])
+    flat = np.flatnonzero(mask)
+    for ranks in (
+        rng.integers(0, len(flat), size=50),
+        np.arange(len(flat))[::-1],
+        np.zeros(0, dtype=np.int64),
+    ):
+        got = _nth_true(mask, starts, ranks)
+        assert got.dtype == np.int64
+        np.testing.assert_array_equal(got, flat[ranks])
 
 
-def test_sample_free_poses_caches_the_free_cells_as_int32():
+def test_sample_free_poses_draws_as_from_the_list_of_free_cells():
+    """The same poses, bit for bit, as indexing the list of every free cell."""
     w = room_world()
-    w.sample_free_poses(3, rng=0, resolution=RES)
-    (cells,) = [v for k, v in w._cache.items() if k[0] == "free cells"]
-    assert cells.dtype == np.int32 and not cells.flags.writeable
-    np.testing.assert_array_equal(cells, np.flatnonzero(w.free_space(RES).data))
+    grid, rng = w.free_space(RES), np.random.default_rng(5)
+    cells = np.flatnonzero(grid.data)
+    want, todo = np.empty((700, 3)), np.arange(700)
+    while len(todo):  # the redraws (the world stops after 20: never reached here)
+        k = len(todo)
+        i, j = np.divmod(cells[rng.integers(0, len(cells), size=k)], grid.shape[1])
+        u = rng.random((k, 3))
+        want[todo, 0] = grid.origin[0] + (j + u[:, 0]) * grid.resolution
+        want[todo, 1] = grid.origin[1] + (i + u[:, 1]) * grid.resolution
+        want[todo, 2] = np.pi - 2.0 * np.pi * u[:, 2]
+        todo = todo[~w.is_free(want[todo, :2])]
+    np.testing.assert_array_equal(w.sample_free_poses(700, rng=5, resolution=RES), want)
 
 
 # --------------------------------------------------------------------------

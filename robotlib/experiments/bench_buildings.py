@@ -76,6 +76,12 @@ if "error" in out:  # what the error says to do: the exact path
     MCL.best(world, fast=False, rng=0)
     mark("mcl_best_exact", t)
 out["ready_peak_mb"] = out.get("fast_peak_mb", out["peak_mb"])
+import gc
+from numba.core.dispatcher import Dispatcher
+out["compiled"] = sorted(  # not loaded from numba's cache: their compiling counted
+    d.py_func.__qualname__ for d in gc.get_objects()
+    if isinstance(d, Dispatcher) and d.stats.cache_misses
+)
 print(json.dumps(out), flush=True)
 counts = json.loads(sys.argv[2])
 if counts:  # one step of the path set up, as `robotlib bench mcl` times it
@@ -127,8 +133,9 @@ def bench_building(side: float, timeout: float = 120.0, steps=STEP_COUNTS) -> di
         ``free_space_s``, ``cone_table_s``, ``mcl_best_s``), ``table_mb``
         (1e6 bytes), ``peak_mb`` and ``ready_peak_mb`` (MiB: the peak at the
         end and when the filter was ready), ``steps`` (``path``, ``n``,
-        ``ms_per_step`` median and ``ms_min`` fastest), and ``error`` or
-        ``timeout`` when it did not finish.
+        ``ms_per_step`` median and ``ms_min`` fastest), ``compiled`` (the
+        kernels numba compiled rather than loaded from its cache), and
+        ``error`` or ``timeout`` when it did not finish.
     """
     cmd = [sys.executable, "-c", _CHILD, repr(float(side)), json.dumps(list(steps))]
     env = {**os.environ, "ROBOTLIB_TABLE_CACHE": "off"}  # time the build itself
@@ -209,6 +216,11 @@ def _print(r: dict) -> None:
     if steps:
         path = r["steps"][0]["path"]
         lines.append(f"  {path} step, median (fastest): {', '.join(steps)}")
+    if r.get("compiled"):
+        lines.append(
+            f"  {len(r['compiled'])} kernels compiled in this run (not in numba's "
+            "cache): its time and peak include compiling; run again for warm figures"
+        )
     if verdict(r) is not None:
         lines.append(f"  {verdict(r)}")
     print("\n".join(lines))  # noqa: T201
