@@ -33,6 +33,7 @@ Numba kernels: contiguous arrays and scalars in; they import nothing of
 robotlib but the JIT options and other kernels.
 """
 
+import ctypes
 import math
 
 import numba as nb
@@ -498,4 +499,20 @@ def strip_sweep_table(
             segments, normals, x0, y0, resolution, n_bins, max_range, min_range,
             cos_specular, w, planes,
         )  # fmt: skip
+    _give_back_freed()
     cone_pass(n_rays, ray_step, planes, table)
+
+
+def _give_back_freed() -> None:
+    """Return to the system the memory the strips' threads freed (glibc only).
+
+    Each thread allocates its strips from a malloc arena of its own, which
+    glibc keeps once they are freed, for that thread's next allocation: 19
+    MB after ``columbia.map``'s table, 3 MB after a 50 m building's, that
+    the filter set up next cannot reuse (a 50 m building's peak: 1.4 MB
+    more). ``malloc_trim`` hands them back; elsewhere nothing is done.
+    """
+    try:
+        ctypes.CDLL(None).malloc_trim(0)
+    except (OSError, AttributeError, TypeError):  # not glibc (Windows: no CDLL(None))
+        pass
