@@ -157,8 +157,8 @@ def build_strips(segments, c, s, c2, s2, u0, w, n_strips, normals, cos_specular)
     for k in range(n_strips):
         count[k + 1] += count[k]
     n = count[n_strips]
-    raw = np.empty((n, 8))
-    raw_ids = np.empty(n, dtype=np.int64)
+    entries = np.empty((n, 8))
+    ids = np.empty(n, dtype=np.int64)
     fill = count[:n_strips].copy()
     for m in range(n_walls):
         if _unseen(segments, m, c, s, c2, s2):
@@ -191,23 +191,23 @@ def build_strips(segments, c, s, c2, s2, u0, w, n_strips, normals, cos_specular)
             f = fill[k]
             fill[k] = f + 1
             if parallel:
-                raw[f, _VMIN] = -np.inf
-                raw[f, _VMAX] = np.inf
+                entries[f, _VMIN] = -np.inf
+                entries[f, _VMAX] = np.inf
             else:
-                raw[f, _VMIN] = min(va, vb) - _MV
-                raw[f, _VMAX] = max(va, vb) + _MV
-            raw[f, _ULO] = min(up, uq) - _MU
-            raw[f, _UHI] = max(up, uq) + _MU
-            raw[f, _PX] = px
-            raw[f, _PY] = py
-            raw[f, _EX] = ex
-            raw[f, _EY] = ey
+                entries[f, _VMIN] = min(va, vb) - _MV
+                entries[f, _VMAX] = max(va, vb) + _MV
+            entries[f, _ULO] = min(up, uq) - _MU
+            entries[f, _UHI] = max(up, uq) + _MU
+            entries[f, _PX] = px
+            entries[f, _PY] = py
+            entries[f, _EX] = ex
+            entries[f, _EY] = ey
             code = 4 * m
             if abs(c * normals[m, 0] + s * normals[m, 1]) >= cos_specular:
                 code += 1
             if abs(c2 * normals[m, 0] + s2 * normals[m, 1]) >= cos_specular:
                 code += 2
-            raw_ids[f] = code
+            ids[f] = code
     # each strip sorted where it lies, through a copy of that strip alone
     # (not a second (n, 8) array: the build's memory is the table and this)
     reach = np.zeros(n_strips)
@@ -224,23 +224,23 @@ def build_strips(segments, c, s, c2, s2, u0, w, n_strips, normals, cos_specular)
         hi = count[k + 1]
         if hi == lo:
             continue
-        _sort_by_start(raw, lo, hi, order, keys)
+        _sort_by_start(entries, lo, hi, order, keys)
         for r in range(hi - lo):
             for col in range(8):
-                rows[r, col] = raw[lo + r, col]
-            codes[r] = raw_ids[lo + r]
+                rows[r, col] = entries[lo + r, col]
+            codes[r] = ids[lo + r]
         longest = 0.0
         for r in range(hi - lo):
             q = order[r] - lo
             for col in range(8):
-                raw[lo + r, col] = rows[q, col]
-            raw_ids[lo + r] = codes[q]
+                entries[lo + r, col] = rows[q, col]
+            ids[lo + r] = codes[q]
             if rows[q, _VMIN] > -np.inf:
                 longest = max(longest, rows[q, _VMAX] - rows[q, _VMIN])
             else:
                 firsts[k] = lo + r + 1
         reach[k] = longest
-    return count, firsts, raw, raw_ids, reach
+    return count, firsts, entries, ids, reach
 
 
 @nb.njit(inline="always", **JIT)  # ~12 % sooner, +0.4 s to compile
@@ -504,13 +504,10 @@ def strip_sweep_table(
 
 
 def _give_back_freed() -> None:
-    """Return to the system the memory the strips' threads freed (glibc only).
+    """Return the strips' freed memory to the system (glibc; elsewhere nothing).
 
-    Each thread allocates its strips from a malloc arena of its own, which
-    glibc keeps once they are freed, for that thread's next allocation: 19
-    MB after ``columbia.map``'s table, 3 MB after a 50 m building's, that
-    the filter set up next cannot reuse (a 50 m building's peak: 1.4 MB
-    more). ``malloc_trim`` hands them back; elsewhere nothing is done.
+    glibc keeps what each thread frees in that thread's own arena: 17 MB
+    after ``columbia.map``'s table, which the filter set up next cannot use.
     """
     try:
         ctypes.CDLL(None).malloc_trim(0)
