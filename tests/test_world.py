@@ -264,22 +264,24 @@ def test_sample_free_poses_without_free_space_raises():
         w.sample_free_poses(3, rng=0)
 
 
-@pytest.mark.parametrize("shape", [(1, 1), (1, 9), (13, 17), (40, 3)])
-def test_nth_true_is_flatnonzero_at_the_ranks(shape):
-    from robotlib.world.model import _nth_true
+@pytest.mark.parametrize("shape", [(1, 1), (1, 9), (13, 17), (40, 3), (3, 70000)])
+def test_free_cells_give_flatnonzero_at_the_ranks(shape):
+    from robotlib.world.model import _free_cells, _nth_true
 
     rng = np.random.default_rng(shape[0] * 100 + shape[1])
     mask = rng.random(shape) < 0.4
     mask[shape[0] // 2] = False  # an empty row
     mask.flat[-1] = True  # and at least one True cell
-    starts = np.concatenate([[0], np.cumsum(mask.sum(axis=1))])
+    starts, cols = _free_cells(mask)
+    assert cols.dtype == (np.uint16 if shape[1] <= 65536 else np.int64)
+    assert not starts.flags.writeable and not cols.flags.writeable
     flat = np.flatnonzero(mask)
     for ranks in (
         rng.integers(0, len(flat), size=50),
         np.arange(len(flat))[::-1],
         np.zeros(0, dtype=np.int64),
     ):
-        got = _nth_true(mask, starts, ranks)
+        got = _nth_true(starts, cols, shape[1], ranks)
         assert got.dtype == np.int64
         np.testing.assert_array_equal(got, flat[ranks])
 
