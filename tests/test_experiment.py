@@ -178,6 +178,39 @@ def test_bench_mcl_cli_writes_json(tmp_path):
     assert all(0 < r["ms_min"] <= r["ms_per_step"] for r in results)
 
 
+def test_bench_buildings_times_the_set_up_and_the_step_in_a_fresh_process():
+    """A small building: the fast path, its parts, its peak and a timed step."""
+    from robotlib.experiments.bench_buildings import bench_building, verdict
+
+    r = bench_building(8.0, timeout=300, steps=[40])
+    assert "error" not in r and r["walls"] > 4
+    assert 0 < r["table_mb"] and r["ready_peak_mb"] >= r["table_mb"] / 1.048576
+    assert all(r[k] >= 0 for k in ("free_space_s", "cone_table_s", "mcl_best_s"))
+    (step,) = r["steps"]
+    assert step["path"] == "fast" and step["n"] == 40
+    assert 0 < step["ms_min"] <= step["ms_per_step"]
+    assert verdict(r) is None  # no target for 8 m
+
+
+def test_bench_buildings_verdict_against_the_targets():
+    from robotlib.experiments.bench_buildings import verdict
+
+    fast = {"free_space_s": 0.1, "cone_table_s": 1.0, "mcl_best_s": 0.1}
+    assert verdict({"side_m": 50.0, **fast, "ready_peak_mb": 286.0}).startswith(
+        "target ready in 3 s and 300 MB: met with the fast path: ready in 1.20 s "
+        "at 300 MB (286 MiB)"
+    )  # MiB measured, MB the target's unit
+    assert "MISSED" in verdict({"side_m": 50.0, **fast, "ready_peak_mb": 287.0})
+    assert "MISSED" in verdict({"side_m": 50.0, **fast, "cone_table_s": 2.9,
+                                "ready_peak_mb": 200.0})  # fmt: skip
+    exact = {"free_space_s": 0.4, "wall_blocks_s": 0.2, "mcl_best_exact_s": 0.1}
+    text = verdict({"side_m": 200.0, "error": "too large", **exact,
+                    "cone_table_s": 0.0, "ready_peak_mb": 300.0})  # fmt: skip
+    assert text.startswith("target ready in 30 s and 1500 MB: met with the exact")
+    assert "ready in 0.70 s" in text
+    assert "did not finish" in verdict({"side_m": 200.0, "timeout": 120.0})
+
+
 def test_bench_numpy_beam_weights_match_the_fast_beam_model():
     """The bench's plain NumPy beam model is the library's model."""
     from robotlib.experiments.bench_mcl import _beam_norms, _numpy_weights

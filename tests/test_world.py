@@ -264,6 +264,45 @@ def test_sample_free_poses_without_free_space_raises():
         w.sample_free_poses(3, rng=0)
 
 
+@pytest.mark.parametrize("shape", [(1, 1), (1, 9), (13, 17), (40, 3), (3, 70000)])
+def test_free_cells_give_flatnonzero_at_the_ranks(shape):
+    from robotlib.world.model import _free_cells, _nth_true
+
+    rng = np.random.default_rng(shape[0] * 100 + shape[1])
+    mask = rng.random(shape) < 0.4
+    mask[shape[0] // 2] = False  # an empty row
+    mask.flat[-1] = True  # and at least one True cell
+    starts, cols = _free_cells(mask)
+    assert cols.dtype == (np.uint16 if shape[1] <= 65536 else np.int64)
+    assert not starts.flags.writeable and not cols.flags.writeable
+    flat = np.flatnonzero(mask)
+    for ranks in (
+        rng.integers(0, len(flat), size=50),
+        np.arange(len(flat))[::-1],
+        np.zeros(0, dtype=np.int64),
+    ):
+        got = _nth_true(starts, cols, shape[1], ranks)
+        assert got.dtype == np.int64
+        np.testing.assert_array_equal(got, flat[ranks])
+
+
+def test_sample_free_poses_draws_as_from_the_list_of_free_cells():
+    """The same poses, bit for bit, as indexing the list of every free cell."""
+    w = room_world()
+    grid, rng = w.free_space(RES), np.random.default_rng(5)
+    cells = np.flatnonzero(grid.data)
+    want, todo = np.empty((700, 3)), np.arange(700)
+    while len(todo):  # the redraws (the world stops after 20: never reached here)
+        k = len(todo)
+        i, j = np.divmod(cells[rng.integers(0, len(cells), size=k)], grid.shape[1])
+        u = rng.random((k, 3))
+        want[todo, 0] = grid.origin[0] + (j + u[:, 0]) * grid.resolution
+        want[todo, 1] = grid.origin[1] + (i + u[:, 1]) * grid.resolution
+        want[todo, 2] = np.pi - 2.0 * np.pi * u[:, 2]
+        todo = todo[~w.is_free(want[todo, :2])]
+    np.testing.assert_array_equal(w.sample_free_poses(700, rng=5, resolution=RES), want)
+
+
 # --------------------------------------------------------------------------
 # geometry
 

@@ -362,35 +362,89 @@ class World:
         rng = as_rng(rng)
         grid = self.free_space(resolution, radius)
         key = ("free cells", float(resolution), float(radius))
-        if key not in self._cache:  # found once (filters draw every step), int32
-            flat = np.flatnonzero(grid.data)
-            self._cache[key] = flat.astype(
-                np.int32 if grid.data.size < 2**31 else flat.dtype
-            )
-            self._cache[key].setflags(write=False)
-        cells = self._cache[key]
-        if len(cells) == 0:
+        if key not in self._cache:  # found once (filters draw every step)
+            self._cache[key] = _free_cells(grid.data)
+        starts, cols = self._cache[key]
+        n_free = int(starts[-1])
+        if n_free == 0:
             raise ValueError(f"world {self.name!r} has no free space for r={radius}")
         out = np.empty((n, 3))
         todo = np.arange(n)
         # A cell whose centre is free may have a corner that is not: redraw the
         # few poses that land there (almost all are free on the first draw).
         for _ in range(_MAX_REDRAWS):
-            k = len(todo)
-            pick = cells[rng.integers(0, len(cells), size=k)]
-            i, j = np.divmod(pick, grid.shape[1])
-            u = rng.random((k, 3))
-            out[todo, 0] = grid.origin[0] + (j + u[:, 0]) * grid.resolution
-            out[todo, 1] = grid.origin[1] + (i + u[:, 1]) * grid.resolution
-            out[todo, 2] = np.pi - 2.0 * np.pi * u[:, 2]
+            _draw_poses(out, todo, grid, starts, cols, rng)
             todo = todo[~self.is_free(out[todo, :2], radius)]
             if len(todo) == 0:
                 return out
         # Still not free after many draws: put them at free cell centres.
-        pick = cells[rng.integers(0, len(cells), size=len(todo))]
+        ranks = rng.integers(0, n_free, size=len(todo))
+        pick = _nth_true(starts, cols, grid.shape[1], ranks)
         centres = grid.centres().reshape(-1, 2)
         out[todo, :2] = centres[pick]
         return out
+
+
+def _free_cells(mask: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """List ``mask``'s True cells compactly: each row's first rank, each cell's column.
+
+    Half the memory of their flat indexes (uint16 columns beside a count per
+    row: 1.7 MB on a 50 m x 50 m building at 5 cm, kept beside a filter),
+    found a block of rows at a time (no int64 list of them all).
+
+    Parameters
+    ----------
+    mask : numpy.ndarray of bool, shape (ny, nx)
+        The cells.
+
+    Returns
+    -------
+    starts : numpy.ndarray of int64, shape (ny + 1,)
+        Rank of each row's first True cell (``starts[-1]``: how many in all).
+    cols : numpy.ndarray, shape (starts[-1],)
+        Their columns, row by row (uint16, or int64 beyond 65,536 columns).
+        Both read-only.
+    """
+    ny, nx = mask.shape
+    starts = np.zeros(ny + 1, dtype=np.int64)
+    np.cumsum(np.count_nonzero(mask, axis=1), out=starts[1:])
+    cols = np.empty(starts[-1], dtype=np.uint16 if nx <= 1 << 16 else np.int64)
+    step = max(1, (1 << 16) // max(nx, 1))  # rows at a time
+    for i in range(0, ny, step):
+        cols[starts[i] : starts[min(i + step, ny)]] = np.nonzero(mask[i : i + step])[1]
+    starts.setflags(write=False)
+    cols.setflags(write=False)
+    return starts, cols
+
+
+def _draw_poses(out, todo, grid: Grid, starts, cols, rng) -> None:
+    """Draw ``out[todo]`` (m, m, rad): uniform in random free cells, uniform headings.
+
+    The cells are ranks among `_free_cells`' ``starts, cols`` of ``grid``.
+    A function of its own so that its draws (2.8 MB for 50,000 poses) are
+    freed before the poses' clearance is measured.
+    """
+    k = len(todo)
+    nx = grid.shape[1]
+    i, j = np.divmod(
+        _nth_true(starts, cols, nx, rng.integers(0, int(starts[-1]), size=k)), nx
+    )
+    u = rng.random((k, 3))
+    out[todo, 0] = grid.origin[0] + (j + u[:, 0]) * grid.resolution
+    out[todo, 1] = grid.origin[1] + (i + u[:, 1]) * grid.resolution
+    out[todo, 2] = np.pi - 2.0 * np.pi * u[:, 2]
+
+
+def _nth_true(
+    starts: np.ndarray, cols: np.ndarray, nx: int, ranks: np.ndarray
+) -> np.ndarray:
+    """Return ``np.flatnonzero(mask)[ranks]`` from `_free_cells`' ``starts, cols``.
+
+    ``nx`` is the mask's row length; ``ranks`` (k,) ints in ``[0,
+    starts[-1])``. Returns (k,) int64 flat indexes (C order).
+    """
+    rows = np.searchsorted(starts, ranks, side="right") - 1
+    return rows * nx + cols[ranks]
 
 
 def _flood_fill(free: np.ndarray, i0: int, j0: int) -> np.ndarray:

@@ -33,6 +33,7 @@ Numba kernels: contiguous arrays and scalars in; they import nothing of
 robotlib but the JIT options and other kernels.
 """
 
+import ctypes
 import math
 
 import numba as nb
@@ -156,8 +157,8 @@ def build_strips(segments, c, s, c2, s2, u0, w, n_strips, normals, cos_specular)
     for k in range(n_strips):
         count[k + 1] += count[k]
     n = count[n_strips]
-    raw = np.empty((n, 8))
-    raw_ids = np.empty(n, dtype=np.int64)
+    entries = np.empty((n, 8))
+    ids = np.empty(n, dtype=np.int64)
     fill = count[:n_strips].copy()
     for m in range(n_walls):
         if _unseen(segments, m, c, s, c2, s2):
@@ -190,25 +191,25 @@ def build_strips(segments, c, s, c2, s2, u0, w, n_strips, normals, cos_specular)
             f = fill[k]
             fill[k] = f + 1
             if parallel:
-                raw[f, _VMIN] = -np.inf
-                raw[f, _VMAX] = np.inf
+                entries[f, _VMIN] = -np.inf
+                entries[f, _VMAX] = np.inf
             else:
-                raw[f, _VMIN] = min(va, vb) - _MV
-                raw[f, _VMAX] = max(va, vb) + _MV
-            raw[f, _ULO] = min(up, uq) - _MU
-            raw[f, _UHI] = max(up, uq) + _MU
-            raw[f, _PX] = px
-            raw[f, _PY] = py
-            raw[f, _EX] = ex
-            raw[f, _EY] = ey
+                entries[f, _VMIN] = min(va, vb) - _MV
+                entries[f, _VMAX] = max(va, vb) + _MV
+            entries[f, _ULO] = min(up, uq) - _MU
+            entries[f, _UHI] = max(up, uq) + _MU
+            entries[f, _PX] = px
+            entries[f, _PY] = py
+            entries[f, _EX] = ex
+            entries[f, _EY] = ey
             code = 4 * m
             if abs(c * normals[m, 0] + s * normals[m, 1]) >= cos_specular:
                 code += 1
             if abs(c2 * normals[m, 0] + s2 * normals[m, 1]) >= cos_specular:
                 code += 2
-            raw_ids[f] = code
-    entries = np.empty((n, 8))
-    ids = np.empty(n, dtype=np.int64)
+            ids[f] = code
+    # each strip sorted where it lies, through a copy of that strip alone
+    # (not a second (n, 8) array: the build's memory is the table and this)
     reach = np.zeros(n_strips)
     firsts = count[:n_strips].copy()
     most = 0
@@ -216,20 +217,26 @@ def build_strips(segments, c, s, c2, s2, u0, w, n_strips, normals, cos_specular)
         most = max(most, count[k + 1] - count[k])
     order = np.empty(most, dtype=np.int64)
     keys = np.empty(most)
+    rows = np.empty((most, 8))
+    codes = np.empty(most, dtype=np.int64)
     for k in range(n_strips):
         lo = count[k]
         hi = count[k + 1]
         if hi == lo:
             continue
-        _sort_by_start(raw, lo, hi, order, keys)
+        _sort_by_start(entries, lo, hi, order, keys)
+        for r in range(hi - lo):
+            for col in range(8):
+                rows[r, col] = entries[lo + r, col]
+            codes[r] = ids[lo + r]
         longest = 0.0
         for r in range(hi - lo):
-            q = order[r]
+            q = order[r] - lo
             for col in range(8):
-                entries[lo + r, col] = raw[q, col]
-            ids[lo + r] = raw_ids[q]
-            if raw[q, _VMIN] > -np.inf:
-                longest = max(longest, raw[q, _VMAX] - raw[q, _VMIN])
+                entries[lo + r, col] = rows[q, col]
+            ids[lo + r] = codes[q]
+            if rows[q, _VMIN] > -np.inf:
+                longest = max(longest, rows[q, _VMAX] - rows[q, _VMIN])
             else:
                 firsts[k] = lo + r + 1
         reach[k] = longest
@@ -492,4 +499,17 @@ def strip_sweep_table(
             segments, normals, x0, y0, resolution, n_bins, max_range, min_range,
             cos_specular, w, planes,
         )  # fmt: skip
+    _give_back_freed()
     cone_pass(n_rays, ray_step, planes, table)
+
+
+def _give_back_freed() -> None:
+    """Return the strips' freed memory to the system (glibc; elsewhere nothing).
+
+    glibc keeps what each thread frees in that thread's own arena: 17 MB
+    after ``columbia.map``'s table, which the filter set up next cannot use.
+    """
+    try:
+        ctypes.CDLL(None).malloc_trim(0)
+    except (OSError, AttributeError, TypeError):  # not glibc (Windows: no CDLL(None))
+        pass
