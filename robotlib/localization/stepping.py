@@ -169,9 +169,8 @@ def run_step(kind, particles, weights, prm, noise, key, sensors, skip, table, lu
 
     _run(exp, spans(n, _threads()))
     res = chunked.finish(weights, top, out_w, out_p, cs)
-    if u >= 0.0:  # a kernel of its own: compiled only for filters that need it
-        _kernels.systematic_gather(out_p, out_w, u, new_p)
-        new_w.fill(1.0 / len(new_p))
+    if u >= 0.0:  # kernels of their own: compiled only for filters that need them
+        _gather(out_p, out_w, u, new_p, new_w)
     return res
 
 
@@ -202,5 +201,20 @@ def _openmp_step(kind, particles, weights, prm, noise, key, sensors, skip, table
             weights, out_p, out_w, cs, mm,
         )  # fmt: skip
     if u >= 0.0:
-        chunked.gather_into(out_p, out_w, u, new_p, new_w)
+        _gather(out_p, out_w, u, new_p, new_w)
     return res
+
+
+def _gather(particles, weights, u, new_p, new_w):
+    """`resample.systematic_gather` into ``new_p``, then ``new_w`` set to ``1 / n``.
+
+    The running sums (serial: the same bits) are kept in ``new_w``; the
+    rows are gathered in even pieces over the threads (`chunked.gather_rows`).
+    """
+    total = chunked.cumulate(weights, new_w)
+
+    def rows(lo, hi):
+        chunked.gather_rows(particles, new_w, total, u, lo, hi, new_p)
+
+    _run(rows, spans(len(new_p), _threads()))
+    new_w.fill(1.0 / len(new_p))

@@ -161,11 +161,31 @@ def _gather_cum(particles, cum, total, u, out):
     ``total`` is the last; ``cum[j] / total`` is `resample.cumulative`'s
     entry (its last, forced to 1, is never read), so the rows are the same.
     """
+    _gather_rows(particles, cum, total, u, 0, out.shape[0], out)
+
+
+@nb.njit(**JIT, inline="always")
+def _gather_rows(particles, cum, total, u, lo, hi, out):
+    """Rows ``lo:hi`` of `_gather_cum`'s set: the walk started where it reaches ``lo``.
+
+    The walk stops at row ``k`` on the first ``j`` whose quotient ``cum[j] /
+    total`` exceeds the row's position ``(k + u) / n`` (the last ``j`` if
+    none); the quotients never decrease, so a bisection finds the ``j`` of
+    row ``lo`` and the rows from there are those of the whole walk.
+    """
     n_cum = cum.shape[0]
     n = out.shape[0]
     j = 0
-    q = cum[0] / total if n_cum > 0 else 0.0  # each entry's quotient once
-    for k in range(n):
+    last = n_cum - 1
+    position = (lo + u) / n
+    while j < last:
+        mid = (j + last) // 2
+        if cum[mid] / total > position:
+            last = mid
+        else:
+            j = mid + 1
+    q = cum[j] / total if n_cum > 0 else 0.0  # each entry's quotient once
+    for k in range(lo, hi):
         position = (k + u) / n
         while j < n_cum - 1 and q <= position:
             j += 1
@@ -176,19 +196,24 @@ def _gather_cum(particles, cum, total, u, out):
 
 
 @nb.njit(**JIT)
-def gather_into(particles, weights, u, new_p, new_w):
-    """`resample.systematic_gather` into ``new_p``, and ``new_w`` set to ``1 / n``.
-
-    The cumulative weights are kept in ``new_w`` (no array made).
-    """
+def cumulate(weights, cum):
+    """Write the running sums of ``weights`` (N,) into ``cum`` (N,); return the last."""
     total = 0.0
     for j in range(weights.shape[0]):
         total += weights[j]
-        new_w[j] = total
-    _gather_cum(particles, new_w, total, u, new_p)
-    n = new_p.shape[0]
-    for k in range(n):
-        new_w[k] = 1.0 / n
+        cum[j] = total
+    return total
+
+
+@nb.njit(**JIT)
+def gather_rows(particles, cum, total, u, lo, hi, out):
+    """Rows ``lo:hi`` of `resample.systematic_gather`'s set into ``out`` (n, 3).
+
+    From `cumulate`'s running sums ``cum`` and their ``total``
+    (`_gather_rows`): pieces of rows run on threads give the rows of one
+    serial walk.
+    """
+    _gather_rows(particles, cum, total, u, lo, hi, out)
 
 
 # -- a few particles: the whole step in one call -------------------------------------
