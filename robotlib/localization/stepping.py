@@ -208,13 +208,14 @@ def _openmp_step(kind, particles, weights, prm, noise, key, sensors, skip, table
 def _gather(particles, weights, u, new_p, new_w):
     """`resample.systematic_gather` into ``new_p``, then ``new_w`` set to ``1 / n``.
 
-    The running sums (serial: the same bits) are kept in ``new_w``; the
-    rows are gathered in even pieces over the threads (`chunked.gather_rows`).
+    The cumulative weights (summed serially: the same bits) are kept in
+    ``new_w``; the rows are gathered in even pieces over the threads
+    (`chunked.gather_rows`).
     """
-    total = chunked.cumulate(weights, new_w)
+    chunked.cumulate(weights, new_w)
 
     def rows(lo, hi):
-        chunked.gather_rows(particles, new_w, total, u, lo, hi, new_p)
+        chunked.gather_rows(particles, new_w, u, lo, hi, new_p)
 
     _run(rows, spans(len(new_p), _threads()))
     new_w.fill(1.0 / len(new_p))

@@ -158,62 +158,72 @@ def _finish_into(weights, top, out_w, out_p, cs, u, new_p, new_w, est):
 def _gather_cum(particles, cum, total, u, out):
     """`resample.systematic_gather` from the running sums ``cum`` (N,) of the weights.
 
-    ``total`` is the last; ``cum[j] / total`` is `resample.cumulative`'s
-    entry (its last, forced to 1, is never read), so the rows are the same.
+    ``total`` is the last. ``cum`` becomes the quotients ``cum[j] / total``,
+    `resample.cumulative`'s entries (its last, forced to 1, is never read),
+    so the rows are the same.
     """
-    _gather_rows(particles, cum, total, u, 0, out.shape[0], out)
+    _quotients(cum, total)
+    _gather_rows(particles, cum, u, 0, out.shape[0], out)
 
 
 @nb.njit(**JIT, inline="always")
-def _gather_rows(particles, cum, total, u, lo, hi, out):
+def _quotients(cum, total):
+    """``cum[j] /= total``: independent divisions, none on the walk's path."""
+    for j in range(cum.shape[0]):
+        cum[j] = cum[j] / total
+
+
+@nb.njit(**JIT, inline="always")
+def _gather_rows(particles, q, u, lo, hi, out):
     """Rows ``lo:hi`` of `_gather_cum`'s set: the walk started where it reaches ``lo``.
 
-    The walk stops at row ``k`` on the first ``j`` whose quotient ``cum[j] /
-    total`` exceeds the row's position ``(k + u) / n`` (the last ``j`` if
-    none); the quotients never decrease, so a bisection finds the ``j`` of
-    row ``lo`` and the rows from there are those of the whole walk.
+    ``q`` (N,) holds the cumulative weights' quotients. The walk stops at
+    row ``k`` on the first ``j`` with ``q[j]`` above the row's position
+    ``(k + u) / n`` (the last ``j`` if none); ``q`` never decreases, so a
+    bisection finds the ``j`` of row ``lo`` and the rows from there are
+    those of the whole walk.
     """
-    n_cum = cum.shape[0]
+    n_q = q.shape[0]
     n = out.shape[0]
     j = 0
-    last = n_cum - 1
+    last = n_q - 1
     position = (lo + u) / n
     while j < last:
         mid = (j + last) // 2
-        if cum[mid] / total > position:
+        if q[mid] > position:
             last = mid
         else:
             j = mid + 1
-    q = cum[j] / total if n_cum > 0 else 0.0  # each entry's quotient once
     for k in range(lo, hi):
         position = (k + u) / n
-        while j < n_cum - 1 and q <= position:
+        while j < n_q - 1 and q[j] <= position:
             j += 1
-            q = cum[j] / total
         out[k, 0] = particles[j, 0]
         out[k, 1] = particles[j, 1]
         out[k, 2] = particles[j, 2]
 
 
 @nb.njit(**JIT)
-def cumulate(weights, cum):
-    """Write the running sums of ``weights`` (N,) into ``cum`` (N,); return the last."""
+def cumulate(weights, q):
+    """Write the cumulative weights' quotients into ``q`` (N,), as `_gather_cum` does.
+
+    The running sums of ``weights`` (N,), serially, each divided by the last.
+    """
     total = 0.0
     for j in range(weights.shape[0]):
         total += weights[j]
-        cum[j] = total
-    return total
+        q[j] = total
+    _quotients(q, total)
 
 
 @nb.njit(**JIT)
-def gather_rows(particles, cum, total, u, lo, hi, out):
+def gather_rows(particles, q, u, lo, hi, out):
     """Rows ``lo:hi`` of `resample.systematic_gather`'s set into ``out`` (n, 3).
 
-    From `cumulate`'s running sums ``cum`` and their ``total``
-    (`_gather_rows`): pieces of rows run on threads give the rows of one
-    serial walk.
+    From `cumulate`'s quotients ``q`` (`_gather_rows`): pieces of rows run
+    on threads give the rows of one serial walk.
     """
-    _gather_rows(particles, cum, total, u, lo, hi, out)
+    _gather_rows(particles, q, u, lo, hi, out)
 
 
 # -- a few particles: the whole step in one call -------------------------------------
