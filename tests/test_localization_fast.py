@@ -240,6 +240,16 @@ def test_gather_in_pieces_matches_the_serial_walk():
         stepping._gather(p, w, u, new_p, new_w)
         np.testing.assert_array_equal(new_p, ref)
         assert np.all(new_w == 1.0 / len(p))
+    for w in (np.zeros(997), np.full(997, np.nan)):  # NaN quotients: all row 0
+        ref = np.empty((len(p), 3))
+        _kernels.systematic_gather(p, w, 0.5, ref)
+        new_p, new_w = np.empty((len(p), 3)), np.empty(len(p))
+        for pieces in (1, 3):
+            q = np.empty(len(p))
+            chunked.cumulate(w, q)
+            for lo, hi in stepping.spans(len(p), pieces):
+                chunked.gather_rows(p, q, 0.5, lo, hi, new_p)
+            np.testing.assert_array_equal(new_p, ref)
 
 
 def test_standard_normals_depend_on_rng_and_n_only():

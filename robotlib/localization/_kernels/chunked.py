@@ -178,8 +178,9 @@ def _gather_rows(particles, q, u, lo, hi, out):
     """Rows ``lo:hi`` of `_gather_cum`'s set: the walk started where it reaches ``lo``.
 
     ``q`` (N,) holds the cumulative weights' quotients. The walk stops at
-    row ``k`` on the first ``j`` with ``q[j]`` above the row's position
-    ``(k + u) / n`` (the last ``j`` if none); ``q`` never decreases, so a
+    row ``k`` on the first ``j`` where ``q[j] <= (k + u) / n`` fails (the
+    last ``j`` if none); that test never passes again once it fails (``q``
+    never decreases, and is all NaN when the weights sum to 0 or NaN), so a
     bisection finds the ``j`` of row ``lo`` and the rows from there are
     those of the whole walk.
     """
@@ -190,7 +191,7 @@ def _gather_rows(particles, q, u, lo, hi, out):
     position = (lo + u) / n
     while j < last:
         mid = (j + last) // 2
-        if q[mid] > position:
+        if not q[mid] <= position:  # the walk's own test: NaN quotients stop it
             last = mid
         else:
             j = mid + 1
