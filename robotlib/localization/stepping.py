@@ -13,7 +13,8 @@ streams, so the numbers do not depend on the threads: up to
 `FILL_FIRST_MAX` particles it is drawn first, beyond each piece is one of
 the noise's chunks and draws its own rows; from `OPENMP_MIN` particles
 numba's threaded kernel draws it where it is used
-(`_kernels.normals`). The sums run serially at the end. A waiting thread sleeps (no
+(`_kernels.normals`). The sums run serially at the end; a resampling's rows
+are gathered in pieces over the threads again. A waiting thread sleeps (no
 OpenMP spinning), so a step keeps its pace when another process shares
 the cores. Same numbers, bit for bit, as the models' kernels in turn.
 

@@ -129,8 +129,9 @@ def finish(weights, top, out_w, out_p, cs):
     ``out_w`` holds the updated, unnormalised weights (`exp_chunk`); they
     are normalised in place (`update_weights`) and the pose estimated
     (`weighted_pose_mean`). Returns ``(log_mean, ess, estimate)``. The
-    resampling a step may end with is the caller's (`resample.systematic_gather`
-    then): a filter that does not resample every step compiles no gathering.
+    resampling a step may end with is the caller's (`cumulate`, then
+    `gather_rows` in pieces): a filter that does not resample every step
+    compiles no gathering.
     """
     est = np.empty(3)
     log_mean, ess, _ = _finish_estimate(weights, top, out_w, out_p, cs, est, out_w[:0])
