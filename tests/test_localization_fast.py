@@ -17,6 +17,7 @@ from robotlib.localization import (
     expected_readings,
     systematic_resample,
 )
+from robotlib.localization._kernels import chunked
 from robotlib.localization.motion import NORMALS_CHUNK, standard_normals
 from robotlib.sensing import SonarModel
 from robotlib.sensing import _kernels as _raycast
@@ -215,6 +216,40 @@ def test_systematic_gather_matches_resampler():
         idx = systematic_resample(w, np.random.default_rng(9), n)
         np.testing.assert_array_equal(out, p[idx])
         np.testing.assert_array_equal(out, naive.systematic_gather(p, w, u, n))
+
+
+def test_gather_in_pieces_matches_the_serial_walk():
+    """`stepping._gather`'s pieces give `systematic_gather`'s rows, however cut."""
+    from robotlib.localization import stepping
+
+    rng = np.random.default_rng(4)
+    p = rng.uniform(-3, 3, (997, 3))
+    w = rng.random(997) ** 6
+    w[100:400] = 0.0  # runs of empty weights: the walk's steps over them
+    w[500] = 50.0  # one particle holding many positions, split between pieces
+    for u in (0.0, 0.5, 0.999):
+        ref = naive.systematic_gather(p, w, u, len(p))
+        q = np.empty(len(p))
+        chunked.cumulate(w, q)
+        for pieces in (1, 2, 7, 997):
+            out = np.full((len(p), 3), np.nan)
+            for lo, hi in stepping.spans(len(p), pieces):
+                chunked.gather_rows(p, q, u, lo, hi, out)
+            np.testing.assert_array_equal(out, ref)
+        new_p, new_w = np.empty((len(p), 3)), np.empty(len(p))
+        stepping._gather(p, w, u, new_p, new_w)
+        np.testing.assert_array_equal(new_p, ref)
+        assert np.all(new_w == 1.0 / len(p))
+    for w in (np.zeros(997), np.full(997, np.nan)):  # NaN quotients: all row 0
+        ref = np.empty((len(p), 3))
+        _kernels.systematic_gather(p, w, 0.5, ref)
+        new_p, new_w = np.empty((len(p), 3)), np.empty(len(p))
+        for pieces in (1, 3):
+            q = np.empty(len(p))
+            chunked.cumulate(w, q)
+            for lo, hi in stepping.spans(len(p), pieces):
+                chunked.gather_rows(p, q, 0.5, lo, hi, new_p)
+            np.testing.assert_array_equal(new_p, ref)
 
 
 def test_standard_normals_depend_on_rng_and_n_only():

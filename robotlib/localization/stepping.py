@@ -13,9 +13,11 @@ streams, so the numbers do not depend on the threads: up to
 `FILL_FIRST_MAX` particles it is drawn first, beyond each piece is one of
 the noise's chunks and draws its own rows; from `OPENMP_MIN` particles
 numba's threaded kernel draws it where it is used
-(`_kernels.normals`). The sums run serially at the end. A waiting thread sleeps (no
-OpenMP spinning), so a step keeps its pace when another process shares
-the cores. Same numbers, bit for bit, as the models' kernels in turn.
+(`_kernels.normals`). The sums run serially at the end; from `OPENMP_MIN`
+particles a resampling's rows are gathered in pieces over the threads
+again. A waiting thread sleeps (no OpenMP spinning), so a step keeps its
+pace when another process shares the cores. Same numbers, bit for bit,
+as the models' kernels in turn.
 
 Imports the localization's kernels and `robotlib.localization.motion`;
 never the sensor models or `robotlib.localization.mcl`.
@@ -169,9 +171,8 @@ def run_step(kind, particles, weights, prm, noise, key, sensors, skip, table, lu
 
     _run(exp, spans(n, _threads()))
     res = chunked.finish(weights, top, out_w, out_p, cs)
-    if u >= 0.0:  # a kernel of its own: compiled only for filters that need it
-        _kernels.systematic_gather(out_p, out_w, u, new_p)
-        new_w.fill(1.0 / len(new_p))
+    if u >= 0.0:  # kernels of their own: compiled only for filters that need them
+        _gather(out_p, out_w, u, new_p, new_w)
     return res
 
 
@@ -202,5 +203,27 @@ def _openmp_step(kind, particles, weights, prm, noise, key, sensors, skip, table
             weights, out_p, out_w, cs, mm,
         )  # fmt: skip
     if u >= 0.0:
-        chunked.gather_into(out_p, out_w, u, new_p, new_w)
+        _gather(out_p, out_w, u, new_p, new_w)
     return res
+
+
+def _gather(particles, weights, u, new_p, new_w):
+    """`resample.systematic_gather` into ``new_p``, then ``new_w`` set to ``1 / n``.
+
+    The cumulative weights (summed serially: the same bits) are kept in
+    ``new_w``; from `OPENMP_MIN` particles the rows are gathered in even
+    pieces over the threads (`chunked.gather_rows`). Below, one call: at
+    10,000 particles the gather takes 0.04 ms, and handing out pieces
+    doubled it.
+    """
+    chunked.cumulate(weights, new_w)
+    n = len(new_p)
+    if n < OPENMP_MIN:
+        chunked.gather_rows(particles, new_w, u, 0, n, new_p)
+    else:
+
+        def rows(lo, hi):
+            chunked.gather_rows(particles, new_w, u, lo, hi, new_p)
+
+        _run(rows, spans(n, _threads()))
+    new_w.fill(1.0 / n)

@@ -129,8 +129,9 @@ def finish(weights, top, out_w, out_p, cs):
     ``out_w`` holds the updated, unnormalised weights (`exp_chunk`); they
     are normalised in place (`update_weights`) and the pose estimated
     (`weighted_pose_mean`). Returns ``(log_mean, ess, estimate)``. The
-    resampling a step may end with is the caller's (`resample.systematic_gather`
-    then): a filter that does not resample every step compiles no gathering.
+    resampling a step may end with is the caller's (`cumulate`, then
+    `gather_rows` in pieces): a filter that does not resample every step
+    compiles no gathering.
     """
     est = np.empty(3)
     log_mean, ess, _ = _finish_estimate(weights, top, out_w, out_p, cs, est, out_w[:0])
@@ -158,37 +159,73 @@ def _finish_into(weights, top, out_w, out_p, cs, u, new_p, new_w, est):
 def _gather_cum(particles, cum, total, u, out):
     """`resample.systematic_gather` from the running sums ``cum`` (N,) of the weights.
 
-    ``total`` is the last; ``cum[j] / total`` is `resample.cumulative`'s
-    entry (its last, forced to 1, is never read), so the rows are the same.
+    ``total`` is the last. ``cum`` becomes the quotients ``cum[j] / total``,
+    `resample.cumulative`'s entries (its last, forced to 1, is never read),
+    so the rows are the same.
     """
-    n_cum = cum.shape[0]
+    _quotients(cum, total)
+    _gather_rows(particles, cum, u, 0, out.shape[0], out)
+
+
+@nb.njit(**JIT, inline="always")
+def _quotients(cum, total):
+    """``cum[j] /= total``: independent divisions, none on the walk's path."""
+    for j in range(cum.shape[0]):
+        cum[j] = cum[j] / total
+
+
+@nb.njit(**JIT, inline="always")
+def _gather_rows(particles, q, u, lo, hi, out):
+    """Rows ``lo:hi`` of `_gather_cum`'s set: the walk started where it reaches ``lo``.
+
+    ``q`` (N,) holds the cumulative weights' quotients. The walk stops at
+    row ``k`` on the first ``j`` where ``q[j] <= (k + u) / n`` fails (the
+    last ``j`` if none); that test never passes again once it fails (``q``
+    never decreases, and is all NaN when the weights sum to 0 or NaN), so a
+    bisection finds the ``j`` of row ``lo`` and the rows from there are
+    those of the whole walk.
+    """
+    n_q = q.shape[0]
     n = out.shape[0]
     j = 0
-    q = cum[0] / total if n_cum > 0 else 0.0  # each entry's quotient once
-    for k in range(n):
+    last = n_q - 1
+    position = (lo + u) / n
+    while j < last:
+        mid = (j + last) // 2
+        if not q[mid] <= position:  # the walk's own test: NaN quotients stop it
+            last = mid
+        else:
+            j = mid + 1
+    for k in range(lo, hi):
         position = (k + u) / n
-        while j < n_cum - 1 and q <= position:
+        while j < n_q - 1 and q[j] <= position:
             j += 1
-            q = cum[j] / total
         out[k, 0] = particles[j, 0]
         out[k, 1] = particles[j, 1]
         out[k, 2] = particles[j, 2]
 
 
 @nb.njit(**JIT)
-def gather_into(particles, weights, u, new_p, new_w):
-    """`resample.systematic_gather` into ``new_p``, and ``new_w`` set to ``1 / n``.
+def cumulate(weights, q):
+    """Write the cumulative weights' quotients into ``q`` (N,), as `_gather_cum` does.
 
-    The cumulative weights are kept in ``new_w`` (no array made).
+    The running sums of ``weights`` (N,), serially, each divided by the last.
     """
     total = 0.0
     for j in range(weights.shape[0]):
         total += weights[j]
-        new_w[j] = total
-    _gather_cum(particles, new_w, total, u, new_p)
-    n = new_p.shape[0]
-    for k in range(n):
-        new_w[k] = 1.0 / n
+        q[j] = total
+    _quotients(q, total)
+
+
+@nb.njit(**JIT)
+def gather_rows(particles, q, u, lo, hi, out):
+    """Rows ``lo:hi`` of `resample.systematic_gather`'s set into ``out`` (n, 3).
+
+    From `cumulate`'s quotients ``q`` (`_gather_rows`): pieces of rows run
+    on threads give the rows of one serial walk.
+    """
+    _gather_rows(particles, q, u, lo, hi, out)
 
 
 # -- a few particles: the whole step in one call -------------------------------------
