@@ -43,6 +43,7 @@ import subprocess
 import sys
 import threading
 import time
+import warnings
 
 __all__ = ["Prebuild", "start"]
 
@@ -114,6 +115,8 @@ class Prebuild:
 
     def __init__(self, proc: subprocess.Popen):
         self.proc = proc
+        self.forked = isinstance(proc, _Forked)
+        """Whether the helper is a fork of this process (`_for_the_parent`)."""
         self.ready = False
         self.waited = 0.0
         """Seconds `wait` waited (wall)."""
@@ -162,8 +165,12 @@ class Prebuild:
         return True
 
 
-def start(fast: bool = True, options: dict | None = None) -> Prebuild | None:
+def start(
+    fast: bool = True, options: dict | None = None, world=None
+) -> Prebuild | None:
     """Start the helper for `MCL.best` (``fast`` and its ``options``), or None.
+
+    ``world`` is the filter's: a forked helper computes `_for_the_parent` on it.
 
     None when the helper would not help (see the module's docstring) or
     ``options`` cannot be passed to it (only JSON values can). A process
@@ -187,6 +194,17 @@ def start(fast: bool = True, options: dict | None = None) -> Prebuild | None:
         spec = json.dumps({"options": options or {}, "file": os.path.abspath(__file__)})
     except (TypeError, ValueError):
         return None
+    proc = _fork(spec, world) if _can_fork() else _spawn(spec)
+    if proc is None:
+        return None
+    threading.Thread(target=proc.wait, daemon=True).start()  # reaped when it ends
+    helper = Prebuild(proc)
+    started.append(helper)
+    return helper
+
+
+def _spawn(spec: str) -> subprocess.Popen | None:
+    """Start the helper as a fresh interpreter (``spec`` its JSON), or None."""
     env = dict(os.environ, ROBOTLIB_TABLE_CACHE="off")
     env[ENV] = "0"
     import numba
@@ -202,7 +220,7 @@ def start(fast: bool = True, options: dict | None = None) -> Prebuild | None:
         "from robotlib.localization._prebuild import _main; _main()"
     )
     try:
-        proc = subprocess.Popen(
+        return subprocess.Popen(
             [sys.executable, "-c", code, spec],
             stdin=subprocess.PIPE,
             stdout=subprocess.PIPE,
@@ -212,10 +230,109 @@ def start(fast: bool = True, options: dict | None = None) -> Prebuild | None:
         )
     except OSError:
         return None
-    threading.Thread(target=proc.wait, daemon=True).start()  # reaped when it ends
-    helper = Prebuild(proc)
-    started.append(helper)
-    return helper
+
+
+def _can_fork() -> bool:
+    """Whether the helper can be a fork of this process (else a fresh interpreter).
+
+    A fork skips the helper's imports and numba's set-up (the parent's are
+    copied), about 0.6 s of its processor time. Not once numba has started
+    its thread pool: GNU OpenMP does not survive a fork.
+    """
+    if not hasattr(os, "fork"):  # pragma: no cover - not POSIX
+        return False
+    try:
+        from numba.np.ufunc import parallel
+    except ImportError:  # pragma: no cover - numba's layout changed
+        return False
+    return getattr(parallel, "_is_initialized", True) is False
+
+
+class _Forked:
+    """A forked helper, with what `Prebuild` and its callers use of `subprocess.Popen`.
+
+    Parameters
+    ----------
+    pid : int
+        The helper's process id.
+    out : int
+        The read end of the pipe the helper writes its ready line to.
+    life : int
+        The write end of a pipe the helper reads until it closes (when this
+        process ends): the helper then ends too.
+    """
+
+    def __init__(self, pid: int, out: int, life: int):
+        self.pid = pid
+        self.stdout = os.fdopen(out, "rb", buffering=0)
+        self.stdin = os.fdopen(life, "wb", buffering=0)
+        self.returncode = None
+        self._done = threading.Event()
+        threading.Thread(target=self._reap, daemon=True).start()
+
+    def _reap(self) -> None:
+        try:
+            status = os.waitpid(self.pid, 0)[1]
+            self.returncode = os.waitstatus_to_exitcode(status)
+        except ChildProcessError:  # reaped by someone else's os.wait
+            self.returncode = -1
+        self._done.set()
+
+    def poll(self) -> int | None:
+        """Return the exit status, or None while the helper runs."""
+        return self.returncode
+
+    def wait(self, timeout: float | None = None) -> int:
+        """Wait for the helper to end; return its exit status."""
+        if not self._done.wait(timeout):
+            raise subprocess.TimeoutExpired(f"prebuild helper {self.pid}", timeout)
+        return self.returncode
+
+
+def _fork(spec: str, world=None) -> _Forked | None:
+    """Start the helper as a fork of this process (``spec`` its JSON), or None.
+
+    Given the parent's ``world``, the helper first computes `_for_the_parent`.
+    """
+    from numba.core.compiler_lock import global_compiler_lock
+    from numba.core.registry import cpu_target
+
+    # numba's set-up, which this process's first compile does anyway: the
+    # helper inherits it instead of doing it again
+    cpu_target.typing_context.refresh()
+    cpu_target.target_context.refresh()
+    out_r, out_w = os.pipe()
+    life_r, life_w = os.pipe()
+    try:
+        with global_compiler_lock, warnings.catch_warnings():  # no thread compiles
+            warnings.simplefilter("ignore", DeprecationWarning)  # "multi-threaded"
+            pid = os.fork()
+    except OSError:
+        for fd in (out_r, out_w, life_r, life_w):
+            os.close(fd)
+        return None
+    if pid == 0:  # the helper: never returns
+        try:
+            os.close(out_r)
+            os.close(life_w)
+            null = os.open(os.devnull, os.O_RDWR)
+            for fd in (0, 1, 2):
+                os.dup2(null, fd)
+            os.environ[ENV] = "0"
+            started.clear()
+            ends = threading.Thread(target=_exit_with_parent, args=(life_r,))
+            ends.daemon = True
+            ends.start()
+            given = json.loads(spec)["options"]
+            if world is not None:
+                _for_the_parent(world, given)
+            os.environ["ROBOTLIB_TABLE_CACHE"] = "off"
+            _run(given, out_w)
+        finally:
+            os._exit(1)
+    os.close(out_w)
+    os.close(life_r)
+    return _Forked(pid, out_r, life_w)
 
 
 def compile_tail(mcl, helper: Prebuild) -> int:
@@ -299,20 +416,54 @@ def _room_free(xy, radius=0.0):
     return (x > radius) & (x < 3.0 - radius) & (y > radius) & (y < 3.0 - radius)
 
 
-def _exit_with_parent() -> None:
-    """End this process when the parent closes our standard input (it ended)."""
+def _exit_with_parent(fd: int = 0) -> None:
+    """End this process when the parent closes the pipe ``fd`` (it ended)."""
     try:
-        sys.stdin.buffer.read()
+        while os.read(fd, 4096):
+            pass
     finally:
         os._exit(0)
 
 
 def _main() -> None:
-    """Run the helper: build `MCL.best` on `_ROOM` and step it (module docstring)."""
+    """Run the spawned helper: its options in ``sys.argv[1]`` (JSON), then `_run`."""
     threading.Thread(target=_exit_with_parent, daemon=True).start()
     spec = json.loads(sys.argv[1])
     if os.path.abspath(__file__) != spec["file"]:  # another robotlib: no use
         os._exit(1)
+    _run(spec["options"], sys.stdout.fileno())
+
+
+def _for_the_parent(world, given: dict) -> None:
+    """Compute what the parent's `MCL.best` needs after its cone table (a fork).
+
+    The admissible area of the parent's own ``world`` (into the tables' disk
+    cache as well, where the parent then finds it), a free test of as many
+    points as the first draw of particles, and the beam model's factors, all
+    with the argument types of the parent's calls: the parent loads these
+    kernels from numba's cache instead of compiling them.
+    """
+    import numpy as np
+
+    from . import _kernels
+    from ._kernels.tables import compile_sweep_helpers
+    from .cones import _sweep_builds, free_space
+    from .mcl import BEST
+    from .paper import ADMISSIBLE_RADIUS
+    from .sensors import BeamParameters
+
+    options = {**BEST, **given}
+    if _sweep_builds(world, None, 1):  # the parent compiles `_ray_echoes` meanwhile
+        compile_sweep_helpers(echoes=False)
+    radius = options.get("admissible_radius", ADMISSIBLE_RADIUS)
+    free_space(world, options.get("resolution", 0.05), radius)
+    world.is_free(np.zeros((options["n"], 2)), radius)
+    q = BeamParameters(**options["beam"])
+    _kernels.beam_norms(1.0, q.z_hit, q.z_short, q.sigma_hit, q.lambda_short, 2)
+
+
+def _run(given: dict, out: int) -> None:
+    """Build `MCL.best` (``given`` options) on `_ROOM`, step it; ready on ``out``."""
     import numpy as np
 
     from ..world import World
@@ -330,7 +481,7 @@ def _main() -> None:
     _kernels.beam_norms = _fake_norms  # the parent compiles it, after its table
     world = World(np.array(_ROOM), start=(1.5, 1.5, 0.0), name="prebuild")
     object.__setattr__(world, "is_free", _room_free)  # no distance kernels either
-    options = {**BEST, **spec["options"]}
+    options = {**BEST, **given}
     res = float(options.get("resolution", 0.05))
     radius = float(options.get("admissible_radius", ADMISSIBLE_RADIUS))
     x0, y0, x1, y1 = world.bounds
@@ -343,7 +494,7 @@ def _main() -> None:
     free[:, ~((xs > radius) & (xs < 3.0 - radius))] = False
     free.setflags(write=False)
     world._cache["free", res, radius] = Grid(free, (x0, y0), res)
-    mcl = MCL.best(world, rng=0, **spec["options"])
+    mcl = MCL.best(world, rng=0, **given)
     z = np.linspace(0.3, 2.5, len(mcl.sensor.sonar.sensors))
     odo = np.array(world.start)
     step = np.array([0.5, 0.0, 0.05])
@@ -351,6 +502,5 @@ def _main() -> None:
         mcl.step(odo + k * step, odo + (k + 1) * step, z[::-1] if k % 2 else z)
         if mcl.info.resampled:
             break
-    sys.stdout.write(f"{_READY} {time.process_time():.3f}\n")
-    sys.stdout.flush()
+    os.write(out, f"{_READY} {time.process_time():.3f}\n".encode())
     os._exit(0)
