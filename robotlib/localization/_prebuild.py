@@ -18,16 +18,23 @@ compiled code).
 The helper's room has no cone table worth building: its table is filled
 with made-up ranges (`_fake_table`), the beam model's factors are made up
 too (`_fake_norms`), and its admissible area and free test are every point
-of the room by the robot's radius (`_room_free`), so the helper compiles
-none of their kernels (this process does, while the helper compiles the
-step's: about half of the compiling each). The made-up table never reaches
-the table cache (``ROBOTLIB_TABLE_CACHE=off`` in the helper).
+of the room by the robot's radius (`_room_free`). The made-up table never
+reaches the table cache (``ROBOTLIB_TABLE_CACHE=off`` in the helper).
+
+The helper is a fork of this process (`_fork`) while numba has no thread
+pool yet (`_can_fork`), else a fresh interpreter (`_spawn`). A fork needs
+no imports or numba set-up of its own, and it has the filter's world: it
+first compiles what this process would compile after its cone table's
+largest kernel (`_for_the_parent`: the table's other helpers, the
+admissible area, the beam model's factors), while this process compiles
+that kernel and builds its table. A spawned helper compiles the step's
+kernels only, and this process the rest.
 
 No helper is started when the step's kernels are cached already, when
 numba's cache is off or cannot be found, when there is one core, when the
 machine has no core to spare (`BUSY_SPARE`; ``ROBOTLIB_PREBUILD=1`` starts
 one anyway), or when ``ROBOTLIB_PREBUILD`` is ``0``/``off``. The helper
-ends when it is done or when this process ends (its standard input closes),
+ends when it is done or when this process ends (a pipe from it closes),
 whichever comes first.
 Imports nothing of robotlib at import time (`start` imports the
 localization's kernels; the helper `robotlib.localization.mcl` and
@@ -435,13 +442,16 @@ def _main() -> None:
 
 
 def _for_the_parent(world, given: dict) -> None:
-    """Compute what the parent's `MCL.best` needs after its cone table (a fork).
+    """Compile (and compute) what the parent's `MCL.best` needs besides its step.
 
-    The admissible area of the parent's own ``world`` (into the tables' disk
-    cache as well, where the parent then finds it), a free test of as many
-    points as the first draw of particles, and the beam model's factors, all
-    with the argument types of the parent's calls: the parent loads these
-    kernels from numba's cache instead of compiling them.
+    In a fork, first: the cone table's sweep helpers but `_ray_echoes`
+    (which the parent compiles meanwhile), the admissible area of the
+    parent's own ``world`` (into the tables' disk cache as well, where the
+    parent then finds it), a free test of as many points as the first draw
+    of particles, and the beam model's factors, all with the argument types
+    of the parent's calls: the parent loads these kernels from numba's cache
+    instead of compiling them. On a map too large for the sweep, only the
+    factors (the parent builds the rest with other kernels).
     """
     import numpy as np
 
@@ -453,11 +463,11 @@ def _for_the_parent(world, given: dict) -> None:
     from .sensors import BeamParameters
 
     options = {**BEST, **given}
-    if _sweep_builds(world, None, 1):  # the parent compiles `_ray_echoes` meanwhile
-        compile_sweep_helpers(echoes=False)
-    radius = options.get("admissible_radius", ADMISSIBLE_RADIUS)
-    free_space(world, options.get("resolution", 0.05), radius)
-    world.is_free(np.zeros((options["n"], 2)), radius)
+    if _sweep_builds(world, None, 1):  # the labs' worlds (a large map: none of it)
+        compile_sweep_helpers(echoes=False)  # the parent compiles `_ray_echoes`
+        radius = options.get("admissible_radius", ADMISSIBLE_RADIUS)
+        free_space(world, options.get("resolution", 0.05), radius)
+        world.is_free(np.zeros((options["n"], 2)), radius)
     q = BeamParameters(**options["beam"])
     _kernels.beam_norms(1.0, q.z_hit, q.z_short, q.sigma_hit, q.lambda_short, 2)
 
