@@ -325,6 +325,8 @@ def _fork(spec: str, world=None) -> _Forked | None:
             null = os.open(os.devnull, os.O_RDWR)
             for fd in (0, 1, 2):
                 os.dup2(null, fd)
+            # not the parent's streams either (a notebook's go to its kernel)
+            sys.stdout = sys.stderr = open(os.devnull, "w")  # noqa: SIM115
             os.environ[ENV] = "0"
             started.clear()
             ends = threading.Thread(target=_exit_with_parent, args=(life_r,))
