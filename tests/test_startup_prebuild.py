@@ -22,7 +22,7 @@ import time
 import numpy as np
 import pytest
 
-from robotlib.localization import _prebuild
+from robotlib.localization import _prebuild, _prebuild_run
 
 pytestmark = pytest.mark.skipif(
     os.name != "posix" or len(os.sched_getaffinity(0)) < 2,
@@ -142,7 +142,7 @@ def test_the_helper_ends_with_its_parent(tmp_path):
     """A parent that ends at once (or is killed) leaves no helper behind."""
     script = textwrap.dedent("""
         import os
-        from robotlib.localization import _prebuild
+        from robotlib.localization import _prebuild, _prebuild_run
         helper = _prebuild.start()
         print(helper.proc.pid, flush=True)
         os._exit(0)
@@ -161,7 +161,7 @@ def test_the_helper_ends_with_its_parent(tmp_path):
 
 def test_the_fake_table_fills_every_entry_in_range():
     table = np.zeros((3, 4, 72), dtype=np.uint16)
-    _prebuild._fake_table(None, 0.0, table)
+    _prebuild_run._fake_table(None, 0.0, table)
     assert table.min() >= 100 and table.max() < 5000
     assert len(np.unique(table)) > 100  # varied: the helper's filter resamples
 

@@ -281,10 +281,11 @@ sweep_table, sweep_table_parallel = serial_and_parallel(_sweep_table)
 def compile_sweep_helpers(echoes: bool) -> None:
     """Compile `_sweep_table`'s helpers ahead of it: `_ray_echoes`, or the others.
 
-    `build_cone_table` compiles `_ray_echoes` (the largest) before its first
-    sweep, and a helper process (`robotlib.localization._prebuild`) the
-    others meanwhile, into numba's cache, where the sweep's compile then
-    finds them (for these argument types, the sweep's). The same table.
+    With a helper process at work (`robotlib.localization._prebuild`),
+    `ConeTable` compiles `_ray_echoes` (the largest) before its sweep and the
+    helper the others meanwhile, into numba's cache, where the sweep's
+    compile then finds them (for these argument types, the sweep's). The
+    same table.
     """
     f8, a1, a2, i1 = nb.float64, nb.float64[::1], nb.float64[:, ::1], nb.int64[::1]
     if echoes:
@@ -362,8 +363,6 @@ def build_cone_table(
         return
     work = table.shape[0] * table.shape[1] * segments.shape[0]
     kernel = sweep_table if work <= SERIAL_MAX_WORK else sweep_table_parallel
-    if not kernel.overloads:  # the rest may be compiling meanwhile elsewhere
-        compile_sweep_helpers(echoes=True)
     kernel(
         segments, x0, y0, resolution, n_bins, ray_step, n_rays, max_range,
         min_range, cos_specular, block, table,
