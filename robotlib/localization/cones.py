@@ -29,7 +29,7 @@ import numpy as np
 from ..sensing import SonarModel
 from ..world import World
 from ..world.index import INDEX_MIN_SEGMENTS, SegmentIndex
-from . import _kernels, _prebuild
+from . import _kernels
 from .motion import PARALLEL_MIN, _particles
 
 __all__ = ["MAX_TABLE_BYTES", "ConeTable", "cone_table", "expected_readings"]
@@ -139,7 +139,9 @@ class ConeTable:
                 self.table,
             )  # fmt: skip
         else:
-            if _prebuild.forked():  # the sweep's other helpers compile there
+            from ._prebuild import forked
+
+            if forked():  # the sweep's other helpers compile there meanwhile
                 _kernels.compile_sweep_helpers(echoes=True)
             _kernels.build_cone_table(
                 np.ascontiguousarray(world.obstacles), *self.origin, *model, 16,
