@@ -199,7 +199,8 @@ def start(
     proc = _fork(spec, world) if _can_fork() else _spawn(spec)
     if proc is None:
         return None
-    threading.Thread(target=proc.wait, daemon=True).start()  # reaped when it ends
+    if not isinstance(proc, _Forked):  # which reaps its own
+        threading.Thread(target=proc.wait, daemon=True).start()  # when it ends
     helper = Prebuild(proc)
     started.append(helper)
     return helper
