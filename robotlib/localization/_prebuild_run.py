@@ -95,7 +95,8 @@ def _for_the_parent(world, given: dict) -> None:
 
     options = {**BEST, **given}
     if _sweep_builds(world, None, 1):  # the labs' worlds (a large map: none of it)
-        compile_sweep_helpers(echoes=False)  # the parent compiles `_ray_echoes`
+        # the sweep's helpers but `_ray_echoes`, for the parent's walls' type
+        compile_sweep_helpers(np.ascontiguousarray(world.obstacles))
         radius = options.get("admissible_radius", ADMISSIBLE_RADIUS)
         free_space(world, options.get("resolution", 0.05), radius)
         world.is_free(np.zeros((options["n"], 2)), radius)
