@@ -22,7 +22,7 @@ import time
 import numpy as np
 import pytest
 
-from robotlib.localization import _prebuild
+from robotlib.localization import _prebuild, _prebuild_run
 
 pytestmark = pytest.mark.skipif(
     os.name != "posix" or len(os.sched_getaffinity(0)) < 2,
@@ -47,6 +47,9 @@ FIRST_STEP = textwrap.dedent("""
             name = getattr(f, "__name__", "")
             compiled.append(getattr(f, "__module__", "") + "." + name)
 
+    if "threads" in sys.argv:  # numba's thread pool up: no fork, a fresh helper
+        from numba.np.ufunc import parallel
+        parallel._launch_threads()
     world = load_world("corridor")
     mcl = MCL.best(world, rng=0)
     helper = mcl._prebuild
@@ -61,18 +64,20 @@ FIRST_STEP = textwrap.dedent("""
     print(json.dumps({"helper": helper is not None,
                       "ready": helper is not None and helper.ready,
                       "exit": None if helper is None else helper.proc.returncode,
+                      "forked": helper is not None and helper.forked,
                       "first": first, "ests": ests}))
 """)
 
 
-def _first_step(cache, prebuild: bool) -> dict:
+def _first_step(cache, prebuild: bool, threads: bool = False) -> dict:
     env = dict(
         os.environ, NUMBA_CACHE_DIR=str(cache), ROBOTLIB_PREBUILD=str(int(prebuild))
     )
     env.pop("ROBOTLIB_TABLE_CACHE", None)
+    args = ["threads"] if threads else []
     out = subprocess.run(
-        [sys.executable, "-c", FIRST_STEP], env=env, capture_output=True, text=True,
-        timeout=600, check=True,
+        [sys.executable, "-c", FIRST_STEP, *args], env=env, capture_output=True,
+        text=True, timeout=600, check=True,
     )  # fmt: skip
     return json.loads(out.stdout.strip().splitlines()[-1])
 
@@ -81,6 +86,7 @@ def test_the_first_step_compiles_nothing_and_gives_the_same_numbers(tmp_path):
     """With the helper: the step compiles at most its tail; same numbers, tables."""
     helped = _first_step(tmp_path / "helped", True)
     assert helped["helper"] and helped["ready"] and helped["exit"] == 0
+    assert helped["forked"]  # no thread pool yet: a fork of the process
     # nothing but what this process compiles while it waits (`compile_tail`)
     assert set(helped["first"]) <= {
         f"robotlib.localization._kernels.resample.{name}"
@@ -96,6 +102,19 @@ def test_the_first_step_compiles_nothing_and_gives_the_same_numbers(tmp_path):
     )
     # a warm cache starts no helper
     assert not _first_step(tmp_path / "helped", True)["helper"]
+
+
+def test_a_spawned_helper_gives_the_same_numbers(tmp_path):
+    """With numba's thread pool started (no fork), a fresh interpreter helps."""
+    spawned = _first_step(tmp_path / "spawned", True, threads=True)
+    assert spawned["helper"] and spawned["ready"] and spawned["exit"] == 0
+    assert not spawned["forked"]
+    assert set(spawned["first"]) <= {
+        f"robotlib.localization._kernels.resample.{name}"
+        for name in ("gather", "kld_resample", "cumulative", "outside")
+    }
+    alone = _first_step(tmp_path / "alone", False)
+    assert spawned["ests"] == alone["ests"]
 
 
 def test_no_helper_when_switched_off_or_busy(monkeypatch):
@@ -123,7 +142,7 @@ def test_the_helper_ends_with_its_parent(tmp_path):
     """A parent that ends at once (or is killed) leaves no helper behind."""
     script = textwrap.dedent("""
         import os
-        from robotlib.localization import _prebuild
+        from robotlib.localization import _prebuild, _prebuild_run
         helper = _prebuild.start()
         print(helper.proc.pid, flush=True)
         os._exit(0)
@@ -142,7 +161,7 @@ def test_the_helper_ends_with_its_parent(tmp_path):
 
 def test_the_fake_table_fills_every_entry_in_range():
     table = np.zeros((3, 4, 72), dtype=np.uint16)
-    _prebuild._fake_table(None, 0.0, table)
+    _prebuild_run._fake_table(None, 0.0, table)
     assert table.min() >= 100 and table.max() < 5000
     assert len(np.unique(table)) > 100  # varied: the helper's filter resamples
 

@@ -6,8 +6,8 @@ then compiles the step's own kernels (as many seconds again); numba
 compiles one function at a time in a process. `start` runs the second half
 in a helper process at once, on another core, while this process builds
 the filter: the helper builds the same filter on a small room of its own
-(`_ROOM`) and takes steps with it, which compiles the same kernels for the
-same argument types into numba's on-disk cache; `Prebuild.wait` (before the
+and takes steps with it, which compiles the same kernels for the same
+argument types into numba's on-disk cache; `Prebuild.wait` (before the
 filter's first step) waits until the helper has taken its first step, and
 the step then loads those kernels from the cache instead of compiling them.
 While it would wait, this process compiles the step's last kernels itself
@@ -15,23 +15,28 @@ While it would wait, this process compiles the step's last kernels itself
 process waits for the other. The numbers are the same either way (the same
 compiled code).
 
-The helper's room has no cone table worth building: its table is filled
-with made-up ranges (`_fake_table`), the beam model's factors are made up
-too (`_fake_norms`), and its admissible area and free test are every point
-of the room by the robot's radius (`_room_free`), so the helper compiles
-none of their kernels (this process does, while the helper compiles the
-step's: about half of the compiling each). The made-up table never reaches
-the table cache (``ROBOTLIB_TABLE_CACHE=off`` in the helper).
+What the helper runs is in `robotlib.localization._prebuild_run`. The
+made-up cone table of its room never reaches the table cache
+(``ROBOTLIB_TABLE_CACHE=off`` in the helper).
+
+The helper is a fork of this process (`_fork`) while numba has no thread
+pool yet (`_can_fork`), else a fresh interpreter (`_spawn`). A fork needs
+no imports or numba set-up of its own, and it has the filter's world: it
+first compiles what this process would compile after its cone table's
+largest kernel (`_prebuild_run._for_the_parent`: the table's other helpers, the
+admissible area, the beam model's factors), while this process compiles
+that kernel and builds its table. A spawned helper compiles the step's
+kernels only, and this process the rest.
 
 No helper is started when the step's kernels are cached already, when
 numba's cache is off or cannot be found, when there is one core, when the
 machine has no core to spare (`BUSY_SPARE`; ``ROBOTLIB_PREBUILD=1`` starts
 one anyway), or when ``ROBOTLIB_PREBUILD`` is ``0``/``off``. The helper
-ends when it is done or when this process ends (its standard input closes),
+ends when it is done or when this process ends (a pipe from it closes),
 whichever comes first.
 Imports nothing of robotlib at import time (`start` imports the
-localization's kernels; the helper `robotlib.localization.mcl` and
-`robotlib.world`), and never a layer above the localization.
+localization's kernels; the helper `robotlib.localization._prebuild_run`),
+and never a layer above the localization.
 """
 
 from __future__ import annotations
@@ -43,8 +48,9 @@ import subprocess
 import sys
 import threading
 import time
+import warnings
 
-__all__ = ["Prebuild", "start"]
+__all__ = ["Prebuild", "forked", "start"]
 
 ENV = "ROBOTLIB_PREBUILD"
 """Environment variable: ``0``/``off`` no helper (the helper sets it), ``1``/``on``
@@ -63,18 +69,15 @@ process and the first step comes seconds sooner.
 WAIT_SECONDS = 120.0
 """Longest `Prebuild.wait` waits for the helper's first step, s."""
 
-_ROOM = (
-    (0.0, 0.0, 3.0, 0.0),
-    (3.0, 0.0, 3.0, 3.0),
-    (3.0, 3.0, 0.0, 3.0),
-    (0.0, 3.0, 0.0, 0.0),
-)
-"""The helper's world: a 3 m square room, walls ``x1, y1, x2, y2`` in m."""
-
 _READY = "ready"
 
 started: list[Prebuild] = []
 """Every helper this process started (for benchmarks: their processor time)."""
+
+
+def forked() -> bool:
+    """Whether a forked helper of this process is at work (`_for_the_parent`)."""
+    return any(h.forked and h.proc.poll() is None for h in started)
 
 
 def _cores() -> int:
@@ -108,12 +111,14 @@ class Prebuild:
 
     Parameters
     ----------
-    proc : subprocess.Popen
+    proc : subprocess.Popen or _Forked
         The helper, with its standard input and output piped.
     """
 
     def __init__(self, proc: subprocess.Popen):
         self.proc = proc
+        self.forked = isinstance(proc, _Forked)
+        """Whether the helper is a fork of this process (`_for_the_parent`)."""
         self.ready = False
         self.waited = 0.0
         """Seconds `wait` waited (wall)."""
@@ -162,8 +167,12 @@ class Prebuild:
         return True
 
 
-def start(fast: bool = True, options: dict | None = None) -> Prebuild | None:
+def start(
+    fast: bool = True, options: dict | None = None, world=None
+) -> Prebuild | None:
     """Start the helper for `MCL.best` (``fast`` and its ``options``), or None.
+
+    ``world`` is the filter's: a forked helper computes `_for_the_parent` on it.
 
     None when the helper would not help (see the module's docstring) or
     ``options`` cannot be passed to it (only JSON values can). A process
@@ -187,6 +196,18 @@ def start(fast: bool = True, options: dict | None = None) -> Prebuild | None:
         spec = json.dumps({"options": options or {}, "file": os.path.abspath(__file__)})
     except (TypeError, ValueError):
         return None
+    proc = _fork(spec, world) if _can_fork() else _spawn(spec)
+    if proc is None:
+        return None
+    if not isinstance(proc, _Forked):  # which reaps its own
+        threading.Thread(target=proc.wait, daemon=True).start()  # when it ends
+    helper = Prebuild(proc)
+    started.append(helper)
+    return helper
+
+
+def _spawn(spec: str) -> subprocess.Popen | None:
+    """Start the helper as a fresh interpreter (``spec`` its JSON), or None."""
     env = dict(os.environ, ROBOTLIB_TABLE_CACHE="off")
     env[ENV] = "0"
     import numba
@@ -199,10 +220,10 @@ def start(fast: bool = True, options: dict | None = None) -> Prebuild | None:
     )
     code = (
         f"import sys; sys.path.insert(0, {package!r}); "
-        "from robotlib.localization._prebuild import _main; _main()"
+        "from robotlib.localization._prebuild_run import _main; _main()"
     )
     try:
-        proc = subprocess.Popen(
+        return subprocess.Popen(
             [sys.executable, "-c", code, spec],
             stdin=subprocess.PIPE,
             stdout=subprocess.PIPE,
@@ -212,10 +233,113 @@ def start(fast: bool = True, options: dict | None = None) -> Prebuild | None:
         )
     except OSError:
         return None
-    threading.Thread(target=proc.wait, daemon=True).start()  # reaped when it ends
-    helper = Prebuild(proc)
-    started.append(helper)
-    return helper
+
+
+def _can_fork() -> bool:
+    """Whether the helper can be a fork of this process (else a fresh interpreter).
+
+    A fork skips the helper's imports and numba's set-up (the parent's are
+    copied), about 0.6 s of its processor time. Not once numba has started
+    its thread pool: GNU OpenMP does not survive a fork.
+    """
+    if not hasattr(os, "fork"):  # pragma: no cover - not POSIX
+        return False
+    try:
+        from numba.np.ufunc import parallel
+    except ImportError:  # pragma: no cover - numba's layout changed
+        return False
+    return getattr(parallel, "_is_initialized", True) is False
+
+
+class _Forked:
+    """A forked helper, with what `Prebuild` and its callers use of `subprocess.Popen`.
+
+    Parameters
+    ----------
+    pid : int
+        The helper's process id.
+    out : int
+        The read end of the pipe the helper writes its ready line to.
+    life : int
+        The write end of a pipe the helper reads until it closes (when this
+        process ends): the helper then ends too.
+    """
+
+    def __init__(self, pid: int, out: int, life: int):
+        self.pid = pid
+        self.stdout = os.fdopen(out, "rb", buffering=0)
+        self.stdin = os.fdopen(life, "wb", buffering=0)
+        self.returncode = None
+        self._done = threading.Event()
+        threading.Thread(target=self._reap, daemon=True).start()
+
+    def _reap(self) -> None:
+        try:
+            status = os.waitpid(self.pid, 0)[1]
+            self.returncode = os.waitstatus_to_exitcode(status)
+        except ChildProcessError:  # reaped by someone else's os.wait
+            self.returncode = -1
+        self._done.set()
+
+    def poll(self) -> int | None:
+        """Return the exit status, or None while the helper runs."""
+        return self.returncode
+
+    def wait(self, timeout: float | None = None) -> int:
+        """Wait for the helper to end; return its exit status."""
+        if not self._done.wait(timeout):
+            raise subprocess.TimeoutExpired(f"prebuild helper {self.pid}", timeout)
+        return self.returncode
+
+
+def _fork(spec: str, world=None) -> _Forked | None:
+    """Start the helper as a fork of this process (``spec`` its JSON), or None.
+
+    Given the parent's ``world``, the helper first computes `_for_the_parent`.
+    """
+    from numba.core.compiler_lock import global_compiler_lock
+    from numba.core.registry import cpu_target
+
+    # numba's set-up, which this process's first compile does anyway: the
+    # helper inherits it instead of doing it again
+    cpu_target.typing_context.refresh()
+    cpu_target.target_context.refresh()
+    out_r, out_w = os.pipe()
+    life_r, life_w = os.pipe()
+    try:
+        with global_compiler_lock, warnings.catch_warnings():  # no thread compiles
+            warnings.simplefilter("ignore", DeprecationWarning)  # "multi-threaded"
+            pid = os.fork()
+    except OSError:
+        for fd in (out_r, out_w, life_r, life_w):
+            os.close(fd)
+        return None
+    if pid == 0:  # the helper: never returns
+        try:
+            from ._prebuild_run import _exit_with_parent, _for_the_parent, _run
+
+            os.close(out_r)
+            os.close(life_w)
+            null = os.open(os.devnull, os.O_RDWR)
+            for fd in (0, 1, 2):
+                os.dup2(null, fd)
+            # not the parent's streams either (a notebook's go to its kernel)
+            sys.stdout = sys.stderr = open(os.devnull, "w")  # noqa: SIM115
+            os.environ[ENV] = "0"
+            started.clear()
+            ends = threading.Thread(target=_exit_with_parent, args=(life_r,))
+            ends.daemon = True
+            ends.start()
+            given = json.loads(spec)["options"]
+            if world is not None:
+                _for_the_parent(world, given)
+            os.environ["ROBOTLIB_TABLE_CACHE"] = "off"
+            _run(given, out_w)
+        finally:
+            os._exit(1)
+    os.close(out_w)
+    os.close(life_r)
+    return _Forked(pid, out_r, life_w)
 
 
 def compile_tail(mcl, helper: Prebuild) -> int:
@@ -273,84 +397,3 @@ def compile_tail(mcl, helper: Prebuild) -> int:
         job()
         done += 1
     return done
-
-
-def _fake_table(*args) -> None:
-    """Stand-in for the cone table builders: made-up ranges in the last argument."""
-    import numpy as np
-
-    table = args[-1]
-    table[...] = (np.arange(table.size) * 7919 % 4900 + 100).reshape(table.shape)
-
-
-def _fake_norms(max_range, z_hit, z_short, sigma, lam_short, n):
-    """Stand-in for `beam_norms`: made-up factors, arrays of the same types."""
-    import numpy as np
-
-    return np.linspace(0.5, 2.0, n), np.linspace(0.0, 1.0, n)
-
-
-def _room_free(xy, radius=0.0):
-    """Stand-in for the helper's `World.is_free`: inside `_ROOM` by ``radius``."""
-    import numpy as np
-
-    xy = np.asarray(xy, dtype=float)
-    x, y = xy[..., 0], xy[..., 1]
-    return (x > radius) & (x < 3.0 - radius) & (y > radius) & (y < 3.0 - radius)
-
-
-def _exit_with_parent() -> None:
-    """End this process when the parent closes our standard input (it ended)."""
-    try:
-        sys.stdin.buffer.read()
-    finally:
-        os._exit(0)
-
-
-def _main() -> None:
-    """Run the helper: build `MCL.best` on `_ROOM` and step it (module docstring)."""
-    threading.Thread(target=_exit_with_parent, daemon=True).start()
-    spec = json.loads(sys.argv[1])
-    if os.path.abspath(__file__) != spec["file"]:  # another robotlib: no use
-        os._exit(1)
-    import numpy as np
-
-    from ..world import World
-    from ..world.grid import Grid
-    from . import _kernels
-    from .mcl import BEST, MCL
-    from .paper import ADMISSIBLE_RADIUS
-
-    for name in (
-        "build_cone_table",
-        "build_cone_table_indexed",
-        "build_cone_table_strips",
-    ):
-        setattr(_kernels, name, _fake_table)
-    _kernels.beam_norms = _fake_norms  # the parent compiles it, after its table
-    world = World(np.array(_ROOM), start=(1.5, 1.5, 0.0), name="prebuild")
-    object.__setattr__(world, "is_free", _room_free)  # no distance kernels either
-    options = {**BEST, **spec["options"]}
-    res = float(options.get("resolution", 0.05))
-    radius = float(options.get("admissible_radius", ADMISSIBLE_RADIUS))
-    x0, y0, x1, y1 = world.bounds
-    ny = int(np.ceil((y1 - y0) / res - 1e-9))
-    nx = int(np.ceil((x1 - x0) / res - 1e-9))
-    free = np.zeros((ny, nx), dtype=bool)
-    ys = y0 + (np.arange(ny) + 0.5) * res
-    xs = x0 + (np.arange(nx) + 0.5) * res
-    free[(ys > radius) & (ys < 3.0 - radius)] = True
-    free[:, ~((xs > radius) & (xs < 3.0 - radius))] = False
-    free.setflags(write=False)
-    world._cache["free", res, radius] = Grid(free, (x0, y0), res)
-    mcl = MCL.best(world, rng=0, **spec["options"])
-    z = np.linspace(0.3, 2.5, len(mcl.sensor.sonar.sensors))
-    odo = np.array(world.start)
-    step = np.array([0.5, 0.0, 0.05])
-    for k in range(8):  # until a step resampled: a first step may, or may not
-        mcl.step(odo + k * step, odo + (k + 1) * step, z[::-1] if k % 2 else z)
-        if mcl.info.resampled:
-            break
-    sys.stdout.write(f"{_READY} {time.process_time():.3f}\n")
-    sys.stdout.flush()
-    os._exit(0)

@@ -139,6 +139,10 @@ class ConeTable:
                 self.table,
             )  # fmt: skip
         else:
+            from ._prebuild import forked
+
+            if forked():  # the sweep's other helpers compile there meanwhile
+                _kernels.compile_sweep_helpers()
             _kernels.build_cone_table(
                 np.ascontiguousarray(world.obstacles), *self.origin, *model, 16,
                 self.table,

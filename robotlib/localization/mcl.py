@@ -229,13 +229,13 @@ class MCL:
         from ._prebuild import start
         from .sensors import BeamParameters, BeamSensorModel
 
-        helper = start(fast, kwargs)  # the step's kernels compile meanwhile
+        helper = start(fast, kwargs, world)  # the step's kernels compile meanwhile
         options = {**BEST, **kwargs}
         n = options.pop("n")
         beam = BeamParameters(**options.pop("beam"))
         kld = options.pop("kld")
         aug = options.pop("augmented")
-        if helper is not None:  # the admissible area first: the helper skips it
+        if helper is not None and not helper.forked:  # the area first: skipped there
             free_space(
                 world,
                 options.get("resolution", 0.05),

@@ -278,6 +278,25 @@ def _sweep_table(
 sweep_table, sweep_table_parallel = serial_and_parallel(_sweep_table)
 
 
+def compile_sweep_helpers(segments=None) -> None:
+    """Compile `_sweep_table`'s helpers ahead of it: `_ray_echoes`, or the others.
+
+    Without ``segments``, `_ray_echoes` (the largest); given the walls (M, 4)
+    the sweep will take (its first argument), the others. With a helper
+    process at work (`robotlib.localization._prebuild`), `ConeTable`
+    compiles the first before its sweep and the helper the others
+    meanwhile, into numba's cache, where the sweep's compile then finds
+    them (for the sweep's argument types). The same table.
+    """
+    f8, a1, a2, i1 = nb.float64, nb.float64[::1], nb.float64[:, ::1], nb.int64[::1]
+    if segments is None:
+        _ray_echoes.compile((f8, f8, a2, a2, f8, f8, a2, a1, i1, a1, nb.int64, a1, i1))
+        return
+    _near_walls.compile((nb.typeof(segments), f8, f8, f8))
+    _unit_normals.compile((a2,))
+    _table_entry.compile((f8, f8, f8))
+
+
 @nb.njit(**JIT_PARALLEL)
 def cone_cast_table(
     segments, x0, y0, resolution, n_bins, n_rays, cone, max_range, min_range,
