@@ -50,6 +50,9 @@ FIRST_STEP = textwrap.dedent("""
     if "threads" in sys.argv:  # numba's thread pool up: no fork, a fresh helper
         from numba.np.ufunc import parallel
         parallel._launch_threads()
+    if "pythread" in sys.argv:  # another thread, as in a Jupyter kernel: no fork
+        import threading
+        threading.Thread(target=threading.Event().wait, daemon=True).start()
     world = load_world("corridor")
     mcl = MCL.best(world, rng=0)
     helper = mcl._prebuild
@@ -69,12 +72,12 @@ FIRST_STEP = textwrap.dedent("""
 """)
 
 
-def _first_step(cache, prebuild: bool, threads: bool = False) -> dict:
+def _first_step(cache, prebuild: bool, mode: str | None = None) -> dict:
     env = dict(
         os.environ, NUMBA_CACHE_DIR=str(cache), ROBOTLIB_PREBUILD=str(int(prebuild))
     )
     env.pop("ROBOTLIB_TABLE_CACHE", None)
-    args = ["threads"] if threads else []
+    args = [mode] if mode else []
     out = subprocess.run(
         [sys.executable, "-c", FIRST_STEP, *args], env=env, capture_output=True,
         text=True, timeout=600, check=True,
@@ -104,9 +107,11 @@ def test_the_first_step_compiles_nothing_and_gives_the_same_numbers(tmp_path):
     assert not _first_step(tmp_path / "helped", True)["helper"]
 
 
-def test_a_spawned_helper_gives_the_same_numbers(tmp_path):
-    """With numba's thread pool started (no fork), a fresh interpreter helps."""
-    spawned = _first_step(tmp_path / "spawned", True, threads=True)
+@pytest.mark.parametrize("mode", ["threads", "pythread"])
+def test_a_spawned_helper_gives_the_same_numbers(tmp_path, mode):
+    """With numba's thread pool or another thread running (no fork), a fresh
+    interpreter helps."""
+    spawned = _first_step(tmp_path / "spawned", True, mode)
     assert spawned["helper"] and spawned["ready"] and spawned["exit"] == 0
     assert not spawned["forked"]
     assert set(spawned["first"]) <= {

@@ -239,10 +239,12 @@ def _can_fork() -> bool:
     """Whether the helper can be a fork of this process (else a fresh interpreter).
 
     A fork skips the helper's imports and numba's set-up (the parent's are
-    copied), about 0.6 s of its processor time. Not once numba has started
+    copied), about 0.6 s of its processor time. Only from a process with no
+    other thread (a script, not a Jupyter kernel, whose threads may hold a
+    lock the child would wait on for ever), and not once numba has started
     its thread pool: GNU OpenMP does not survive a fork.
     """
-    if not hasattr(os, "fork"):  # pragma: no cover - not POSIX
+    if not hasattr(os, "fork") or threading.active_count() > 1:
         return False
     try:
         from numba.np.ufunc import parallel
