@@ -33,15 +33,14 @@ and sensing's kernels. Units: metres, radians; tables hold millimetres
 (uint16).
 """
 
+from .by_reading import beam_table_step, paper_table_step
 from .common import wrap
 from .exact import expected_scan_blocks, expected_scan_blocks_parallel, wall_blocks
 from .fused import (
-    beam_table_step,
     lut_table_step_keyed_parallel,
     lut_table_step_parallel,
     paper_lut_step_keyed_parallel,
     paper_lut_step_parallel,
-    paper_table_step,
 )
 from .models import (
     beam_loglik,

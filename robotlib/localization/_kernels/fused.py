@@ -10,7 +10,8 @@ import numba as nb
 import numpy as np
 
 from ..._config import JIT, JIT_PARALLEL, serial_and_parallel
-from .common import _TWO_PI, exp, wrap
+from .common import _TWO_PI, wrap
+from .elementary import exp, sincos
 from .motion import _odometry_one
 from .normals import fill, sfc64_state
 from .weights import _finish_estimate
@@ -122,13 +123,16 @@ def _move_and_read(
     ax, ay, aa, keep = _sensor_columns(sensors, skip)
     bins = n_bins / _TWO_PI
     for j in nb.prange(particles.shape[0]):
-        x, y, th = _odometry_one(
+        _, _, th = _odometry_one(
             j, particles, rot1, trans, rot2, sd1, sdt, sd2, normals, out_p
         )
-        c = math.cos(th)
-        s = math.sin(th)
-        cs[j, 0] = c
-        cs[j, 1] = s
+        cs[j, 1], cs[j, 0] = sincos(th)
+    for j in nb.prange(particles.shape[0]):
+        x = out_p[j, 0]
+        y = out_p[j, 1]
+        th = out_p[j, 2]
+        c = cs[j, 0]
+        s = cs[j, 1]
         row = mm[j]
         for i in range(s_count):
             row[i] = keep[i] & _flat_index(
@@ -179,14 +183,14 @@ def move_and_read_keyed_parallel(
             t = trans + sdt * draws[d + 1]
             r2 = rot2 + sd2 * draws[d + 2]
             th0 = particles[j, 2]
-            x = particles[j, 0] + t * math.cos(th0 + r1)
-            y = particles[j, 1] + t * math.sin(th0 + r1)
+            s0, c0 = sincos(th0 + r1)
+            x = particles[j, 0] + t * c0
+            y = particles[j, 1] + t * s0
             th = wrap(th0 + r1 + r2)
             out_p[j, 0] = x
             out_p[j, 1] = y
             out_p[j, 2] = th
-            c = math.cos(th)
-            s = math.sin(th)
+            s, c = sincos(th)
             cs[j, 0] = c
             cs[j, 1] = s
             row = mm[j]
@@ -199,67 +203,6 @@ def move_and_read_keyed_parallel(
     for j in nb.prange(n):
         for i in range(s_count):
             mm[j, i] = flat[mm[j, i]]
-
-
-@nb.njit(**JIT)
-def _buffers(n, s_count):
-    """Scratch for `move_and_read`: ``cs`` (n, 2) and ``mm`` (n, S) int32."""
-    return np.empty((n, 2)), np.empty((n, s_count), dtype=np.int32)
-
-
-@nb.njit(**JIT)
-def _paper_mm(j, mm, z, inv_n, out):
-    """`_paper_cs` on looked-up entries ``mm[j]``."""
-    d = 0.0
-    for i in range(mm.shape[1]):
-        d += abs((z[i] - mm[j, i] * 0.001) / z[i])
-    out[j] = math.log(exp(-d / mm.shape[1]) + inv_n)
-
-
-@nb.njit(**JIT)
-def _beam_mm_row(
-    j, mm, z, e_short, is_max, hit, short, z_max, p_rand, inv_sigma, exponent,
-    u2_skip, out,
-):  # fmt: skip
-    """`_beam_table_cs` on looked-up entries ``mm[j]``."""
-    ll = 0.0
-    prod = 1.0
-    for i in range(mm.shape[1]):
-        if i % 16 == 15:
-            ll += math.log(prod)
-            prod = 1.0
-        if is_max[i]:
-            prod *= z_max
-            continue
-        k = mm[j, i]
-        zhat = k * 0.001
-        u = (z[i] - zhat) * inv_sigma
-        if u * u < u2_skip:
-            p = hit[k] * exp(-0.5 * u * u) + p_rand
-        else:
-            p = p_rand
-        # a select, not a branch (about half the readings are short); p >= +0
-        # and the short term finite, so adding 0.0 leaves p's bits
-        sh = short[k] * e_short[i]
-        p += sh if z[i] <= zhat else 0.0
-        prod *= p
-    out[j] = (ll + math.log(prod)) * exponent
-
-
-@nb.njit(**JIT)
-def paper_table_step(
-    particles, normals, motion, sensors, table, where, z, inv_n, weights, out_p, out_w
-):
-    """Fused step with the paper's model (`paper_table_loglik`)."""
-    n = particles.shape[0]
-    skip = np.zeros(sensors.shape[0], dtype=np.bool_)
-    cs, mm = _buffers(n, sensors.shape[0])
-    move_and_read(
-        particles, normals, motion, sensors, table, where, skip, out_p, cs, mm
-    )
-    for j in range(n):
-        _paper_mm(j, mm, z, inv_n, out_w)
-    return _weigh_estimate(weights, out_p, cs, out_w)
 
 
 @nb.njit(**JIT_PARALLEL)
@@ -316,29 +259,6 @@ def paper_lut_step_parallel(
     )
     _paper_weigh_parallel(terms, mm, inv_n, out_w)
     return _weigh_estimate_parallel(weights, out_p, cs, out_w)
-
-
-@nb.njit(**JIT)
-def beam_table_step(
-    particles, normals, motion, sensors, table, where, z, e_short, is_max, hit,
-    short, beam, weights, out_p, out_w,
-):  # fmt: skip
-    """Fused step with the beam model (`beam_table_loglik`).
-
-    ``beam`` is ``(z_max, p_rand, inv_sigma, exponent, u2_skip)`` (`beam_skip`).
-    """
-    z_max, p_rand, inv_sigma, exponent, u2_skip = beam
-    n = particles.shape[0]
-    cs, mm = _buffers(n, sensors.shape[0])
-    move_and_read(
-        particles, normals, motion, sensors, table, where, is_max, out_p, cs, mm
-    )
-    for j in range(n):
-        _beam_mm_row(
-            j, mm, z, e_short, is_max, hit, short, z_max, p_rand, inv_sigma,
-            exponent, u2_skip, out_w,
-        )  # fmt: skip
-    return _weigh_estimate(weights, out_p, cs, out_w)
 
 
 @nb.njit(**JIT)  # its passes are threaded kernels

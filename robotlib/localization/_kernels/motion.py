@@ -4,12 +4,11 @@ Numba kernels: contiguous arrays and scalars in, no Python objects; they
 import nothing of robotlib but the JIT options and other kernels.
 """
 
-import math
-
 import numba as nb
 
 from ..._config import JIT, serial_and_parallel
 from .common import wrap
+from .elementary import sincos
 
 
 @nb.njit(**JIT, inline="always")
@@ -18,8 +17,9 @@ def _odometry_one(j, particles, rot1, trans, rot2, sd1, sdt, sd2, normals, out):
     t = trans + sdt * normals[j, 1]
     r2 = rot2 + sd2 * normals[j, 2]
     th = particles[j, 2]
-    out[j, 0] = particles[j, 0] + t * math.cos(th + r1)
-    out[j, 1] = particles[j, 1] + t * math.sin(th + r1)
+    s, c = sincos(th + r1)
+    out[j, 0] = particles[j, 0] + t * c
+    out[j, 1] = particles[j, 1] + t * s
     out[j, 2] = wrap(th + r1 + r2)
     return out[j, 0], out[j, 1], out[j, 2]
 

@@ -13,7 +13,8 @@ import numba as nb
 import numpy as np
 
 from ..._config import JIT, JIT_PARALLEL, serial_and_parallel
-from .common import _LOG_SQRT_2PI, exp
+from .common import _LOG_SQRT_2PI
+from .elementary import exp, sincos
 from .tables import _table_mm
 
 
@@ -130,10 +131,10 @@ def _beam_table_loglik(
     reading); ``p_rand = z_rand / max_range``.
     """
     for j in nb.prange(particles.shape[0]):
+        s, c = sincos(particles[j, 2])
         _beam_table_cs(
-            j, particles, math.cos(particles[j, 2]), math.sin(particles[j, 2]), sensors,
-            table, x0, y0, inv_res, z, e_short, is_max, hit, short, z_max, p_rand,
-            inv_sigma, exponent, np.inf, out,
+            j, particles, c, s, sensors, table, x0, y0, inv_res, z, e_short, is_max,
+            hit, short, z_max, p_rand, inv_sigma, exponent, np.inf, out,
         )  # fmt: skip
 
 
@@ -177,8 +178,7 @@ def lut_table_loglik_parallel(
     Gives the same numbers as `beam_table_loglik`.
     """
     for j in nb.prange(particles.shape[0]):
-        c = math.cos(particles[j, 2])
-        s = math.sin(particles[j, 2])
+        s, c = sincos(particles[j, 2])
         _lut_cs(j, particles, c, s, sensors, table, x0, y0, inv_res, lut, exponent, out)
 
 
@@ -194,8 +194,7 @@ def _paper_cs(j, particles, c, s, sensors, table, x0, y0, inv_res, z, inv_n, out
 def _paper_table_loglik(particles, sensors, table, x0, y0, inv_res, z, inv_n, out):
     """`expected_table` then `paper_loglik` (``inv_n = 1/n``) in one pass."""
     for j in nb.prange(particles.shape[0]):
-        c = math.cos(particles[j, 2])
-        s = math.sin(particles[j, 2])
+        s, c = sincos(particles[j, 2])
         _paper_cs(j, particles, c, s, sensors, table, x0, y0, inv_res, z, inv_n, out)
 
 
