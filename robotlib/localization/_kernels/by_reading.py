@@ -23,7 +23,7 @@ from ..._config import JIT
 from .common import _TWO_PI
 from .elementary import exp, sincos
 from .fused import _flat_index, _sensor_columns, _weigh_estimate
-from .motion import _odometry_one
+from .motion import odometry_pose
 
 
 @nb.njit(**JIT)
@@ -44,23 +44,38 @@ def move_and_read_by_reading(
     n = particles.shape[0]
     ax, ay, aa, keep = _sensor_columns(sensors, skip)
     bins = n_bins / _TWO_PI
-    xs = np.empty(n)  # the moved poses and headings' cosines and sines, contiguous
+    # the poses, noise and headings' cosines and sines as columns (N,): the
+    # moves then read and write contiguous operands
+    xs = np.empty(n)
     ys = np.empty(n)
     ths = np.empty(n)
-    cc = np.empty(n)
-    ss = np.empty(n)
+    n1 = np.empty(n)
+    nt = np.empty(n)
+    n2 = np.empty(n)
     for j in range(n):
-        x, y, th = _odometry_one(
-            j, particles, rot1, trans, rot2, sd1, sdt, sd2, normals, out_p
-        )
-        s, c = sincos(th)
-        cs[j, 0] = c
-        cs[j, 1] = s
+        xs[j] = particles[j, 0]
+        ys[j] = particles[j, 1]
+        ths[j] = particles[j, 2]
+        n1[j] = normals[j, 0]
+        nt[j] = normals[j, 1]
+        n2[j] = normals[j, 2]
+    cc = n1  # each noise column is read before its slot is written
+    ss = nt
+    for j in range(n):
+        x, y, th = odometry_pose(
+            xs[j], ys[j], ths[j], n1[j], nt[j], n2[j], rot1, trans, rot2, sd1, sdt,
+            sd2,
+        )  # fmt: skip
         xs[j] = x
         ys[j] = y
         ths[j] = th
-        cc[j] = c
-        ss[j] = s
+        ss[j], cc[j] = sincos(th)
+    for j in range(n):
+        out_p[j, 0] = xs[j]
+        out_p[j, 1] = ys[j]
+        out_p[j, 2] = ths[j]
+        cs[j, 0] = cc[j]
+        cs[j, 1] = ss[j]
     kt = np.empty((s_count, n), dtype=np.int32)
     for i in range(s_count):
         ki = kt[i]
