@@ -21,9 +21,8 @@ import numpy as np
 
 from ..._config import JIT
 from .common import _TWO_PI
-from .elementary import exp, sincos
-from .fused import _flat_index, _sensor_columns, _weigh_estimate
-from .motion import odometry_pose
+from .elementary import exp
+from .fused import _flat_index, _sensor_columns, _weigh_estimate, move_columns
 
 
 @nb.njit(**JIT)
@@ -37,45 +36,19 @@ def move_and_read_by_reading(
     ``mm[j, i]``: 0 where ``skip[i]``), in three passes over the particles:
     move, then each reading's flat table index, then the table reads.
     """
-    rot1, trans, rot2, sd1, sdt, sd2 = motion
     x0, y0, inv_res = where
     ny, nx, n_bins = table.shape
     s_count = sensors.shape[0]
     n = particles.shape[0]
     ax, ay, aa, keep = _sensor_columns(sensors, skip)
     bins = n_bins / _TWO_PI
-    # the poses, noise and headings' cosines and sines as columns (N,): the
-    # moves then read and write contiguous operands
-    xs = np.empty(n)
-    ys = np.empty(n)
-    ths = np.empty(n)
-    n1 = np.empty(n)
-    nt = np.empty(n)
-    n2 = np.empty(n)
-    for j in range(n):
-        xs[j] = particles[j, 0]
-        ys[j] = particles[j, 1]
-        ths[j] = particles[j, 2]
-        n1[j] = normals[j, 0]
-        nt[j] = normals[j, 1]
+    xs, ys, ths = np.empty(n), np.empty(n), np.empty(n)
+    cc, ss, n2 = np.empty(n), np.empty(n), np.empty(n)
+    for j in range(n):  # the noise as columns; cc and ss receive cos and sin
+        cc[j] = normals[j, 0]
+        ss[j] = normals[j, 1]
         n2[j] = normals[j, 2]
-    cc = n1  # each noise column is read before its slot is written
-    ss = nt
-    for j in range(n):
-        x, y, th = odometry_pose(
-            xs[j], ys[j], ths[j], n1[j], nt[j], n2[j], rot1, trans, rot2, sd1, sdt,
-            sd2,
-        )  # fmt: skip
-        xs[j] = x
-        ys[j] = y
-        ths[j] = th
-        ss[j], cc[j] = sincos(th)
-    for j in range(n):
-        out_p[j, 0] = xs[j]
-        out_p[j, 1] = ys[j]
-        out_p[j, 2] = ths[j]
-        cs[j, 0] = cc[j]
-        cs[j, 1] = ss[j]
+    move_columns(0, n, particles, xs, ys, ths, cc, ss, n2, motion, out_p, cs)
     kt = np.empty((s_count, n), dtype=np.int32)
     for i in range(s_count):
         ki = kt[i]

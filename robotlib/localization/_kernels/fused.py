@@ -10,9 +10,9 @@ import numba as nb
 import numpy as np
 
 from ..._config import JIT, JIT_PARALLEL, serial_and_parallel
-from .common import _TWO_PI, wrap
+from .common import _TWO_PI
 from .elementary import exp, sincos
-from .motion import _odometry_one
+from .motion import odometry_pose
 from .normals import fill, sfc64_state
 from .weights import _finish_estimate
 
@@ -100,6 +100,69 @@ def _sensor_columns(sensors, skip):
     return ax, ay, aa, keep
 
 
+BLOCK = 512
+"""Rows a threaded move takes at a time: its columns stay in the core's cache."""
+
+
+@nb.njit(**JIT, inline="always")
+def move_columns(lo, m, particles, xs, ys, ths, n1, nt, n2, motion, out_p, cs):
+    """Move rows ``lo:lo + m`` of ``particles`` (`odometry_pose`) as columns.
+
+    ``n1, nt, n2`` (at least m,) hold the rows' motion noise; ``xs, ys,
+    ths`` (at least m,) are scratch. The moved rows go to ``out_p`` and their
+    headings' cosines and sines to ``cs``, as `sample_odometry` and
+    `weights.weighted_pose_mean` compute them; on return ``xs, ys, ths``
+    hold the moved poses and ``n1, nt`` the cosines and sines (the noise
+    is used up). Loops over contiguous columns, which the compiler runs on
+    vector lanes (`elementary`'s ``sincos``).
+    """
+    rot1, trans, rot2, sd1, sdt, sd2 = motion
+    for b in range(m):
+        xs[b] = particles[lo + b, 0]
+        ys[b] = particles[lo + b, 1]
+        ths[b] = particles[lo + b, 2]
+    for b in range(m):
+        x, y, th = odometry_pose(
+            xs[b], ys[b], ths[b], n1[b], nt[b], n2[b], rot1, trans, rot2, sd1, sdt,
+            sd2,
+        )  # fmt: skip
+        xs[b] = x
+        ys[b] = y
+        ths[b] = th
+        nt[b], n1[b] = sincos(th)  # each noise slot read before it is written
+    for b in range(m):
+        out_p[lo + b, 0] = xs[b]
+        out_p[lo + b, 1] = ys[b]
+        out_p[lo + b, 2] = ths[b]
+        cs[lo + b, 0] = n1[b]
+        cs[lo + b, 1] = nt[b]
+
+
+@nb.njit(**JIT, inline="always")
+def _index_rows(lo, m, xs, ys, ths, cc, ss, columns, table, where, mm):
+    """Rows ``lo:lo + m`` of ``mm`` (N, S): each sensor's flat table index.
+
+    From the moved poses ``xs, ys, ths`` and headings' cosines ``cc`` and
+    sines ``ss`` of `move_columns`; ``columns`` is `_sensor_columns`'.
+    """
+    ax, ay, aa, keep = columns
+    x0, y0, inv_res = where
+    ny, nx, n_bins = table.shape
+    bins = n_bins / _TWO_PI
+    for b in range(m):
+        row = mm[lo + b]
+        x = xs[b]
+        y = ys[b]
+        th = ths[b]
+        c = cc[b]
+        s = ss[b]
+        for i in range(ax.shape[0]):
+            row[i] = keep[i] & _flat_index(
+                x + c * ax[i] - s * ay[i], y + s * ax[i] + c * ay[i],
+                (th + aa[i]) * bins, ny, nx, n_bins, x0, y0, inv_res,
+            )  # fmt: skip
+
+
 def _move_and_read(
     particles, normals, motion, sensors, table, where, skip, out_p, cs, mm
 ):  # fmt: skip
@@ -109,39 +172,30 @@ def _move_and_read(
     ``out_p[j]`` (as `sample_odometry`), keeps the cosine and sine of its new
     heading in ``cs[j]`` (N, 2) and its sensors' flat table indexes (the cell
     and bin of `table_bin`; 0 where ``skip[i]``: not read) in ``mm[j]`` (N, S)
-    int32 (`ConeTable` keeps below 2^31 entries). Pass two replaces each
-    index by the table's entry (mm): independent reads the processor
-    overlaps, the table being larger than its caches. Every helper is
-    inlined: a call per particle inside the threaded loop costs more than
-    the particle's arithmetic. The sensors' loop has no branch (`_flat_index`),
-    so the compiler runs it on vector lanes.
+    int32 (`ConeTable` keeps below 2^31 entries), `BLOCK` rows at a time
+    (`move_columns`). Pass two replaces each index by the table's entry
+    (mm): independent reads the processor overlaps, the table being larger
+    than its caches. Every helper is inlined: a call per particle inside the
+    threaded loop costs more than the particle's arithmetic. The sensors'
+    loop has no branch (`_flat_index`), so the compiler runs it on vector
+    lanes.
     """
-    rot1, trans, rot2, sd1, sdt, sd2 = motion
-    x0, y0, inv_res = where
-    ny, nx, n_bins = table.shape
-    s_count = sensors.shape[0]
-    ax, ay, aa, keep = _sensor_columns(sensors, skip)
-    bins = n_bins / _TWO_PI
-    for j in nb.prange(particles.shape[0]):
-        _, _, th = _odometry_one(
-            j, particles, rot1, trans, rot2, sd1, sdt, sd2, normals, out_p
-        )
-        cs[j, 1], cs[j, 0] = sincos(th)
-    for j in nb.prange(particles.shape[0]):
-        x = out_p[j, 0]
-        y = out_p[j, 1]
-        th = out_p[j, 2]
-        c = cs[j, 0]
-        s = cs[j, 1]
-        row = mm[j]
-        for i in range(s_count):
-            row[i] = keep[i] & _flat_index(
-                x + c * ax[i] - s * ay[i], y + s * ax[i] + c * ay[i],
-                (th + aa[i]) * bins, ny, nx, n_bins, x0, y0, inv_res,
-            )  # fmt: skip
+    columns = _sensor_columns(sensors, skip)
+    n = particles.shape[0]
+    for blk in nb.prange((n + BLOCK - 1) // BLOCK):
+        lo = blk * BLOCK
+        m = min(BLOCK, n - lo)
+        xs, ys, ths = np.empty(m), np.empty(m), np.empty(m)
+        n1, nt, n2 = np.empty(m), np.empty(m), np.empty(m)
+        for b in range(m):
+            n1[b] = normals[lo + b, 0]
+            nt[b] = normals[lo + b, 1]
+            n2[b] = normals[lo + b, 2]
+        move_columns(lo, m, particles, xs, ys, ths, n1, nt, n2, motion, out_p, cs)
+        _index_rows(lo, m, xs, ys, ths, n1, nt, columns, table, where, mm)
     flat = table.reshape(table.size)
-    for j in nb.prange(particles.shape[0]):
-        for i in range(s_count):
+    for j in nb.prange(n):
+        for i in range(mm.shape[1]):
             mm[j, i] = flat[mm[j, i]]
 
 
@@ -158,15 +212,10 @@ def move_and_read_keyed_parallel(
     ``key`` (`normals.fill_chunks`: `motion.standard_normals`' numbers),
     drawn by the thread that uses it instead of stored for the step: the
     threads take whole chunks, each drawn into a buffer of its own in one
-    loop (`normals.fill`) and then used. The same numbers as
-    `move_and_read_parallel` on `normals.fill_chunks`' noise.
+    loop (`normals.fill`) and then used, `BLOCK` rows at a time. The same
+    numbers as `move_and_read_parallel` on `normals.fill_chunks`' noise.
     """
-    rot1, trans, rot2, sd1, sdt, sd2 = motion
-    x0, y0, inv_res = where
-    ny, nx, n_bins = table.shape
-    s_count = sensors.shape[0]
-    ax, ay, aa, keep = _sensor_columns(sensors, skip)
-    bins = n_bins / _TWO_PI
+    columns = _sensor_columns(sensors, skip)
     n = particles.shape[0]
     n_chunks = (n + rows - 1) // rows
     for ch in nb.prange(n_chunks):
@@ -176,32 +225,22 @@ def move_and_read_keyed_parallel(
         hi = min(lo + rows, n)
         draws = np.empty(3 * (hi - lo))  # the chunk's noise, drawn in one loop
         fill(st, draws)
-        for j in range(lo, hi):
-            # `_odometry_one` on the chunk's three numbers for the row
-            d = 3 * (j - lo)
-            r1 = rot1 + sd1 * draws[d]
-            t = trans + sdt * draws[d + 1]
-            r2 = rot2 + sd2 * draws[d + 2]
-            th0 = particles[j, 2]
-            s0, c0 = sincos(th0 + r1)
-            x = particles[j, 0] + t * c0
-            y = particles[j, 1] + t * s0
-            th = wrap(th0 + r1 + r2)
-            out_p[j, 0] = x
-            out_p[j, 1] = y
-            out_p[j, 2] = th
-            s, c = sincos(th)
-            cs[j, 0] = c
-            cs[j, 1] = s
-            row = mm[j]
-            for i in range(s_count):
-                row[i] = keep[i] & _flat_index(
-                    x + c * ax[i] - s * ay[i], y + s * ax[i] + c * ay[i],
-                    (th + aa[i]) * bins, ny, nx, n_bins, x0, y0, inv_res,
-                )  # fmt: skip
+        xs, ys, ths = np.empty(BLOCK), np.empty(BLOCK), np.empty(BLOCK)
+        n1, nt, n2 = np.empty(BLOCK), np.empty(BLOCK), np.empty(BLOCK)
+        for start in range(lo, hi, BLOCK):
+            m = min(BLOCK, hi - start)
+            d = 3 * (start - lo)
+            for b in range(m):
+                n1[b] = draws[d + 3 * b]
+                nt[b] = draws[d + 3 * b + 1]
+                n2[b] = draws[d + 3 * b + 2]
+            move_columns(
+                start, m, particles, xs, ys, ths, n1, nt, n2, motion, out_p, cs
+            )
+            _index_rows(start, m, xs, ys, ths, n1, nt, columns, table, where, mm)
     flat = table.reshape(table.size)
     for j in nb.prange(n):
-        for i in range(s_count):
+        for i in range(mm.shape[1]):
             mm[j, i] = flat[mm[j, i]]
 
 
