@@ -8,7 +8,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from robotlib.localization._kernels.elementary import exp, sincos
+from robotlib.localization._kernels.elementary import exp, log, sincos
 
 
 @nb.njit
@@ -105,3 +105,44 @@ def test_sincos_edges(x):
 def test_sincos_any_angle(x):
     ours, libm = _sincos_pair([x])
     assert np.abs(ours - libm).max() <= 1e-15 * max(1.0, abs(x) / 1e3)
+
+
+@nb.njit
+def _logs(x, ours, libm):
+    for i in range(x.shape[0]):
+        ours[i] = log(x[i])
+        libm[i] = math.log(x[i]) if x[i] > 0.0 else (-np.inf if x[i] == 0 else np.nan)
+
+
+def _log_pair(x):
+    x = np.asarray(x, dtype=np.float64)
+    ours, libm = np.empty_like(x), np.empty_like(x)
+    _logs(x, ours, libm)
+    return ours, libm
+
+
+def test_log_is_within_one_ulp():
+    rng = np.random.default_rng(2)
+    x = np.concatenate([
+        rng.uniform(0.0, 10.0, 300_000), np.exp(rng.uniform(-700.0, 700.0, 300_000)),
+        rng.uniform(0.5, 2.0, 200_000), 1.0 + rng.normal(0.0, 1e-6, 100_000),
+        rng.uniform(0.0, 1e-310, 10_000),
+    ])  # fmt: skip
+    ours, libm = _log_pair(x)
+    assert _ulps(ours[libm != 0], libm[libm != 0]).max() <= 1.0
+    assert (ours == libm).mean() > 0.85
+
+
+def test_log_edges():
+    x = [0.0, -0.0, -1.0, np.inf, -np.inf, np.nan, 1.0, 5e-324, 1.7976931348623157e308]
+    ours, libm = _log_pair(x)
+    np.testing.assert_array_equal(ours, libm)
+
+
+@given(st.floats(allow_nan=True, allow_infinity=True))
+def test_log_any_float(x):
+    ours, libm = _log_pair([x])
+    if not math.isfinite(libm[0]):
+        assert ours[0] == libm[0] or math.isnan(ours[0]) and math.isnan(libm[0])
+    else:
+        assert abs(ours[0] - libm[0]) <= np.spacing(abs(libm[0]))

@@ -14,14 +14,12 @@ Numba kernels: contiguous arrays and scalars in, no Python objects; they
 import nothing of robotlib but the JIT options and other kernels.
 """
 
-import math
-
 import numba as nb
 import numpy as np
 
 from ..._config import JIT
 from .common import _TWO_PI
-from .elementary import exp
+from .elementary import exp, log
 from .fused import _flat_index, _sensor_columns, _weigh_estimate, move_columns
 
 
@@ -108,13 +106,13 @@ def beam_loglik_by_reading(
     for i in range(s_count):
         if i % 16 == 15:  # factors in (1e-3, 10): one log per 16 readings
             for j in range(n):
-                ll[j] += math.log(prod[j])
+                ll[j] += log(prod[j])
                 prod[j] = 1.0
         pi = p[i]
         for j in range(n):
             prod[j] *= pi[j]
     for j in range(n):
-        out[j] = (ll[j] + math.log(prod[j])) * exponent
+        out[j] = (ll[j] + log(prod[j])) * exponent
 
 
 @nb.njit(**JIT)
@@ -134,7 +132,7 @@ def paper_loglik_by_reading(kt, z, inv_n, out):
     for j in range(n):
         d[j] = exp(-d[j] / s_count)
     for j in range(n):
-        out[j] = math.log(d[j] + inv_n)
+        out[j] = log(d[j] + inv_n)
 
 
 @nb.njit(**JIT)

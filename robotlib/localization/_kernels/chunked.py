@@ -21,8 +21,6 @@ Numba kernels: contiguous arrays and scalars in, no Python objects; they
 import nothing of robotlib but the JIT options and other kernels.
 """
 
-import math
-
 import numba as nb
 import numpy as np
 
@@ -33,7 +31,7 @@ from .by_reading import (
     paper_loglik_by_reading,
 )
 from .elementary import exp
-from .fused import move_and_read
+from .fused import _top, log_rows, lut_products, move_and_read, paper_rows_log
 from .pcg64 import fill_normals, next_double
 from .weights import _finish_estimate
 
@@ -45,36 +43,18 @@ def beam_rows(mm, lut, exponent, out_w):
     As the last pass of `fused.lut_table_step_parallel` (``lut`` from
     `beam_scan_lut`, times ``exponent``). Returns the largest.
     """
-    top = -np.inf
-    for j in range(mm.shape[0]):
-        ll = 0.0
-        prod = 1.0
-        for i in range(mm.shape[1]):
-            if i % 16 == 15:
-                ll += math.log(prod)
-                prod = 1.0
-            prod *= lut[i, mm[j, i]]
-        v = (ll + math.log(prod)) * exponent
-        out_w[j] = v
-        if v > top:
-            top = v
-    return top
+    n = mm.shape[0]
+    ll = np.empty(n)
+    lut_products(lut, mm, 0, n, ll, out_w)
+    log_rows(0, n, ll, exponent, out_w)
+    return _top(out_w)
 
 
 @jit_inner
 def paper_rows(mm, terms, inv_n, out_w):
     """As `beam_rows` with the paper's model (`fused.paper_lut_step_parallel`)."""
-    s_count = mm.shape[1]
-    top = -np.inf
-    for j in range(mm.shape[0]):
-        d = 0.0
-        for i in range(s_count):
-            d += terms[i, mm[j, i]]
-        v = math.log(exp(-d / s_count) + inv_n)
-        out_w[j] = v
-        if v > top:
-            top = v
-    return top
+    paper_rows_log(terms, mm, 0, mm.shape[0], inv_n, out_w)
+    return _top(out_w)
 
 
 @nb.njit(**JIT)

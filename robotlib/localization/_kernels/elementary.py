@@ -32,7 +32,18 @@ from numba.extending import intrinsic
 
 from ..._config import JIT
 
-__all__ = ["exp", "sincos"]
+__all__ = ["exp", "log", "sincos"]
+
+
+@intrinsic
+def _to_bits(typingctx, x):
+    """Return the int64 whose bit pattern is the float64 ``x``'s (IEEE 754)."""
+    sig = types.int64(types.float64)
+
+    def codegen(context, builder, signature, args):
+        return builder.bitcast(args[0], ir.IntType(64))
+
+    return sig, codegen
 
 
 @intrinsic
@@ -126,3 +137,48 @@ def sincos(x):
     sn = -sn if q >= 2.0 else sn
     cn = -cn if (q == 1.0 or q == 2.0) else cn
     return sn, cn
+
+
+_LG1 = 6.666666666666735130e-01
+_LG2 = 3.999999999940941908e-01
+_LG3 = 2.857142874366239149e-01
+_LG4 = 2.222219843214978396e-01
+_LG5 = 1.818357216161805012e-01
+_LG6 = 1.531383769920937332e-01
+_LG7 = 1.479819860511658591e-01
+_SQRT2 = 1.4142135623730951
+_TINY = 2.2250738585072014e-308  # the least normal float64
+_TWO54 = 1.8014398509481984e16
+_MANTISSA = (1 << 52) - 1
+_ONE_BITS = 1023 << 52
+
+
+@nb.njit(**JIT, inline="always")
+def log(x):
+    """Natural log of ``x`` within 1 ulp (-inf at 0, NaN below, inf and NaN kept).
+
+    ``x = 2^k m`` with ``m`` in [sqrt(2)/2, sqrt(2)), ``f = m - 1`` exact,
+    then ``log(1 + f)`` from a polynomial in ``s = f / (2 + f)``. No branch
+    (subnormal ``x`` is scaled by 2^54 first, the special values are
+    selects), so a loop of it is vectorized.
+    """
+    sub = x < _TINY
+    xs = x * _TWO54 if sub else x
+    hx = _to_bits(xs)
+    k = (hx >> 52) - 1023 - (54 if sub else 0)
+    m = _from_bits((hx & _MANTISSA) | _ONE_BITS)  # in [1, 2)
+    big = m > _SQRT2
+    m = m * 0.5 if big else m
+    fk = float(k + (1 if big else 0))
+    f = m - 1.0
+    hfsq = 0.5 * f * f
+    s = f / (2.0 + f)
+    z = s * s
+    w = z * z
+    t1 = w * (_LG2 + w * (_LG4 + w * _LG6))
+    t2 = z * (_LG1 + w * (_LG3 + w * (_LG5 + w * _LG7)))
+    r = t2 + t1
+    y = fk * _LN2_HI - ((hfsq - (s * (hfsq + r) + fk * _LN2_LO)) - f)
+    y = y if x < np.inf else x  # inf, and NaN (compares false)
+    y = -np.inf if x == 0.0 else y
+    return np.nan if x < 0.0 else y

@@ -4,14 +4,12 @@ Numba kernels: contiguous arrays and scalars in, no Python objects; they
 import nothing of robotlib but the JIT options and other kernels.
 """
 
-import math
-
 import numba as nb
 import numpy as np
 
 from ..._config import JIT, JIT_PARALLEL, serial_and_parallel
 from .common import _TWO_PI
-from .elementary import exp, sincos
+from .elementary import exp, log, sincos
 from .motion import odometry_pose
 from .normals import fill, sfc64_state
 from .weights import _finish_estimate
@@ -244,24 +242,67 @@ def move_and_read_keyed_parallel(
             mm[j, i] = flat[mm[j, i]]
 
 
+@nb.njit(**JIT, inline="always")
+def lut_products(lut, mm, lo, m, ll, out_w):
+    """Rows ``lo:lo + m``' products of ``lut[i, mm[j, i]]``, 16 factors at a time.
+
+    ``out_w[j]`` receives the last product and ``ll[j - lo]`` the sum of
+    the logs of the others (0 below 16 readings): the log-likelihood is
+    then ``ll + log(out_w)`` (`log_rows`), in one loop of logs the compiler
+    runs on vector lanes.
+    """
+    for b in range(m):
+        j = lo + b
+        acc = 0.0
+        prod = 1.0
+        for i in range(mm.shape[1]):
+            if i % 16 == 15:
+                acc += log(prod)
+                prod = 1.0
+            prod *= lut[i, mm[j, i]]
+        ll[b] = acc
+        out_w[j] = prod
+
+
+@nb.njit(**JIT, inline="always")
+def log_rows(lo, m, ll, exponent, out_w):
+    """``out_w[j] = (ll[j - lo] + log(out_w[j])) * exponent`` for rows ``lo:lo + m``."""
+    for b in range(m):
+        out_w[lo + b] = (ll[b] + log(out_w[lo + b])) * exponent
+
+
 @nb.njit(**JIT_PARALLEL)
 def _lut_weigh_parallel(lut, mm, exponent, out_w):
     """Each particle's beam log-likelihood from its table entries, over threads.
 
-    ``out_w[j]`` is `_lut_mm_row`'s number for row ``mm[j]`` (N, S) int32 of
-    millimetres, written out (no call per particle in a threaded loop):
-    the log of products of 16 of ``lut[i, mm]``, times ``exponent``.
+    ``out_w[j]`` for row ``mm[j]`` (N, S) int32 of millimetres: the logs of
+    products of 16 of ``lut[i, mm]``, times ``exponent`` (`lut_products`,
+    `log_rows`), `BLOCK` rows at a time.
+    """
+    n = mm.shape[0]
+    for blk in nb.prange((n + BLOCK - 1) // BLOCK):
+        lo = blk * BLOCK
+        m = min(BLOCK, n - lo)
+        ll = np.empty(m)
+        lut_products(lut, mm, lo, m, ll, out_w)
+        log_rows(lo, m, ll, exponent, out_w)
+
+
+@nb.njit(**JIT, inline="always")
+def paper_rows_log(terms, mm, lo, m, inv_n, out_w):
+    """Rows ``lo:lo + m`` of ``out_w``: ``log(exp(-mean_i terms[i, mm_ji]) + inv_n)``.
+
+    The sums first (table reads), then the exponentials and logs in a loop
+    of their own, which the compiler runs on vector lanes.
     """
     s_count = mm.shape[1]
-    for j in nb.prange(mm.shape[0]):
-        ll = 0.0
-        prod = 1.0
+    for b in range(m):
+        d = 0.0
         for i in range(s_count):
-            if i % 16 == 15:
-                ll += math.log(prod)
-                prod = 1.0
-            prod *= lut[i, mm[j, i]]
-        out_w[j] = (ll + math.log(prod)) * exponent
+            d += terms[i, mm[lo + b, i]]
+        out_w[lo + b] = d
+    for b in range(m):
+        out_w[lo + b] = log(exp(-out_w[lo + b] / s_count) + inv_n)
 
 
 @nb.njit(**JIT_PARALLEL)
@@ -269,14 +310,13 @@ def _paper_weigh_parallel(terms, mm, inv_n, out_w):
     """Each particle's paper log-weight from its table entries, over threads.
 
     ``out_w[j]`` is ``log(exp(-mean_i terms[i, mm[j, i]]) + inv_n)``, as
-    `paper_table_step` weighs a row (``terms``: `paper_lut_step_parallel`'s).
+    `by_reading.paper_table_step` weighs a particle (``terms``:
+    `paper_lut_step_parallel`'s), `BLOCK` rows at a time.
     """
-    s_count = mm.shape[1]
-    for j in nb.prange(mm.shape[0]):
-        d = 0.0
-        for i in range(s_count):
-            d += terms[i, mm[j, i]]
-        out_w[j] = math.log(exp(-d / s_count) + inv_n)
+    n = mm.shape[0]
+    for blk in nb.prange((n + BLOCK - 1) // BLOCK):
+        lo = blk * BLOCK
+        paper_rows_log(terms, mm, lo, min(BLOCK, n - lo), inv_n, out_w)
 
 
 @nb.njit(**JIT)  # its passes are threaded kernels

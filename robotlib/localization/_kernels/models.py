@@ -12,7 +12,7 @@ import numpy as np
 from ..._config import JIT, serial_and_parallel
 from ...world._kernels import point_segment_distance
 from .common import _LOG_SQRT_2PI
-from .elementary import exp, sincos
+from .elementary import exp, log, sincos
 
 
 @nb.njit(**JIT, inline="always")
@@ -22,7 +22,7 @@ def paper_one(j, z, zhat, n, out):
     d = 0.0
     for i in range(s_count):
         d += abs((z[i] - zhat[j, i]) / z[i])
-    out[j] = math.log(exp(-d / s_count) + 1.0 / n)
+    out[j] = log(exp(-d / s_count) + 1.0 / n)
 
 
 @nb.njit(**JIT)
@@ -68,7 +68,7 @@ def beam_one(j, z, zhat, max_range, z_hit, z_short, z_max, z_rand, sigma, lam, o
     ll = 0.0
     for i in range(z.shape[0]):
         zi = z[i] if z[i] < max_range - 1e-3 else max_range
-        ll += math.log(
+        ll += log(
             _beam_prob(
                 zi, zhat[j, i], max_range, z_hit, z_short, z_max, z_rand, sigma, lam
             )
@@ -150,7 +150,7 @@ def _field_loglik(
                 else:
                     d = far
             u = d / sigma
-            ll += math.log(
+            ll += log(
                 z_hit * exp(-0.5 * u * u - _LOG_SQRT_2PI) / sigma + z_rand / max_range
             )
         out[j] = ll

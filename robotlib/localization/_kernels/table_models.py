@@ -14,7 +14,7 @@ import numpy as np
 
 from ..._config import JIT, JIT_PARALLEL, serial_and_parallel
 from .common import _LOG_SQRT_2PI
-from .elementary import exp, sincos
+from .elementary import exp, log, sincos
 from .tables import _table_mm
 
 
@@ -75,7 +75,7 @@ def _beam_table_cs(
     prod = 1.0  # factors in (1e-3, 10): one log per 16 sensors, not one each
     for i in range(sensors.shape[0]):
         if i % 16 == 15:
-            ll += math.log(prod)
+            ll += log(prod)
             prod = 1.0
         if is_max[i]:
             prod *= z_max
@@ -90,7 +90,7 @@ def _beam_table_cs(
         if z[i] <= zhat:
             p += short[mm] * e_short[i]
         prod *= p
-    out[j] = (ll + math.log(prod)) * exponent
+    out[j] = (ll + log(prod)) * exponent
 
 
 def beam_skip(hit_max: float, p_rand: float) -> float:
@@ -161,12 +161,12 @@ def _lut_cs(j, particles, c, s, sensors, table, x0, y0, inv_res, lut, exponent, 
     prod = 1.0
     for i in range(sensors.shape[0]):
         if i % 16 == 15:
-            ll += math.log(prod)
+            ll += log(prod)
             prod = 1.0
         prod *= lut[
             i, _table_mm(particles, j, c, s, sensors, i, table, x0, y0, inv_res)
         ]
-    out[j] = (ll + math.log(prod)) * exponent
+    out[j] = (ll + log(prod)) * exponent
 
 
 @nb.njit(**JIT_PARALLEL)
@@ -188,7 +188,7 @@ def _paper_cs(j, particles, c, s, sensors, table, x0, y0, inv_res, z, inv_n, out
     for i in range(sensors.shape[0]):
         mm = _table_mm(particles, j, c, s, sensors, i, table, x0, y0, inv_res)
         d += abs((z[i] - mm * 0.001) / z[i])
-    out[j] = math.log(exp(-d / sensors.shape[0]) + inv_n)
+    out[j] = log(exp(-d / sensors.shape[0]) + inv_n)
 
 
 def _paper_table_loglik(particles, sensors, table, x0, y0, inv_res, z, inv_n, out):
