@@ -183,31 +183,6 @@ def test_small_step_draws_as_numpy_would(corridor):
         assert a.rng.bit_generator.state == b.rng.bit_generator.state
 
 
-def test_kernels_exp_is_math_exp():
-    """`_kernels.common.exp` (the C library's, called directly) = numba's math.exp."""
-    import math
-
-    import numba as nb
-
-    from robotlib.localization._kernels.common import exp
-
-    @nb.njit
-    def both(x, a, b):
-        for i in range(x.shape[0]):
-            a[i] = exp(x[i])
-            b[i] = math.exp(x[i])
-
-    rng = np.random.default_rng(0)
-    x = np.concatenate([
-        rng.uniform(-800.0, 800.0, 200_000), -rng.exponential(2.0, 100_000),
-        [np.inf, -np.inf, np.nan, 0.0, -0.0, 709.78, 709.79, -745.13, -745.14,
-         5e-324, -5e-324, 1e-300],
-    ])  # fmt: skip
-    a, b = np.empty_like(x), np.empty_like(x)
-    both(x, a, b)
-    np.testing.assert_array_equal(a.view(np.uint64), b.view(np.uint64))
-
-
 @pytest.mark.parametrize("how", ["deepcopy", "pickle"])
 def test_a_copied_filter_draws_from_its_own_generator(corridor, how):
     """A copy's step draws from the copy's generator (not a view of the original's)."""

@@ -1,6 +1,8 @@
 """Numba kernels for Monte Carlo localization, one module per concern.
 
 - `common`: the angle wrap and shared constants
+- `elementary`: ``exp``, ``log``, ``sin`` and ``cos`` as inlined arithmetic
+  (vector lanes; the same bits on every machine)
 - `motion`: particles moved by an odometry increment plus drawn noise
 - `tables`: cone tables (expected ranges per cell and heading bin), built and read
 - `table_strips`: the cone-table builder for dense maps (rays through strips)
@@ -11,6 +13,7 @@
 - `weights`: the Bayes update, normalisation, effective sample size, the estimate
 - `resample`: cumulative weights, index searches, KLD-sampling, gathering
 - `fused`: predict, read the table, weigh, normalise and estimate in one call
+- `by_reading`: the serial fused steps, entries laid out reading by reading
 - `chunked`: the fused step in chunks for a pool of Python threads, and in
   one call with the resampling for a few particles
 - `normals`: NumPy's keyed motion noise (SeedSequence, SFC64, ziggurat)
@@ -33,15 +36,14 @@ and sensing's kernels. Units: metres, radians; tables hold millimetres
 (uint16).
 """
 
+from .by_reading import beam_table_step, paper_table_step
 from .common import wrap
 from .exact import expected_scan_blocks, expected_scan_blocks_parallel, wall_blocks
 from .fused import (
-    beam_table_step,
     lut_table_step_keyed_parallel,
     lut_table_step_parallel,
     paper_lut_step_keyed_parallel,
     paper_lut_step_parallel,
-    paper_table_step,
 )
 from .models import (
     beam_loglik,

@@ -21,14 +21,17 @@ Numba kernels: contiguous arrays and scalars in, no Python objects; they
 import nothing of robotlib but the JIT options and other kernels.
 """
 
-import math
-
 import numba as nb
 import numpy as np
 
 from ..._config import JIT, jit_inner
-from .common import exp
-from .fused import _beam_mm_row, _buffers, _paper_mm, move_and_read
+from .by_reading import (
+    beam_loglik_by_reading,
+    move_and_read_by_reading,
+    paper_loglik_by_reading,
+)
+from .elementary import exp
+from .fused import _top, log_rows, lut_products, move_and_read, paper_rows_log
 from .pcg64 import fill_normals, next_double
 from .weights import _finish_estimate
 
@@ -40,36 +43,18 @@ def beam_rows(mm, lut, exponent, out_w):
     As the last pass of `fused.lut_table_step_parallel` (``lut`` from
     `beam_scan_lut`, times ``exponent``). Returns the largest.
     """
-    top = -np.inf
-    for j in range(mm.shape[0]):
-        ll = 0.0
-        prod = 1.0
-        for i in range(mm.shape[1]):
-            if i % 16 == 15:
-                ll += math.log(prod)
-                prod = 1.0
-            prod *= lut[i, mm[j, i]]
-        v = (ll + math.log(prod)) * exponent
-        out_w[j] = v
-        if v > top:
-            top = v
-    return top
+    n = mm.shape[0]
+    ll = np.empty(n)
+    lut_products(lut, mm, 0, n, ll, out_w)
+    log_rows(0, n, ll, exponent, out_w)
+    return _top(out_w)
 
 
 @jit_inner
 def paper_rows(mm, terms, inv_n, out_w):
     """As `beam_rows` with the paper's model (`fused.paper_lut_step_parallel`)."""
-    s_count = mm.shape[1]
-    top = -np.inf
-    for j in range(mm.shape[0]):
-        d = 0.0
-        for i in range(s_count):
-            d += terms[i, mm[j, i]]
-        v = math.log(exp(-d / s_count) + inv_n)
-        out_w[j] = v
-        if v > top:
-            top = v
-    return top
+    paper_rows_log(terms, mm, 0, mm.shape[0], inv_n, out_w)
+    return _top(out_w)
 
 
 @nb.njit(**JIT)
@@ -231,10 +216,6 @@ def gather_rows(particles, q, u, lo, hi, out):
 # -- a few particles: the whole step in one call -------------------------------------
 
 
-_beam_row = nb.njit(**JIT, inline="always")(_beam_mm_row.py_func)
-_paper_row = nb.njit(**JIT, inline="always")(_paper_mm.py_func)
-
-
 @nb.njit(**JIT, inline="always")
 def _weigh_into(weights, out_p, cs, out_w, u, new_p, new_w, est):
     """`fused._weigh_estimate` then (``u >= 0``) `finish`'s resampling, into ``est``."""
@@ -267,10 +248,9 @@ def beam_small(words, draw, particles, weights, noise, sensors, table, z, e_shor
                hit, short, rot1, trans, rot2, sd1, sdt, sd2, x0, y0, inv_res, exponent,
                max_read, z_max, p_rand, inv_sigma, u2_skip, u, out_p, out_w, new_p,
                new_w, est):  # fmt: skip
-    """`fused.beam_table_step`, then (``u >= 0``) resampling as in `finish`.
+    """`by_reading.beam_table_step`, then (``u >= 0``) resampling as in `finish`.
 
-    The same passes, with the per-particle model written in (a call per
-    particle costs about as much as its arithmetic). The scalars come one
+    The same passes. The scalars come one
     by one (cheaper to pass than an array built per step): the motion
     ``(rot1 .. sd2)``, the table's ``(x0, y0, inv_res)``, the beam model's
     ``exponent``, ``max_read`` (readings from it on are max readings, as
@@ -289,16 +269,15 @@ def beam_small(words, draw, particles, weights, noise, sensors, table, z, e_shor
     is_max = np.empty(s_count, dtype=np.bool_)
     for i in range(s_count):
         is_max[i] = z[i] >= max_read
-    cs, mm = _buffers(n, s_count)
-    move_and_read(
+    cs = np.empty((n, 2))
+    kt = move_and_read_by_reading(
         particles, noise, (rot1, trans, rot2, sd1, sdt, sd2), sensors, table,
-        (x0, y0, inv_res), is_max, out_p, cs, mm,
+        (x0, y0, inv_res), is_max, out_p, cs,
     )  # fmt: skip
-    for j in range(n):
-        _beam_row(
-            j, mm, z, e_short, is_max, hit, short, z_max, p_rand, inv_sigma,
-            exponent, u2_skip, out_w,
-        )  # fmt: skip
+    beam_loglik_by_reading(
+        kt, z, e_short, is_max, hit, short, z_max, p_rand, inv_sigma, exponent,
+        u2_skip, out_w,
+    )  # fmt: skip
     return _weigh_into(weights, out_p, cs, out_w, u, new_p, new_w, est)
 
 
@@ -306,15 +285,14 @@ def beam_small(words, draw, particles, weights, noise, sensors, table, z, e_shor
 def paper_small(words, draw, particles, weights, noise, sensors, table, z, rot1,
                 trans, rot2, sd1, sdt, sd2, x0, y0, inv_res, inv_n, u, out_p, out_w,
                 new_p, new_w, est):  # fmt: skip
-    """`fused.paper_table_step`, then (``u >= 0``) resampling, as `beam_small`."""
+    """`by_reading.paper_table_step`, then (``u >= 0``) resampling, as `beam_small`."""
     u = _draw(words, draw, noise, u)
     n = particles.shape[0]
     skip = np.zeros(sensors.shape[0], dtype=np.bool_)
-    cs, mm = _buffers(n, sensors.shape[0])
-    move_and_read(
+    cs = np.empty((n, 2))
+    kt = move_and_read_by_reading(
         particles, noise, (rot1, trans, rot2, sd1, sdt, sd2), sensors, table,
-        (x0, y0, inv_res), skip, out_p, cs, mm,
+        (x0, y0, inv_res), skip, out_p, cs,
     )  # fmt: skip
-    for j in range(n):
-        _paper_row(j, mm, z, inv_n, out_w)
+    paper_loglik_by_reading(kt, z, inv_n, out_w)
     return _weigh_into(weights, out_p, cs, out_w, u, new_p, new_w, est)

@@ -10,13 +10,12 @@ Numba kernels: contiguous arrays and scalars in, no Python objects; they
 import nothing of robotlib but the JIT options and other kernels.
 """
 
-import math
-
 import numba as nb
 import numpy as np
 
 from ..._config import serial_and_parallel
 from .chunked import _draw, _weigh_into
+from .elementary import sincos
 from .exact import _EXACT_CHUNK, _expected_pose_blocks, _lanes, _offsets, _turns
 from .models import beam_one, paper_one
 from .motion import _odometry_one
@@ -116,8 +115,7 @@ def _exact_step(
             _, _, th = _odometry_one(
                 k, particles, rot1, trans, rot2, sd1, sdt, sd2, noise, out_p
             )
-            cs[k, 0] = math.cos(th)
-            cs[k, 1] = math.sin(th)
+            cs[k, 1], cs[k, 0] = sincos(th)
             _expected_pose_blocks(
                 k, out_p, sensors, turns, walls, start, items, grid, n_rays, cone,
                 max_range, min_range, cos_specular, offs, ray, cand, pas, zhat,

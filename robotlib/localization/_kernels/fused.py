@@ -4,14 +4,13 @@ Numba kernels: contiguous arrays and scalars in, no Python objects; they
 import nothing of robotlib but the JIT options and other kernels.
 """
 
-import math
-
 import numba as nb
 import numpy as np
 
 from ..._config import JIT, JIT_PARALLEL, serial_and_parallel
-from .common import _TWO_PI, exp, wrap
-from .motion import _odometry_one
+from .common import _TWO_PI
+from .elementary import exp, log, sincos
+from .motion import odometry_pose
 from .normals import fill, sfc64_state
 from .weights import _finish_estimate
 
@@ -99,6 +98,69 @@ def _sensor_columns(sensors, skip):
     return ax, ay, aa, keep
 
 
+BLOCK = 512
+"""Rows a threaded move takes at a time: its columns stay in the core's cache."""
+
+
+@nb.njit(**JIT, inline="always")
+def move_columns(lo, m, particles, xs, ys, ths, n1, nt, n2, motion, out_p, cs):
+    """Move rows ``lo:lo + m`` of ``particles`` (`odometry_pose`) as columns.
+
+    ``n1, nt, n2`` (at least m,) hold the rows' motion noise; ``xs, ys,
+    ths`` (at least m,) are scratch. The moved rows go to ``out_p`` and their
+    headings' cosines and sines to ``cs``, as `sample_odometry` and
+    `weights.weighted_pose_mean` compute them; on return ``xs, ys, ths``
+    hold the moved poses and ``n1, nt`` the cosines and sines (the noise
+    is used up). Loops over contiguous columns, which the compiler runs on
+    vector lanes (`elementary`'s ``sincos``).
+    """
+    rot1, trans, rot2, sd1, sdt, sd2 = motion
+    for b in range(m):
+        xs[b] = particles[lo + b, 0]
+        ys[b] = particles[lo + b, 1]
+        ths[b] = particles[lo + b, 2]
+    for b in range(m):
+        x, y, th = odometry_pose(
+            xs[b], ys[b], ths[b], n1[b], nt[b], n2[b], rot1, trans, rot2, sd1, sdt,
+            sd2,
+        )  # fmt: skip
+        xs[b] = x
+        ys[b] = y
+        ths[b] = th
+        nt[b], n1[b] = sincos(th)  # each noise slot read before it is written
+    for b in range(m):
+        out_p[lo + b, 0] = xs[b]
+        out_p[lo + b, 1] = ys[b]
+        out_p[lo + b, 2] = ths[b]
+        cs[lo + b, 0] = n1[b]
+        cs[lo + b, 1] = nt[b]
+
+
+@nb.njit(**JIT, inline="always")
+def _index_rows(lo, m, xs, ys, ths, cc, ss, columns, table, where, mm):
+    """Rows ``lo:lo + m`` of ``mm`` (N, S): each sensor's flat table index.
+
+    From the moved poses ``xs, ys, ths`` and headings' cosines ``cc`` and
+    sines ``ss`` of `move_columns`; ``columns`` is `_sensor_columns`'.
+    """
+    ax, ay, aa, keep = columns
+    x0, y0, inv_res = where
+    ny, nx, n_bins = table.shape
+    bins = n_bins / _TWO_PI
+    for b in range(m):
+        row = mm[lo + b]
+        x = xs[b]
+        y = ys[b]
+        th = ths[b]
+        c = cc[b]
+        s = ss[b]
+        for i in range(ax.shape[0]):
+            row[i] = keep[i] & _flat_index(
+                x + c * ax[i] - s * ay[i], y + s * ax[i] + c * ay[i],
+                (th + aa[i]) * bins, ny, nx, n_bins, x0, y0, inv_res,
+            )  # fmt: skip
+
+
 def _move_and_read(
     particles, normals, motion, sensors, table, where, skip, out_p, cs, mm
 ):  # fmt: skip
@@ -108,36 +170,30 @@ def _move_and_read(
     ``out_p[j]`` (as `sample_odometry`), keeps the cosine and sine of its new
     heading in ``cs[j]`` (N, 2) and its sensors' flat table indexes (the cell
     and bin of `table_bin`; 0 where ``skip[i]``: not read) in ``mm[j]`` (N, S)
-    int32 (`ConeTable` keeps below 2^31 entries). Pass two replaces each
-    index by the table's entry (mm): independent reads the processor
-    overlaps, the table being larger than its caches. Every helper is
-    inlined: a call per particle inside the threaded loop costs more than
-    the particle's arithmetic. The sensors' loop has no branch (`_flat_index`),
-    so the compiler runs it on vector lanes.
+    int32 (`ConeTable` keeps below 2^31 entries), `BLOCK` rows at a time
+    (`move_columns`). Pass two replaces each index by the table's entry
+    (mm): independent reads the processor overlaps, the table being larger
+    than its caches. Every helper is inlined: a call per particle inside the
+    threaded loop costs more than the particle's arithmetic. The sensors'
+    loop has no branch (`_flat_index`), so the compiler runs it on vector
+    lanes.
     """
-    rot1, trans, rot2, sd1, sdt, sd2 = motion
-    x0, y0, inv_res = where
-    ny, nx, n_bins = table.shape
-    s_count = sensors.shape[0]
-    ax, ay, aa, keep = _sensor_columns(sensors, skip)
-    bins = n_bins / _TWO_PI
-    for j in nb.prange(particles.shape[0]):
-        x, y, th = _odometry_one(
-            j, particles, rot1, trans, rot2, sd1, sdt, sd2, normals, out_p
-        )
-        c = math.cos(th)
-        s = math.sin(th)
-        cs[j, 0] = c
-        cs[j, 1] = s
-        row = mm[j]
-        for i in range(s_count):
-            row[i] = keep[i] & _flat_index(
-                x + c * ax[i] - s * ay[i], y + s * ax[i] + c * ay[i],
-                (th + aa[i]) * bins, ny, nx, n_bins, x0, y0, inv_res,
-            )  # fmt: skip
+    columns = _sensor_columns(sensors, skip)
+    n = particles.shape[0]
+    for blk in nb.prange((n + BLOCK - 1) // BLOCK):
+        lo = blk * BLOCK
+        m = min(BLOCK, n - lo)
+        xs, ys, ths = np.empty(m), np.empty(m), np.empty(m)
+        n1, nt, n2 = np.empty(m), np.empty(m), np.empty(m)
+        for b in range(m):
+            n1[b] = normals[lo + b, 0]
+            nt[b] = normals[lo + b, 1]
+            n2[b] = normals[lo + b, 2]
+        move_columns(lo, m, particles, xs, ys, ths, n1, nt, n2, motion, out_p, cs)
+        _index_rows(lo, m, xs, ys, ths, n1, nt, columns, table, where, mm)
     flat = table.reshape(table.size)
-    for j in nb.prange(particles.shape[0]):
-        for i in range(s_count):
+    for j in nb.prange(n):
+        for i in range(mm.shape[1]):
             mm[j, i] = flat[mm[j, i]]
 
 
@@ -154,15 +210,10 @@ def move_and_read_keyed_parallel(
     ``key`` (`normals.fill_chunks`: `motion.standard_normals`' numbers),
     drawn by the thread that uses it instead of stored for the step: the
     threads take whole chunks, each drawn into a buffer of its own in one
-    loop (`normals.fill`) and then used. The same numbers as
-    `move_and_read_parallel` on `normals.fill_chunks`' noise.
+    loop (`normals.fill`) and then used, `BLOCK` rows at a time. The same
+    numbers as `move_and_read_parallel` on `normals.fill_chunks`' noise.
     """
-    rot1, trans, rot2, sd1, sdt, sd2 = motion
-    x0, y0, inv_res = where
-    ny, nx, n_bins = table.shape
-    s_count = sensors.shape[0]
-    ax, ay, aa, keep = _sensor_columns(sensors, skip)
-    bins = n_bins / _TWO_PI
+    columns = _sensor_columns(sensors, skip)
     n = particles.shape[0]
     n_chunks = (n + rows - 1) // rows
     for ch in nb.prange(n_chunks):
@@ -172,114 +223,86 @@ def move_and_read_keyed_parallel(
         hi = min(lo + rows, n)
         draws = np.empty(3 * (hi - lo))  # the chunk's noise, drawn in one loop
         fill(st, draws)
-        for j in range(lo, hi):
-            # `_odometry_one` on the chunk's three numbers for the row
-            d = 3 * (j - lo)
-            r1 = rot1 + sd1 * draws[d]
-            t = trans + sdt * draws[d + 1]
-            r2 = rot2 + sd2 * draws[d + 2]
-            th0 = particles[j, 2]
-            x = particles[j, 0] + t * math.cos(th0 + r1)
-            y = particles[j, 1] + t * math.sin(th0 + r1)
-            th = wrap(th0 + r1 + r2)
-            out_p[j, 0] = x
-            out_p[j, 1] = y
-            out_p[j, 2] = th
-            c = math.cos(th)
-            s = math.sin(th)
-            cs[j, 0] = c
-            cs[j, 1] = s
-            row = mm[j]
-            for i in range(s_count):
-                row[i] = keep[i] & _flat_index(
-                    x + c * ax[i] - s * ay[i], y + s * ax[i] + c * ay[i],
-                    (th + aa[i]) * bins, ny, nx, n_bins, x0, y0, inv_res,
-                )  # fmt: skip
+        xs, ys, ths = np.empty(BLOCK), np.empty(BLOCK), np.empty(BLOCK)
+        n1, nt, n2 = np.empty(BLOCK), np.empty(BLOCK), np.empty(BLOCK)
+        for start in range(lo, hi, BLOCK):
+            m = min(BLOCK, hi - start)
+            d = 3 * (start - lo)
+            for b in range(m):
+                n1[b] = draws[d + 3 * b]
+                nt[b] = draws[d + 3 * b + 1]
+                n2[b] = draws[d + 3 * b + 2]
+            move_columns(
+                start, m, particles, xs, ys, ths, n1, nt, n2, motion, out_p, cs
+            )
+            _index_rows(start, m, xs, ys, ths, n1, nt, columns, table, where, mm)
     flat = table.reshape(table.size)
     for j in nb.prange(n):
-        for i in range(s_count):
+        for i in range(mm.shape[1]):
             mm[j, i] = flat[mm[j, i]]
 
 
-@nb.njit(**JIT)
-def _buffers(n, s_count):
-    """Scratch for `move_and_read`: ``cs`` (n, 2) and ``mm`` (n, S) int32."""
-    return np.empty((n, 2)), np.empty((n, s_count), dtype=np.int32)
+@nb.njit(**JIT, inline="always")
+def lut_products(lut, mm, lo, m, ll, out_w):
+    """Rows ``lo:lo + m``' products of ``lut[i, mm[j, i]]``, 16 factors at a time.
+
+    ``out_w[j]`` receives the last product and ``ll[j - lo]`` the sum of
+    the logs of the others (0 below 16 readings): the log-likelihood is
+    then ``ll + log(out_w)`` (`log_rows`), in one loop of logs the compiler
+    runs on vector lanes.
+    """
+    for b in range(m):
+        j = lo + b
+        acc = 0.0
+        prod = 1.0
+        for i in range(mm.shape[1]):
+            if i % 16 == 15:
+                acc += log(prod)
+                prod = 1.0
+            prod *= lut[i, mm[j, i]]
+        ll[b] = acc
+        out_w[j] = prod
 
 
-@nb.njit(**JIT)
-def _paper_mm(j, mm, z, inv_n, out):
-    """`_paper_cs` on looked-up entries ``mm[j]``."""
-    d = 0.0
-    for i in range(mm.shape[1]):
-        d += abs((z[i] - mm[j, i] * 0.001) / z[i])
-    out[j] = math.log(exp(-d / mm.shape[1]) + inv_n)
-
-
-@nb.njit(**JIT)
-def _beam_mm_row(
-    j, mm, z, e_short, is_max, hit, short, z_max, p_rand, inv_sigma, exponent,
-    u2_skip, out,
-):  # fmt: skip
-    """`_beam_table_cs` on looked-up entries ``mm[j]``."""
-    ll = 0.0
-    prod = 1.0
-    for i in range(mm.shape[1]):
-        if i % 16 == 15:
-            ll += math.log(prod)
-            prod = 1.0
-        if is_max[i]:
-            prod *= z_max
-            continue
-        k = mm[j, i]
-        zhat = k * 0.001
-        u = (z[i] - zhat) * inv_sigma
-        if u * u < u2_skip:
-            p = hit[k] * exp(-0.5 * u * u) + p_rand
-        else:
-            p = p_rand
-        # a select, not a branch (about half the readings are short); p >= +0
-        # and the short term finite, so adding 0.0 leaves p's bits
-        sh = short[k] * e_short[i]
-        p += sh if z[i] <= zhat else 0.0
-        prod *= p
-    out[j] = (ll + math.log(prod)) * exponent
-
-
-@nb.njit(**JIT)
-def paper_table_step(
-    particles, normals, motion, sensors, table, where, z, inv_n, weights, out_p, out_w
-):
-    """Fused step with the paper's model (`paper_table_loglik`)."""
-    n = particles.shape[0]
-    skip = np.zeros(sensors.shape[0], dtype=np.bool_)
-    cs, mm = _buffers(n, sensors.shape[0])
-    move_and_read(
-        particles, normals, motion, sensors, table, where, skip, out_p, cs, mm
-    )
-    for j in range(n):
-        _paper_mm(j, mm, z, inv_n, out_w)
-    return _weigh_estimate(weights, out_p, cs, out_w)
+@nb.njit(**JIT, inline="always")
+def log_rows(lo, m, ll, exponent, out_w):
+    """``out_w[j] = (ll[j - lo] + log(out_w[j])) * exponent`` for rows ``lo:lo + m``."""
+    for b in range(m):
+        out_w[lo + b] = (ll[b] + log(out_w[lo + b])) * exponent
 
 
 @nb.njit(**JIT_PARALLEL)
 def _lut_weigh_parallel(lut, mm, exponent, out_w):
     """Each particle's beam log-likelihood from its table entries, over threads.
 
-    ``out_w[j]`` is `_lut_mm_row`'s number for row ``mm[j]`` (N, S) int32 of
-    millimetres, written out (no call per particle in a threaded loop):
-    the log of products of 16 of ``lut[i, mm]``, times ``exponent``.
+    ``out_w[j]`` for row ``mm[j]`` (N, S) int32 of millimetres: the logs of
+    products of 16 of ``lut[i, mm]``, times ``exponent`` (`lut_products`,
+    `log_rows`), `BLOCK` rows at a time.
+    """
+    n = mm.shape[0]
+    for blk in nb.prange((n + BLOCK - 1) // BLOCK):
+        lo = blk * BLOCK
+        m = min(BLOCK, n - lo)
+        ll = np.empty(m)
+        lut_products(lut, mm, lo, m, ll, out_w)
+        log_rows(lo, m, ll, exponent, out_w)
+
+
+@nb.njit(**JIT, inline="always")
+def paper_rows_log(terms, mm, lo, m, inv_n, out_w):
+    """Rows ``lo:lo + m`` of ``out_w``: ``log(exp(-mean_i terms[i, mm_ji]) + inv_n)``.
+
+    The sums first (table reads), then the exponentials and logs in a loop
+    of their own, which the compiler runs on vector lanes.
     """
     s_count = mm.shape[1]
-    for j in nb.prange(mm.shape[0]):
-        ll = 0.0
-        prod = 1.0
+    for b in range(m):
+        d = 0.0
         for i in range(s_count):
-            if i % 16 == 15:
-                ll += math.log(prod)
-                prod = 1.0
-            prod *= lut[i, mm[j, i]]
-        out_w[j] = (ll + math.log(prod)) * exponent
+            d += terms[i, mm[lo + b, i]]
+        out_w[lo + b] = d
+    for b in range(m):
+        out_w[lo + b] = log(exp(-out_w[lo + b] / s_count) + inv_n)
 
 
 @nb.njit(**JIT_PARALLEL)
@@ -287,14 +310,13 @@ def _paper_weigh_parallel(terms, mm, inv_n, out_w):
     """Each particle's paper log-weight from its table entries, over threads.
 
     ``out_w[j]`` is ``log(exp(-mean_i terms[i, mm[j, i]]) + inv_n)``, as
-    `paper_table_step` weighs a row (``terms``: `paper_lut_step_parallel`'s).
+    `by_reading.paper_table_step` weighs a particle (``terms``:
+    `paper_lut_step_parallel`'s), `BLOCK` rows at a time.
     """
-    s_count = mm.shape[1]
-    for j in nb.prange(mm.shape[0]):
-        d = 0.0
-        for i in range(s_count):
-            d += terms[i, mm[j, i]]
-        out_w[j] = math.log(exp(-d / s_count) + inv_n)
+    n = mm.shape[0]
+    for blk in nb.prange((n + BLOCK - 1) // BLOCK):
+        lo = blk * BLOCK
+        paper_rows_log(terms, mm, lo, min(BLOCK, n - lo), inv_n, out_w)
 
 
 @nb.njit(**JIT)  # its passes are threaded kernels
@@ -316,29 +338,6 @@ def paper_lut_step_parallel(
     )
     _paper_weigh_parallel(terms, mm, inv_n, out_w)
     return _weigh_estimate_parallel(weights, out_p, cs, out_w)
-
-
-@nb.njit(**JIT)
-def beam_table_step(
-    particles, normals, motion, sensors, table, where, z, e_short, is_max, hit,
-    short, beam, weights, out_p, out_w,
-):  # fmt: skip
-    """Fused step with the beam model (`beam_table_loglik`).
-
-    ``beam`` is ``(z_max, p_rand, inv_sigma, exponent, u2_skip)`` (`beam_skip`).
-    """
-    z_max, p_rand, inv_sigma, exponent, u2_skip = beam
-    n = particles.shape[0]
-    cs, mm = _buffers(n, sensors.shape[0])
-    move_and_read(
-        particles, normals, motion, sensors, table, where, is_max, out_p, cs, mm
-    )
-    for j in range(n):
-        _beam_mm_row(
-            j, mm, z, e_short, is_max, hit, short, z_max, p_rand, inv_sigma,
-            exponent, u2_skip, out_w,
-        )  # fmt: skip
-    return _weigh_estimate(weights, out_p, cs, out_w)
 
 
 @nb.njit(**JIT)  # its passes are threaded kernels

@@ -12,6 +12,7 @@ import numpy as np
 from ..._config import JIT, serial_and_parallel
 from ...world._kernels import point_segment_distance
 from .common import _LOG_SQRT_2PI
+from .elementary import exp, log, sincos
 
 
 @nb.njit(**JIT, inline="always")
@@ -21,7 +22,7 @@ def paper_one(j, z, zhat, n, out):
     d = 0.0
     for i in range(s_count):
         d += abs((z[i] - zhat[j, i]) / z[i])
-    out[j] = math.log(math.exp(-d / s_count) + 1.0 / n)
+    out[j] = log(exp(-d / s_count) + 1.0 / n)
 
 
 @nb.njit(**JIT)
@@ -46,14 +47,14 @@ def _beam_prob(z, zhat, max_range, z_hit, z_short, z_max, z_rand, sigma, lam_sho
             - math.erf(-zhat / (sigma * math.sqrt(2.0)))
         )
         if mass > 0.0:
-            p += z_hit * math.exp(-0.5 * u * u - _LOG_SQRT_2PI) / sigma / mass
+            p += z_hit * exp(-0.5 * u * u - _LOG_SQRT_2PI) / sigma / mass
         # short: exponential up to zhat, normalised over [0, zhat]
         if z <= zhat and zhat > 0.0:
             p += (
                 z_short
                 * lam_short
-                * math.exp(-lam_short * z)
-                / (1.0 - math.exp(-lam_short * zhat))
+                * exp(-lam_short * z)
+                / (1.0 - exp(-lam_short * zhat))
             )
         p += z_rand / max_range
     else:
@@ -67,7 +68,7 @@ def beam_one(j, z, zhat, max_range, z_hit, z_short, z_max, z_rand, sigma, lam, o
     ll = 0.0
     for i in range(z.shape[0]):
         zi = z[i] if z[i] < max_range - 1e-3 else max_range
-        ll += math.log(
+        ll += log(
             _beam_prob(
                 zi, zhat[j, i], max_range, z_hit, z_short, z_max, z_rand, sigma, lam
             )
@@ -116,8 +117,7 @@ def _field_loglik(
     (``far`` outside the grid). Max readings are skipped.
     """
     for j in nb.prange(particles.shape[0]):
-        c = math.cos(particles[j, 2])
-        s = math.sin(particles[j, 2])
+        s, c = sincos(particles[j, 2])
         ny, nx = field.shape
         ll = 0.0
         for i in range(sensors.shape[0]):
@@ -126,8 +126,9 @@ def _field_loglik(
             sx = particles[j, 0] + c * sensors[i, 0] - s * sensors[i, 1]
             sy = particles[j, 1] + s * sensors[i, 0] + c * sensors[i, 1]
             a = particles[j, 2] + sensors[i, 2]
-            ex = sx + z[i] * math.cos(a)
-            ey = sy + z[i] * math.sin(a)
+            sa, ca = sincos(a)
+            ex = sx + z[i] * ca
+            ey = sy + z[i] * sa
             if segments.shape[0] > 0:
                 d = np.inf
                 for m in range(segments.shape[0]):
@@ -149,9 +150,8 @@ def _field_loglik(
                 else:
                     d = far
             u = d / sigma
-            ll += math.log(
-                z_hit * math.exp(-0.5 * u * u - _LOG_SQRT_2PI) / sigma
-                + z_rand / max_range
+            ll += log(
+                z_hit * exp(-0.5 * u * u - _LOG_SQRT_2PI) / sigma + z_rand / max_range
             )
         out[j] = ll
 

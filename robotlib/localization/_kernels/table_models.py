@@ -13,7 +13,8 @@ import numba as nb
 import numpy as np
 
 from ..._config import JIT, JIT_PARALLEL, serial_and_parallel
-from .common import _LOG_SQRT_2PI, exp
+from .common import _LOG_SQRT_2PI
+from .elementary import exp, log, sincos
 from .tables import _table_mm
 
 
@@ -74,7 +75,7 @@ def _beam_table_cs(
     prod = 1.0  # factors in (1e-3, 10): one log per 16 sensors, not one each
     for i in range(sensors.shape[0]):
         if i % 16 == 15:
-            ll += math.log(prod)
+            ll += log(prod)
             prod = 1.0
         if is_max[i]:
             prod *= z_max
@@ -89,7 +90,7 @@ def _beam_table_cs(
         if z[i] <= zhat:
             p += short[mm] * e_short[i]
         prod *= p
-    out[j] = (ll + math.log(prod)) * exponent
+    out[j] = (ll + log(prod)) * exponent
 
 
 def beam_skip(hit_max: float, p_rand: float) -> float:
@@ -130,10 +131,10 @@ def _beam_table_loglik(
     reading); ``p_rand = z_rand / max_range``.
     """
     for j in nb.prange(particles.shape[0]):
+        s, c = sincos(particles[j, 2])
         _beam_table_cs(
-            j, particles, math.cos(particles[j, 2]), math.sin(particles[j, 2]), sensors,
-            table, x0, y0, inv_res, z, e_short, is_max, hit, short, z_max, p_rand,
-            inv_sigma, exponent, np.inf, out,
+            j, particles, c, s, sensors, table, x0, y0, inv_res, z, e_short, is_max,
+            hit, short, z_max, p_rand, inv_sigma, exponent, np.inf, out,
         )  # fmt: skip
 
 
@@ -160,12 +161,12 @@ def _lut_cs(j, particles, c, s, sensors, table, x0, y0, inv_res, lut, exponent, 
     prod = 1.0
     for i in range(sensors.shape[0]):
         if i % 16 == 15:
-            ll += math.log(prod)
+            ll += log(prod)
             prod = 1.0
         prod *= lut[
             i, _table_mm(particles, j, c, s, sensors, i, table, x0, y0, inv_res)
         ]
-    out[j] = (ll + math.log(prod)) * exponent
+    out[j] = (ll + log(prod)) * exponent
 
 
 @nb.njit(**JIT_PARALLEL)
@@ -177,8 +178,7 @@ def lut_table_loglik_parallel(
     Gives the same numbers as `beam_table_loglik`.
     """
     for j in nb.prange(particles.shape[0]):
-        c = math.cos(particles[j, 2])
-        s = math.sin(particles[j, 2])
+        s, c = sincos(particles[j, 2])
         _lut_cs(j, particles, c, s, sensors, table, x0, y0, inv_res, lut, exponent, out)
 
 
@@ -188,14 +188,13 @@ def _paper_cs(j, particles, c, s, sensors, table, x0, y0, inv_res, z, inv_n, out
     for i in range(sensors.shape[0]):
         mm = _table_mm(particles, j, c, s, sensors, i, table, x0, y0, inv_res)
         d += abs((z[i] - mm * 0.001) / z[i])
-    out[j] = math.log(exp(-d / sensors.shape[0]) + inv_n)
+    out[j] = log(exp(-d / sensors.shape[0]) + inv_n)
 
 
 def _paper_table_loglik(particles, sensors, table, x0, y0, inv_res, z, inv_n, out):
     """`expected_table` then `paper_loglik` (``inv_n = 1/n``) in one pass."""
     for j in nb.prange(particles.shape[0]):
-        c = math.cos(particles[j, 2])
-        s = math.sin(particles[j, 2])
+        s, c = sincos(particles[j, 2])
         _paper_cs(j, particles, c, s, sensors, table, x0, y0, inv_res, z, inv_n, out)
 
 

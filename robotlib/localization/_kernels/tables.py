@@ -13,6 +13,7 @@ from ..._config import JIT, JIT_PARALLEL, jit_inner, serial_and_parallel
 from ...sensing._kernels import _EPS, cone_echo, indexed_cone_echo
 from ...world._kernels import point_segment_distance
 from .common import _TWO_PI
+from .elementary import sincos
 from .table_strips import STRIP, strip_sweep_table
 
 
@@ -527,8 +528,7 @@ def _expected_table(particles, sensors, table, x0, y0, inv_res, out):
     heading the nearest direction bin.
     """
     for j in nb.prange(particles.shape[0]):
-        c = math.cos(particles[j, 2])
-        s = math.sin(particles[j, 2])
+        s, c = sincos(particles[j, 2])
         for i in range(sensors.shape[0]):
             out[j, i] = (
                 _table_mm(particles, j, c, s, sensors, i, table, x0, y0, inv_res)

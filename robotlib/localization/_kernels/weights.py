@@ -10,7 +10,7 @@ import numba as nb
 import numpy as np
 
 from ..._config import JIT, jit_inner, serial_and_parallel
-from .common import exp
+from .elementary import exp, sincos
 
 
 @nb.njit(**JIT)
@@ -113,8 +113,7 @@ def _weighted_pose_mean(particles, weights):
     """Weighted mean of ``x, y`` and circular mean of ``theta``; returns (3,)."""
     cs = np.empty((particles.shape[0], 2))
     for j in nb.prange(particles.shape[0]):
-        cs[j, 0] = math.cos(particles[j, 2])
-        cs[j, 1] = math.sin(particles[j, 2])
+        cs[j, 1], cs[j, 0] = sincos(particles[j, 2])
     return _pose_mean(particles, weights, cs)
 
 
