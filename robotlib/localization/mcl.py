@@ -131,6 +131,9 @@ class MCL:
     _pcg = (None, None)
     """``(bit generator, (words, lock) or None)``: `_pcg_words`' view, kept."""
 
+    _plan = (None, None, None)
+    """`_fused_step`'s view of the models (`_plan`), kept while they are the same."""
+
     def __init__(
         self,
         world: World,
@@ -314,12 +317,11 @@ class MCL:
         resampled ``(particles, weights)``. ``checked``: ``z`` is the
         sensor's `checked_scan` already.
         """
-        sensor = self.sensor
-        if not (
-            hasattr(sensor, "_run")  # the exact path with its noise drawn here
-            and (getattr(sensor, "fast", False) or len(self.particles) <= NORMALS_CHUNK)
-            and type(self.motion).sample is OdometryMotionModel.sample
-        ):
+        sensor, policy = self.sensor, self.resampling
+        plan = self._plan
+        if plan[0] is not sensor or plan[1] is not self.motion or plan[2] is not policy:
+            plan = self._plan = _plan(sensor, self.motion, policy)
+        if not plan[3] or not (plan[4] or len(self.particles) <= NORMALS_CHUNK):
             return False
         rot1, trans, rot2 = odometry_increment(odo_prev, odo_now)
         motion = (rot1, trans, rot2, *_noise_std(self.motion.alphas, rot1, trans, rot2))
@@ -334,18 +336,13 @@ class MCL:
         n = len(p)
         scratch = self._scratch
         noise = scratch.take("normals", (n, 3))
-        policy = self.resampling
-        every = (  # resampled in the call: `ThresholdResampling._resample`'s draw
-            type(policy) is ThresholdResampling
-            and policy.threshold >= 1.0
-            and policy.method in ("systematic", "low_variance")
-        )
+        every = plan[5]
         words = self._pcg_words() if n < PARALLEL_MIN else None
         if words is not None:  # the call draws the noise, then u, from the PCG64
             with words[1]:
-                moved, weights, log_mean, ess, self.last_estimate, new_p, new_w = (
-                    sensor._run(p, w, motion, noise, None, z, scratch,
-                                0.0 if every else -1.0, checked, words[0])
+                moved, weights, log_mean, ess, est, new_p, new_w = sensor._run(
+                    p, w, motion, noise, None, z, scratch, 0.0 if every else -1.0,
+                    checked, words[0],
                 )  # fmt: skip
         else:
             key = None
@@ -354,9 +351,10 @@ class MCL:
             else:  # drawn chunk by chunk in the step
                 key = int(self.rng.integers(np.iinfo(np.int64).max))
             u = self.rng.random() if every else -1.0
-            moved, weights, log_mean, ess, self.last_estimate, new_p, new_w = (
-                sensor._run(p, w, motion, noise, key, z, scratch, u, checked)
+            moved, weights, log_mean, ess, est, new_p, new_w = sensor._run(
+                p, w, motion, noise, key, z, scratch, u, checked
             )
+        self._last_estimate, self._estimate_of = est, None  # `last_estimate`'s setter
         self.particles = moved
         self._weighed(weights, log_mean, ess)
         return None if new_p is None else (new_p, new_w)
@@ -547,6 +545,28 @@ class MCL:
         if w.shape != (len(p),):
             raise ValueError("weights must have shape (N,)")
         self.particles, self.weights = p, w
+
+
+def _plan(sensor, motion, policy) -> tuple:
+    """``(sensor, motion, policy, fused, fast, every)``: what `MCL._fused_step` may do.
+
+    ``fused``: the models allow the fused step (a sensor model with its
+    ``_run``, the odometry motion model); ``fast``: on the sensor's cone
+    table (else, the exact path, up to `NORMALS_CHUNK` particles);
+    ``every``: the policy resamples every step by low variance, in the call
+    (`ThresholdResampling._resample`'s draw). The models' attributes read
+    here are fixed (frozen dataclasses, a sensor's ``fast``).
+    """
+    fused = (
+        hasattr(sensor, "_run")  # the exact path with its noise drawn here
+        and type(motion).sample is OdometryMotionModel.sample
+    )
+    every = (
+        type(policy) is ThresholdResampling
+        and policy.threshold >= 1.0
+        and policy.method in ("systematic", "low_variance")
+    )
+    return sensor, motion, policy, fused, bool(getattr(sensor, "fast", False)), every
 
 
 def _uniform(n: int) -> np.ndarray:

@@ -43,10 +43,13 @@ def _plain(a, ndim: int) -> bool:
     """Whether ``a`` is a C-contiguous float64 array of ``ndim`` dimensions."""
     return (
         type(a) is np.ndarray
-        and a.dtype == np.float64
         and a.ndim == ndim
+        and (a.dtype is _F64 or a.dtype == _F64)  # the canonical one: no ``==``
         and a.flags.c_contiguous
     )
+
+
+_F64 = np.dtype(np.float64)
 
 
 def _gather(particles: np.ndarray, idx) -> np.ndarray:

@@ -101,6 +101,22 @@ def _outputs(scratch, n: int, s: int) -> tuple:
     )
 
 
+def _small_outputs(scratch, n: int, u: float) -> tuple:
+    """``(out_p, out_w, new_p, new_w, est)`` of a one-call step (`chunked.beam_small`).
+
+    The moved particles (n, 3) and their weights (n,) from ``scratch`` (new
+    when None), the resampled set (new: the filter keeps it) when ``u >=
+    0`` (else empty), the estimate (3,) (new: the step returns it).
+    """
+    if scratch is None:
+        out_p, out_w = np.empty((n, 3)), np.empty(n)
+    else:
+        out_p, out_w = scratch.take("particles", (n, 3)), scratch.take("weights", (n,))
+    if u >= 0.0:
+        return out_p, out_w, np.empty((n, 3)), np.empty(n), np.empty(3)
+    return out_p, out_w, _NONE_P, _NONE_W, np.empty(3)
+
+
 _NONE_P = np.empty((0, 3))
 _NO_WORDS = np.zeros(4, dtype=np.uint64)  # no PCG64 state: the caller drew
 _NONE_W = np.empty(0)
@@ -145,6 +161,8 @@ class _ExpectedModel:
         if not checked:
             z = _scan(z, len(self.sonar.sensors))
         n = len(particles)
+        if self.table is not None and n < PARALLEL_MIN:  # one serial call
+            return self._small(particles, weights, motion, noise, z, u, scratch, words)
         if u >= 0.0:
             new = (np.empty((n, 3)), np.empty(n))
         else:
@@ -153,25 +171,15 @@ class _ExpectedModel:
             return self._exact_run(
                 particles, weights, motion, noise, z, scratch, u, new, words
             )
-        if n < PARALLEL_MIN:  # one serial call, its scalars one by one
-            if scratch is None:
-                out_p, out_w = np.empty((n, 3)), np.empty(n)
-            else:
-                out_p = scratch.take("particles", (n, 3))
-                out_w = scratch.take("weights", (n,))
-            est = np.empty(3)
-            log_mean, ess = self._small(particles, weights, motion, noise, z, u,
-                                        out_p, out_w, *new, est, words)  # fmt: skip
-        else:
-            out_p, out_w, cs, mm = _outputs(scratch, n, len(z))
-            out = (out_p, out_w, cs, mm, *new)
-            t = self.table
-            where = (float(t.origin[0]), float(t.origin[1]), 1.0 / t.resolution)
-            prm, skip, lut = self._large(z, motion, where, n)
-            log_mean, ess, est = stepping.run_step(
-                self.name, particles, weights, prm, noise, key, self.sonar.sensors,
-                skip, t.table, lut, out, u,
-            )  # fmt: skip
+        out_p, out_w, cs, mm = _outputs(scratch, n, len(z))
+        out = (out_p, out_w, cs, mm, *new)
+        t = self.table
+        where = (float(t.origin[0]), float(t.origin[1]), 1.0 / t.resolution)
+        prm, skip, lut = self._large(z, motion, where, n)
+        log_mean, ess, est = stepping.run_step(
+            self.name, particles, weights, prm, noise, key, self.sonar.sensors,
+            skip, t.table, lut, out, u,
+        )  # fmt: skip
         got = (None, None) if u < 0.0 else new
         return (out_p, out_w, log_mean, ess, est, *got)
 
@@ -296,14 +304,18 @@ class PaperSensorModel(_ExpectedModel):
             :5
         ]
 
-    def _small(self, particles, weights, motion, noise, z, u, out_p, out_w, new_p,
-               new_w, est, words=None):  # fmt: skip
+    def _small(self, particles, weights, motion, noise, z, u, scratch, words=None):
+        """`_run` below `PARALLEL_MIN` particles: `chunked.paper_small`, one call."""
+        out_p, out_w, new_p, new_w, est = _small_outputs(scratch, len(particles), u)
         sensors, table, where, _ = self._consts()
-        return chunked.paper_small(
+        log_mean, ess = chunked.paper_small(
             _NO_WORDS if words is None else words, words is not None,
             particles, weights, noise, sensors, table, z, *motion, *where,
             1.0 / len(particles), u, out_p, out_w, new_p, new_w, est,
         )  # fmt: skip
+        if u < 0.0:
+            return out_p, out_w, log_mean, ess, est, None, None
+        return out_p, out_w, log_mean, ess, est, new_p, new_w
 
     def _exact_model(self, n: int) -> tuple:
         return (False, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 1.0, float(n))
@@ -452,16 +464,20 @@ class BeamSensorModel(_ExpectedModel):
             :5
         ]
 
-    def _small(self, particles, weights, motion, noise, z, u, out_p, out_w, new_p,
-               new_w, est, words=None):  # fmt: skip
+    def _small(self, particles, weights, motion, noise, z, u, scratch, words=None):
+        """`_run` below `PARALLEL_MIN` particles: `chunked.beam_small`, one call."""
+        out_p, out_w, new_p, new_w, est = _small_outputs(scratch, len(particles), u)
         q = self.params
         sensors, table, where, beam = self._consts(q)
-        return chunked.beam_small(
+        log_mean, ess = chunked.beam_small(
             _NO_WORDS if words is None else words, words is not None,
             particles, weights, noise, sensors, table, z,
             np.exp(-q.lambda_short * z), *self._norms, *motion, *where, *beam, u,
             out_p, out_w, new_p, new_w, est,
         )  # fmt: skip
+        if u < 0.0:
+            return out_p, out_w, log_mean, ess, est, None, None
+        return out_p, out_w, log_mean, ess, est, new_p, new_w
 
     def _exact_model(self, n: int) -> tuple:
         q = self.params
