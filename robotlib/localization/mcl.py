@@ -169,7 +169,7 @@ class MCL:
         self.n_initial = int(n)
         self.init_std = tuple(float(s) for s in init_std)
         self._scratch = Scratch()
-        self._mine = (None, None)  # the set the last step left (known plain)
+        self._mine = (None, None)  # known plain: the last step's set, `set_particles`'s
         self.reset(init)
 
     # -- set up ---------------------------------------------------------------
@@ -481,11 +481,13 @@ class MCL:
         n = len(self.particles)
         done = self._fused_step(odo_prev, odo_now, z, check is not None)
         fused = done is not False
-        if not fused:
+        if fused:
+            est = self._last_estimate
+        else:
             self.predict(odo_prev, odo_now)
             self.update(z)
-            self.last_estimate = self.estimate()
-        est, log_mean = self.last_estimate, self._log_mean
+            est = self.last_estimate = self.estimate()
+        log_mean = self._log_mean
         lent = (self.particles, self.weights)
         if done:  # resampled in the same call
             resampled, injected, regenerated = self._adopt(*done)
@@ -545,6 +547,7 @@ class MCL:
         if w.shape != (len(p),):
             raise ValueError("weights must have shape (N,)")
         self.particles, self.weights = p, w
+        self._mine = (p, w if weights is None else None)  # plain: not checked again
 
 
 def _plan(sensor, motion, policy) -> tuple:

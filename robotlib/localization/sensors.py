@@ -46,7 +46,7 @@ def _scan(z, n_sensors: int) -> np.ndarray:
     if z.shape != (n_sensors,):
         raise ValueError(f"z must have shape ({n_sensors},), got {z.shape}")
     r = z.tolist()  # quicker than NumPy for a few; a NaN makes the sum NaN
-    if r and not (min(r) > 0.0 and sum(r) == sum(r)):
+    if r and not (min(r) > 0.0 and (total := sum(r)) == total):
         raise ValueError("sonar readings must be positive")
     return z
 
