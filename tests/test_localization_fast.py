@@ -317,12 +317,59 @@ def test_step_accepts_particles_set_from_outside(world):
 )
 def test_a_refused_scan_changes_nothing(world, make):
     """A NaN or misshapen scan raises before any draw or move: the next step is
-    the one the filter would have taken without it."""
+    the one the filter would have taken without it.
+
+    Twice: the first step checks the scan before its call; from the second
+    on, the fast paths' set is the filter's own and their one call checks
+    the readings itself. With refused odometry as well, the scan's error.
+    """
     mcl, twin = make(world), make(world)
     odo0, odo1 = np.zeros(3), np.array([0.2, 0.0, 0.05])
     z = np.full(8, 2.0)
-    for bad in (np.r_[z[:7], np.nan], z[:7], -z):
-        with pytest.raises(ValueError):
-            mcl.step(odo0, odo1, bad)
-    np.testing.assert_array_equal(mcl.step(odo0, odo1, z), twin.step(odo0, odo1, z))
-    np.testing.assert_array_equal(mcl.particles, twin.particles)
+    for _ in range(2):
+        for bad in (np.r_[z[:7], np.nan], z[:7], -z, np.r_[0.0, z[1:]]):
+            message = "shape" if len(bad) != 8 else "positive"
+            for odo in (odo0, [0.0, 0.0]):
+                with pytest.raises(ValueError, match=message):
+                    mcl.step(odo, odo1, bad)
+        est = mcl.step(odo0, odo1, z)
+        np.testing.assert_array_equal(est, twin.step(odo0, odo1, z))
+        np.testing.assert_array_equal(mcl.particles, twin.particles)
+        np.testing.assert_array_equal(mcl.weights, twin.weights)
+        assert mcl.rng.bit_generator.state == twin.rng.bit_generator.state
+
+
+@pytest.mark.parametrize("kind", ["paper", "beam"])
+def test_one_call_step_refuses_a_scan_before_drawing(world, kind):
+    """`chunked.beam_small` / `paper_small` return (nan, -1) for a reading not
+    positive, having drawn and written nothing."""
+    model = _models(world)[kind]
+    mcl = MCL(world, model, resampling=ThresholdResampling("systematic", 1.0), n=50)
+    words = mcl._pcg_words()[0]
+    state = words.copy()
+    p, w = mcl.particles, mcl.weights
+    out = [np.full(s, 7.0) for s in ((50, 3), (50, 3), 50, (50, 3), 50, 3)]
+    for bad in (np.nan, 0.0, -1.0):
+        z = np.r_[np.full(7, 2.0), bad]
+        args = (words, True, p, w, out[0])
+        if kind == "beam":
+            q = model.params
+            sensors, table, where, beam = model._consts(q)
+            res = chunked.beam_small(
+                *args, sensors, table, z, np.exp(-q.lambda_short * z),
+                *model._norms, 0.1, 0.2, 0.0, 0.01, 0.01, 0.01, *where, *beam, 0.0,
+                *out[1:],
+            )  # fmt: skip
+        else:
+            sensors, table, where, _ = model._consts()
+            res = chunked.paper_small(
+                *args, sensors, table, z, 0.1, 0.2, 0.0, 0.01, 0.01, 0.01, *where,
+                1 / 50, 0.0, *out[1:],
+            )  # fmt: skip
+        assert math.isnan(res[0]) and res[1] == -1.0
+        np.testing.assert_array_equal(words, state)
+        assert all(np.all(a == 7.0) for a in out)
+        with pytest.raises(ValueError, match="positive"):
+            model._small(p, w, (0.1, 0.2, 0.0, 0.01, 0.01, 0.01), out[0], z, 0.0,
+                         None, words)  # fmt: skip
+        np.testing.assert_array_equal(words, state)

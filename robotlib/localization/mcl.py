@@ -306,7 +306,7 @@ class MCL:
         if self.injection is not None:
             self.injection.update(self._log_mean)
 
-    def _fused_step(self, odo_prev, odo_now, z, checked=False):
+    def _fused_step(self, odo_prev, odo_now, z, checked, plan):
         """Predict, update, estimate (and resample) in one call when the models allow.
 
         The same numbers as `predict`, `update`, `estimate` in turn (the same
@@ -315,12 +315,9 @@ class MCL:
         noise, as `resample` would). Returns False (nothing done) for other
         models, None when the set is still to be resampled, else the
         resampled ``(particles, weights)``. ``checked``: ``z`` is the
-        sensor's `checked_scan` already.
+        sensor's `checked_scan` already; ``plan``: `_plan` of the models.
         """
-        sensor, policy = self.sensor, self.resampling
-        plan = self._plan
-        if plan[0] is not sensor or plan[1] is not self.motion or plan[2] is not policy:
-            plan = self._plan = _plan(sensor, self.motion, policy)
+        sensor = self.sensor
         if not plan[3] or not (plan[4] or len(self.particles) <= NORMALS_CHUNK):
             return False
         rot1, trans, rot2 = odometry_increment(odo_prev, odo_now)
@@ -354,6 +351,37 @@ class MCL:
             moved, weights, log_mean, ess, est, new_p, new_w = sensor._run(
                 p, w, motion, noise, key, z, scratch, u, checked
             )
+        self._last_estimate, self._estimate_of = est, None  # `last_estimate`'s setter
+        self.particles = moved
+        self._weighed(weights, log_mean, ess)
+        return None if new_p is None else (new_p, new_w)
+
+    def _small_step(self, odo_prev, odo_now, z, every, words):
+        """`_fused_step` in one kernel call that checks the readings itself.
+
+        For a known plain set (`_mine`) of fewer than `PARALLEL_MIN`
+        particles, a sensor model on its cone table and the filter's PCG64
+        ``(words, lock)`` (`_pcg_words`): the same numbers and draws. The
+        scan's shape is checked here, its values in the call before its
+        draws (a refused scan changes nothing); should the odometry be
+        refused as well, the scan's error comes first, as in `step`.
+        ``every``: the policy resamples every step (`_plan`).
+        """
+        sensor = self.sensor
+        z = sensor._shaped_scan(z)
+        try:
+            rot1, trans, rot2 = odometry_increment(odo_prev, odo_now)
+            sd = _noise_std(self.motion.alphas, rot1, trans, rot2)
+        except Exception:
+            sensor.checked_scan(z)  # raises when the scan is refused
+            raise
+        p, scratch = self.particles, self._scratch
+        noise = scratch.take("normals", (len(p), 3))
+        with words[1]:
+            moved, weights, log_mean, ess, est, new_p, new_w = sensor._small(
+                p, self.weights, (rot1, trans, rot2, *sd), noise, z,
+                0.0 if every else -1.0, scratch, words[0],
+            )  # fmt: skip
         self._last_estimate, self._estimate_of = est, None  # `last_estimate`'s setter
         self.particles = moved
         self._weighed(weights, log_mean, ess)
@@ -468,18 +496,38 @@ class MCL:
         numpy.ndarray, shape (3,)
             The estimate after the update (before resampling).
         """
-        check = getattr(self.sensor, "checked_scan", None)
-        if check is not None:  # before any draw or move: a refused scan changes nothing
-            z = check(z)
-        if self._prebuild is not None:  # its kernels, from numba's cache
-            if not self._prebuild.poll():  # meanwhile the last ones here
-                from ._prebuild import compile_tail
+        sensor, plan, p = self.sensor, self._plan, self.particles
+        if (
+            plan[0] is not sensor
+            or plan[1] is not self.motion
+            or plan[2] is not self.resampling
+        ):
+            plan = self._plan = _plan(sensor, self.motion, self.resampling)
+        words = (  # one call, the readings' values checked in it (`_small_step`)
+            self._pcg_words()
+            if plan[3] and plan[4] and p is self._mine[0]
+            and self.weights is self._mine[1] and len(p) < PARALLEL_MIN
+            and self._prebuild is None
+            else None
+        )  # fmt: skip
+        if words is not None:
+            n = len(p)
+            done = self._small_step(odo_prev, odo_now, z, plan[5], words)
+        else:
+            check = getattr(sensor, "checked_scan", None)
+            if (
+                check is not None
+            ):  # before any draw or move: a refused one changes nothing
+                z = check(z)
+            if self._prebuild is not None:  # its kernels, from numba's cache
+                if not self._prebuild.poll():  # meanwhile the last ones here
+                    from ._prebuild import compile_tail
 
-                compile_tail(self, self._prebuild)
-            self._prebuild.wait()
-            self._prebuild = None
-        n = len(self.particles)
-        done = self._fused_step(odo_prev, odo_now, z, check is not None)
+                    compile_tail(self, self._prebuild)
+                self._prebuild.wait()
+                self._prebuild = None
+            n = len(self.particles)
+            done = self._fused_step(odo_prev, odo_now, z, check is not None, plan)
         fused = done is not False
         if fused:
             est = self._last_estimate

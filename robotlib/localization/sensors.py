@@ -41,14 +41,23 @@ __all__ = [
 
 
 def _scan(z, n_sensors: int) -> np.ndarray:
+    z = _shaped(z, n_sensors)
+    r = z.tolist()  # quicker than NumPy for a few; a NaN makes the sum NaN
+    if r and not (min(r) > 0.0 and (total := sum(r)) == total):
+        raise ValueError(_NOT_POSITIVE)
+    return z
+
+
+def _shaped(z, n_sensors: int) -> np.ndarray:
+    """`_scan` but for the values: ``z`` as a float array (S,), or ``ValueError``."""
     if not (type(z) is np.ndarray and z.dtype is _F64 and z.flags.c_contiguous):
         z = np.ascontiguousarray(z, dtype=np.float64)
     if z.shape != (n_sensors,):
         raise ValueError(f"z must have shape ({n_sensors},), got {z.shape}")
-    r = z.tolist()  # quicker than NumPy for a few; a NaN makes the sum NaN
-    if r and not (min(r) > 0.0 and (total := sum(r)) == total):
-        raise ValueError("sonar readings must be positive")
     return z
+
+
+_NOT_POSITIVE = "sonar readings must be positive"
 
 
 _F64 = np.dtype(np.float64)
@@ -139,6 +148,10 @@ class _ExpectedModel:
     def checked_scan(self, z) -> np.ndarray:
         """Return ``z`` as a float array of shape (S,), or raise ``ValueError``."""
         return _scan(z, len(self.sonar.sensors))
+
+    def _shaped_scan(self, z) -> np.ndarray:
+        """`checked_scan` but for the values, which `_small`'s kernel checks."""
+        return _shaped(z, len(self.sonar.sensors))
 
     def _where(self):
         t = self.table
@@ -313,6 +326,8 @@ class PaperSensorModel(_ExpectedModel):
             particles, weights, noise, sensors, table, z, *motion, *where,
             1.0 / len(particles), u, out_p, out_w, new_p, new_w, est,
         )  # fmt: skip
+        if ess < 0.0:  # a reading not positive: refused before any draw or write
+            raise ValueError(_NOT_POSITIVE)
         if u < 0.0:
             return out_p, out_w, log_mean, ess, est, None, None
         return out_p, out_w, log_mean, ess, est, new_p, new_w
@@ -475,6 +490,8 @@ class BeamSensorModel(_ExpectedModel):
             np.exp(-q.lambda_short * z), *self._norms, *motion, *where, *beam, u,
             out_p, out_w, new_p, new_w, est,
         )  # fmt: skip
+        if ess < 0.0:  # a reading not positive: refused before any draw or write
+            raise ValueError(_NOT_POSITIVE)
         if u < 0.0:
             return out_p, out_w, log_mean, ess, est, None, None
         return out_p, out_w, log_mean, ess, est, new_p, new_w
