@@ -318,7 +318,11 @@ class PaperSensorModel(_ExpectedModel):
         ]
 
     def _small(self, particles, weights, motion, noise, z, u, scratch, words=None):
-        """`_run` below `PARALLEL_MIN` particles: `chunked.paper_small`, one call."""
+        """`_run` below `PARALLEL_MIN` particles: `chunked.paper_small`, one call.
+
+        The call checks the readings' values before its draws: ``ValueError``
+        for one not positive, nothing drawn or written.
+        """
         out_p, out_w, new_p, new_w, est = _small_outputs(scratch, len(particles), u)
         sensors, table, where, _ = self._consts()
         log_mean, ess = chunked.paper_small(
@@ -480,7 +484,11 @@ class BeamSensorModel(_ExpectedModel):
         ]
 
     def _small(self, particles, weights, motion, noise, z, u, scratch, words=None):
-        """`_run` below `PARALLEL_MIN` particles: `chunked.beam_small`, one call."""
+        """`_run` below `PARALLEL_MIN` particles: `chunked.beam_small`, one call.
+
+        The call checks the readings' values before its draws: ``ValueError``
+        for one not positive, nothing drawn or written.
+        """
         out_p, out_w, new_p, new_w, est = _small_outputs(scratch, len(particles), u)
         q = self.params
         sensors, table, where, beam = self._consts(q)
