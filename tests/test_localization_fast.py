@@ -354,7 +354,7 @@ def test_one_call_step_refuses_a_scan_before_drawing(world, kind):
         args = (words, True, p, w, out[0])
         if kind == "beam":
             q = model.params
-            sensors, table, where, beam = model._consts(q)
+            sensors, table, where, (beam, _) = model._consts(q)
             res = chunked.beam_small(
                 *args, sensors, table, z, np.exp(-q.lambda_short * z),
                 *model._norms, 0.1, 0.2, 0.0, 0.01, 0.01, 0.01, *where, *beam, 0.0,

@@ -542,7 +542,7 @@ class MCL:
         else:
             resampled, injected, regenerated = self.resample()
         if fused:  # arrays lent by the scratch and still in use are not lent again
-            own = type(self.resampling) in _OWN_POLICIES
+            own = plan[6]
             for a in lent:
                 if not own or a is self.particles or a is self.weights:
                     self._scratch.drop(a)
@@ -599,14 +599,15 @@ class MCL:
 
 
 def _plan(sensor, motion, policy) -> tuple:
-    """``(sensor, motion, policy, fused, fast, every)``: what `MCL._fused_step` may do.
+    """``(sensor, motion, policy, fused, fast, every, own)``: what a step may do.
 
     ``fused``: the models allow the fused step (a sensor model with its
     ``_run``, the odometry motion model); ``fast``: on the sensor's cone
     table (else, the exact path, up to `NORMALS_CHUNK` particles);
     ``every``: the policy resamples every step by low variance, in the call
-    (`ThresholdResampling._resample`'s draw). The models' attributes read
-    here are fixed (frozen dataclasses, a sensor's ``fast``).
+    (`ThresholdResampling._resample`'s draw); ``own``: the policy keeps no
+    reference to the sets it resamples (`_OWN_POLICIES`). The models'
+    attributes read here are fixed (frozen dataclasses, a sensor's ``fast``).
     """
     fused = (
         hasattr(sensor, "_run")  # the exact path with its noise drawn here
@@ -617,7 +618,8 @@ def _plan(sensor, motion, policy) -> tuple:
         and policy.threshold >= 1.0
         and policy.method in ("systematic", "low_variance")
     )
-    return sensor, motion, policy, fused, bool(getattr(sensor, "fast", False)), every
+    fast = bool(getattr(sensor, "fast", False))
+    return sensor, motion, policy, fused, fast, every, type(policy) in _OWN_POLICIES
 
 
 def _uniform(n: int) -> np.ndarray:

@@ -490,12 +490,11 @@ class BeamSensorModel(_ExpectedModel):
         for one not positive, nothing drawn or written.
         """
         out_p, out_w, new_p, new_w, est = _small_outputs(scratch, len(particles), u)
-        q = self.params
-        sensors, table, where, beam = self._consts(q)
+        sensors, table, where, (beam, rate) = self._consts(self.params)
         log_mean, ess = chunked.beam_small(
             _NO_WORDS if words is None else words, words is not None,
             particles, weights, noise, sensors, table, z,
-            np.exp(-q.lambda_short * z), *self._norms, *motion, *where, *beam, u,
+            np.exp(z * rate), *self._norms, *motion, *where, *beam, u,
             out_p, out_w, new_p, new_w, est,
         )  # fmt: skip
         if ess < 0.0:  # a reading not positive: refused before any draw or write
@@ -510,10 +509,16 @@ class BeamSensorModel(_ExpectedModel):
                 q.lambda_short, float(q.exponent), 0.0)  # fmt: skip
 
     def _extra(self, q) -> tuple:
+        """``(scalars, rate)``: `chunked.beam_small`'s model scalars, and more.
+
+        ``rate``: the short readings' rate negated, a 0-d array (``z * rate``
+        is quicker to call than ``-lambda_short * z``: the same products).
+        """
         max_range = float(self.sonar.max_range)
         return (
-            float(q.exponent), max_range - 1e-3, float(q.z_max), q.z_rand / max_range,
-            1.0 / q.sigma_hit, self._u2_skip,
+            (float(q.exponent), max_range - 1e-3, float(q.z_max),
+             q.z_rand / max_range, 1.0 / q.sigma_hit, self._u2_skip),
+            np.array(-q.lambda_short),
         )  # fmt: skip
 
     def _large(self, z, motion, where, n):
