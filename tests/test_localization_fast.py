@@ -339,6 +339,41 @@ def test_a_refused_scan_changes_nothing(world, make):
         assert mcl.rng.bit_generator.state == twin.rng.bit_generator.state
 
 
+def test_step_follows_models_replaced_between_steps(world):
+    """A policy, motion model, generator or set replaced between steps is the
+    one the next step uses: the same numbers as the parts in turn."""
+    from robotlib.localization import OdometryMotionModel
+
+    a, b = (MCL(world, _models(world)["beam"], n=300, rng=2) for _ in range(2))
+    odo = [np.array([1.0, 1.0, 0.0]) + k * np.array([0.2, 0.0, 0.05]) for k in range(8)]
+    z = expected_readings(world, np.array([[1.5, 1.0, 0.2]]))[0]
+    changes = [
+        {},
+        {"resampling": ThresholdResampling("systematic", 1.0)},
+        {"motion": OdometryMotionModel((0.01, 0.02, 0.03, 0.001))},
+        {"rng": 9},
+        {"particles": 11},
+        {"resampling": KLDResampling(n_min=100, n_max=300)},
+        {"sensor": _models(world)["paper"]},
+    ]
+    for k, change in enumerate(changes):
+        for mcl in (a, b):
+            for name, value in change.items():
+                if name == "rng":
+                    value = np.random.default_rng(value)
+                if name == "particles":
+                    mcl.set_particles(world.sample_free_poses(300, value))
+                else:
+                    setattr(mcl, name, value)
+        est = a.step(odo[k], odo[k + 1], z)
+        b.predict(odo[k], odo[k + 1])
+        b.update(z)
+        np.testing.assert_array_equal(est, b.estimate())
+        b.resample()
+        np.testing.assert_array_equal(a.particles, b.particles)
+        np.testing.assert_array_equal(a.weights, b.weights)
+
+
 @pytest.mark.parametrize("kind", ["paper", "beam"])
 def test_one_call_step_refuses_a_scan_before_drawing(world, kind):
     """`chunked.beam_small` / `paper_small` return (nan, -1) for a reading not

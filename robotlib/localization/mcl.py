@@ -22,13 +22,13 @@ The resampling policies are in `robotlib.localization.policies`.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
 import numpy as np
 
 from ..world import World
 from . import _kernels
 from .cones import free_space
+from .history import StepInfo
 from .motion import (
     NORMALS_CHUNK,
     PARALLEL_MIN,
@@ -51,42 +51,13 @@ from .policies import (
     ThresholdResampling,
     _gather,
     _plain,
+    _step_plan,
 )
 
 __all__ = [
     "MCL",
     "StepInfo",
 ]
-
-
-@dataclass(frozen=True)
-class StepInfo:
-    """What one `MCL.step` did.
-
-    Attributes
-    ----------
-    n_particles : int
-        Particles weighted this step.
-    ess : float
-        Effective sample size after weighting.
-    resampled : bool
-        Whether the set was resampled.
-    n_after : int
-        Particles after resampling (the next step's count).
-    injected, regenerated : int
-        Random particles added by augmented MCL, and by the admissibility
-        check.
-    log_mean_likelihood : float
-        Log of the scan's mean likelihood under the prior weights.
-    """
-
-    n_particles: int
-    ess: float
-    resampled: bool
-    n_after: int
-    injected: int
-    regenerated: int
-    log_mean_likelihood: float
 
 
 class MCL:
@@ -131,8 +102,8 @@ class MCL:
     _pcg = (None, None)
     """``(bit generator, (words, lock) or None)``: `_pcg_words`' view, kept."""
 
-    _plan = (None, None, None)
-    """`_fused_step`'s view of the models (`_plan`), kept while they are the same."""
+    _plan = (None,) * 7
+    """`step`'s view of the models (`_step_plan`), kept while they are the same."""
 
     def __init__(
         self,
@@ -315,7 +286,7 @@ class MCL:
         noise, as `resample` would). Returns False (nothing done) for other
         models, None when the set is still to be resampled, else the
         resampled ``(particles, weights)``. ``checked``: ``z`` is the
-        sensor's `checked_scan` already; ``plan``: `_plan` of the models.
+        sensor's `checked_scan` already; ``plan``: `_step_plan` of the models.
         """
         sensor = self.sensor
         if not plan[3] or not (plan[4] or len(self.particles) <= NORMALS_CHUNK):
@@ -357,15 +328,12 @@ class MCL:
         return None if new_p is None else (new_p, new_w)
 
     def _small_step(self, odo_prev, odo_now, z, every, words):
-        """`_fused_step` in one kernel call that checks the readings itself.
+        """`_fused_step` in one call that checks the readings' values itself.
 
-        For a known plain set (`_mine`) of fewer than `PARALLEL_MIN`
-        particles, a sensor model on its cone table and the filter's PCG64
-        ``(words, lock)`` (`_pcg_words`): the same numbers and draws. The
-        scan's shape is checked here, its values in the call before its
-        draws (a refused scan changes nothing); should the odometry be
-        refused as well, the scan's error comes first, as in `step`.
-        ``every``: the policy resamples every step (`_plan`).
+        `step`'s case: a known plain set (`_mine`) below `PARALLEL_MIN`
+        particles, a cone table, the filter's PCG64 ``words`` (`_pcg_words`);
+        ``every`` from `_step_plan`. The same numbers and draws; a refused
+        scan changes nothing, its error coming before the odometry's.
         """
         sensor = self.sensor
         z = sensor._shaped_scan(z)
@@ -496,28 +464,21 @@ class MCL:
         numpy.ndarray, shape (3,)
             The estimate after the update (before resampling).
         """
-        sensor, plan, p = self.sensor, self._plan, self.particles
-        if (
-            plan[0] is not sensor
-            or plan[1] is not self.motion
-            or plan[2] is not self.resampling
-        ):
-            plan = self._plan = _plan(sensor, self.motion, self.resampling)
-        words = (  # one call, the readings' values checked in it (`_small_step`)
-            self._pcg_words()
-            if plan[3] and plan[4] and p is self._mine[0]
-            and self.weights is self._mine[1] and len(p) < PARALLEL_MIN
-            and self._prebuild is None
-            else None
+        sensor, motion, policy = self.sensor, self.motion, self.resampling
+        plan, p = self._plan, self.particles
+        if plan[0] is not sensor or plan[1] is not motion or plan[2] is not policy:
+            plan = self._plan = _step_plan(sensor, motion, policy)
+        small = (  # one call that checks the readings' values itself: `_small_step`
+            plan[3] and plan[4] and p is self._mine[0] and self.weights is self._mine[1]
+            and len(p) < PARALLEL_MIN and self._prebuild is None
         )  # fmt: skip
+        words = self._pcg_words() if small else None
         if words is not None:
             n = len(p)
             done = self._small_step(odo_prev, odo_now, z, plan[5], words)
         else:
             check = getattr(sensor, "checked_scan", None)
-            if (
-                check is not None
-            ):  # before any draw or move: a refused one changes nothing
+            if check is not None:  # before any draw or move: a refusal changes nothing
                 z = check(z)
             if self._prebuild is not None:  # its kernels, from numba's cache
                 if not self._prebuild.poll():  # meanwhile the last ones here
@@ -598,39 +559,12 @@ class MCL:
         self._mine = (p, w if weights is None else None)  # plain: not checked again
 
 
-def _plan(sensor, motion, policy) -> tuple:
-    """``(sensor, motion, policy, fused, fast, every, own)``: what a step may do.
-
-    ``fused``: the models allow the fused step (a sensor model with its
-    ``_run``, the odometry motion model); ``fast``: on the sensor's cone
-    table (else, the exact path, up to `NORMALS_CHUNK` particles);
-    ``every``: the policy resamples every step by low variance, in the call
-    (`ThresholdResampling._resample`'s draw); ``own``: the policy keeps no
-    reference to the sets it resamples (`_OWN_POLICIES`). The models'
-    attributes read here are fixed (frozen dataclasses, a sensor's ``fast``).
-    """
-    fused = (
-        hasattr(sensor, "_run")  # the exact path with its noise drawn here
-        and type(motion).sample is OdometryMotionModel.sample
-    )
-    every = (
-        type(policy) is ThresholdResampling
-        and policy.threshold >= 1.0
-        and policy.method in ("systematic", "low_variance")
-    )
-    fast = bool(getattr(sensor, "fast", False))
-    return sensor, motion, policy, fused, fast, every, type(policy) in _OWN_POLICIES
-
-
 def _uniform(n: int) -> np.ndarray:
     """``np.full(n, 1.0 / n)``, the same numbers (a fill is quicker to call)."""
     w = np.empty(n)
     w.fill(1.0 / n)
     return w
 
-
-_OWN_POLICIES = (ThresholdResampling, KLDResampling, PaperResampling)
-"""Policies known to keep no reference to the particles or weights they resample."""
 
 BEST = {
     "n": 50_000,

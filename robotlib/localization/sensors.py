@@ -31,6 +31,7 @@ from . import _kernels, stepping
 from ._kernels import chunked, exact_models
 from .cones import EXACT_PARALLEL_MIN, cone_table, exact_arguments, expected_readings
 from .motion import PARALLEL_MIN, _particles
+from .stepping import _NONE_P, _NONE_W, _outputs, _small_outputs
 
 __all__ = [
     "innovation_loglik",
@@ -90,45 +91,7 @@ def innovation_loglik(z, zhat, n: int | None = None) -> np.ndarray:
     return out
 
 
-def _outputs(scratch, n: int, s: int) -> tuple:
-    """Arrays a fused step writes: particles (n, 3), weights (n,), and its work.
-
-    The work arrays (heading cosines and sines (n, 2), table entries (n, s)
-    int32) are used by the threaded kernels only. From ``scratch`` (a
-    `robotlib.localization.motion.Scratch`) when given, else new.
-    """
-    if scratch is None:
-        return (
-            np.empty((n, 3)), np.empty(n), np.empty((n, 2)),
-            np.empty((n, s), dtype=np.int32) if s else None,
-        )  # fmt: skip
-    return (
-        scratch.take("particles", (n, 3)),
-        scratch.take("weights", (n,)),
-        scratch.take("cs", (n, 2)),
-        scratch.take("mm", (n, s), np.int32) if s else None,
-    )
-
-
-def _small_outputs(scratch, n: int, u: float) -> tuple:
-    """``(out_p, out_w, new_p, new_w, est)`` of a one-call step (`chunked.beam_small`).
-
-    The moved particles (n, 3) and their weights (n,) from ``scratch`` (new
-    when None), the resampled set (new: the filter keeps it) when ``u >=
-    0`` (else empty), the estimate (3,) (new: the step returns it).
-    """
-    if scratch is None:
-        out_p, out_w = np.empty((n, 3)), np.empty(n)
-    else:
-        out_p, out_w = scratch.take("particles", (n, 3)), scratch.take("weights", (n,))
-    if u >= 0.0:
-        return out_p, out_w, np.empty((n, 3)), np.empty(n), np.empty(3)
-    return out_p, out_w, _NONE_P, _NONE_W, np.empty(3)
-
-
-_NONE_P = np.empty((0, 3))
 _NO_WORDS = np.zeros(4, dtype=np.uint64)  # no PCG64 state: the caller drew
-_NONE_W = np.empty(0)
 
 
 class _ExpectedModel:
