@@ -317,12 +317,94 @@ def test_step_accepts_particles_set_from_outside(world):
 )
 def test_a_refused_scan_changes_nothing(world, make):
     """A NaN or misshapen scan raises before any draw or move: the next step is
-    the one the filter would have taken without it."""
+    the one the filter would have taken without it.
+
+    Twice: the first step checks the scan before its call; from the second
+    on, the fast paths' set is the filter's own and their one call checks
+    the readings itself. With refused odometry as well, the scan's error.
+    """
     mcl, twin = make(world), make(world)
     odo0, odo1 = np.zeros(3), np.array([0.2, 0.0, 0.05])
     z = np.full(8, 2.0)
-    for bad in (np.r_[z[:7], np.nan], z[:7], -z):
-        with pytest.raises(ValueError):
-            mcl.step(odo0, odo1, bad)
-    np.testing.assert_array_equal(mcl.step(odo0, odo1, z), twin.step(odo0, odo1, z))
-    np.testing.assert_array_equal(mcl.particles, twin.particles)
+    for _ in range(2):
+        for bad in (np.r_[z[:7], np.nan], z[:7], -z, np.r_[0.0, z[1:]]):
+            message = "shape" if len(bad) != 8 else "positive"
+            for odo in (odo0, [0.0, 0.0]):
+                with pytest.raises(ValueError, match=message):
+                    mcl.step(odo, odo1, bad)
+        est = mcl.step(odo0, odo1, z)
+        np.testing.assert_array_equal(est, twin.step(odo0, odo1, z))
+        np.testing.assert_array_equal(mcl.particles, twin.particles)
+        np.testing.assert_array_equal(mcl.weights, twin.weights)
+        assert mcl.rng.bit_generator.state == twin.rng.bit_generator.state
+
+
+def test_step_follows_models_replaced_between_steps(world):
+    """A policy, motion model, generator or set replaced between steps is the
+    one the next step uses: the same numbers as the parts in turn."""
+    from robotlib.localization import OdometryMotionModel
+
+    a, b = (MCL(world, _models(world)["beam"], n=300, rng=2) for _ in range(2))
+    odo = [np.array([1.0, 1.0, 0.0]) + k * np.array([0.2, 0.0, 0.05]) for k in range(8)]
+    z = expected_readings(world, np.array([[1.5, 1.0, 0.2]]))[0]
+    changes = [
+        {},
+        {"resampling": ThresholdResampling("systematic", 1.0)},
+        {"motion": OdometryMotionModel((0.01, 0.02, 0.03, 0.001))},
+        {"rng": 9},
+        {"particles": 11},
+        {"resampling": KLDResampling(n_min=100, n_max=300)},
+        {"sensor": _models(world)["paper"]},
+    ]
+    for k, change in enumerate(changes):
+        for mcl in (a, b):
+            for name, value in change.items():
+                if name == "rng":
+                    value = np.random.default_rng(value)
+                if name == "particles":
+                    mcl.set_particles(world.sample_free_poses(300, value))
+                else:
+                    setattr(mcl, name, value)
+        est = a.step(odo[k], odo[k + 1], z)
+        b.predict(odo[k], odo[k + 1])
+        b.update(z)
+        np.testing.assert_array_equal(est, b.estimate())
+        b.resample()
+        np.testing.assert_array_equal(a.particles, b.particles)
+        np.testing.assert_array_equal(a.weights, b.weights)
+
+
+@pytest.mark.parametrize("kind", ["paper", "beam"])
+def test_one_call_step_refuses_a_scan_before_drawing(world, kind):
+    """`chunked.beam_small` / `paper_small` return (nan, -1) for a reading not
+    positive, having drawn and written nothing."""
+    model = _models(world)[kind]
+    mcl = MCL(world, model, resampling=ThresholdResampling("systematic", 1.0), n=50)
+    words = mcl._pcg_words()[0]
+    state = words.copy()
+    p, w = mcl.particles, mcl.weights
+    out = [np.full(s, 7.0) for s in ((50, 3), (50, 3), 50, (50, 3), 50, 3)]
+    for bad in (np.nan, 0.0, -1.0):
+        z = np.r_[np.full(7, 2.0), bad]
+        args = (words, True, p, w, out[0])
+        if kind == "beam":
+            q = model.params
+            sensors, table, where, (beam, _) = model._consts(q)
+            res = chunked.beam_small(
+                *args, sensors, table, z, np.exp(-q.lambda_short * z),
+                *model._norms, 0.1, 0.2, 0.0, 0.01, 0.01, 0.01, *where, *beam, 0.0,
+                *out[1:],
+            )  # fmt: skip
+        else:
+            sensors, table, where, _ = model._consts()
+            res = chunked.paper_small(
+                *args, sensors, table, z, 0.1, 0.2, 0.0, 0.01, 0.01, 0.01, *where,
+                1 / 50, 0.0, *out[1:],
+            )  # fmt: skip
+        assert math.isnan(res[0]) and res[1] == -1.0
+        np.testing.assert_array_equal(words, state)
+        assert all(np.all(a == 7.0) for a in out)
+        with pytest.raises(ValueError, match="positive"):
+            model._small(p, w, (0.1, 0.2, 0.0, 0.01, 0.01, 0.01), out[0], z, 0.0,
+                         None, words)  # fmt: skip
+        np.testing.assert_array_equal(words, state)

@@ -2,7 +2,8 @@
 
 `History.record` takes what a runner knows after each step (the true pose,
 the filter, the time the step took); `History.arrays` returns NumPy arrays
-and `History.to_dict` plain lists for JSON. The filter never records itself.
+and `History.to_dict` plain lists for JSON. The filter never records itself;
+it says what its last step did (`StepInfo`, `MCL.info`).
 """
 
 from __future__ import annotations
@@ -11,7 +12,37 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["History", "localized_step"]
+__all__ = ["History", "StepInfo", "localized_step"]
+
+
+@dataclass(frozen=True)
+class StepInfo:
+    """What one `MCL.step` did.
+
+    Attributes
+    ----------
+    n_particles : int
+        Particles weighted this step.
+    ess : float
+        Effective sample size after weighting.
+    resampled : bool
+        Whether the set was resampled.
+    n_after : int
+        Particles after resampling (the next step's count).
+    injected, regenerated : int
+        Random particles added by augmented MCL, and by the admissibility
+        check.
+    log_mean_likelihood : float
+        Log of the scan's mean likelihood under the prior weights.
+    """
+
+    n_particles: int
+    ess: float
+    resampled: bool
+    n_after: int
+    injected: int
+    regenerated: int
+    log_mean_likelihood: float
 
 
 @dataclass

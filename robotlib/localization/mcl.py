@@ -22,13 +22,13 @@ The resampling policies are in `robotlib.localization.policies`.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
 import numpy as np
 
 from ..world import World
 from . import _kernels
 from .cones import free_space
+from .history import StepInfo
 from .motion import (
     NORMALS_CHUNK,
     PARALLEL_MIN,
@@ -51,42 +51,13 @@ from .policies import (
     ThresholdResampling,
     _gather,
     _plain,
+    _step_plan,
 )
 
 __all__ = [
     "MCL",
     "StepInfo",
 ]
-
-
-@dataclass(frozen=True)
-class StepInfo:
-    """What one `MCL.step` did.
-
-    Attributes
-    ----------
-    n_particles : int
-        Particles weighted this step.
-    ess : float
-        Effective sample size after weighting.
-    resampled : bool
-        Whether the set was resampled.
-    n_after : int
-        Particles after resampling (the next step's count).
-    injected, regenerated : int
-        Random particles added by augmented MCL, and by the admissibility
-        check.
-    log_mean_likelihood : float
-        Log of the scan's mean likelihood under the prior weights.
-    """
-
-    n_particles: int
-    ess: float
-    resampled: bool
-    n_after: int
-    injected: int
-    regenerated: int
-    log_mean_likelihood: float
 
 
 class MCL:
@@ -131,6 +102,9 @@ class MCL:
     _pcg = (None, None)
     """``(bit generator, (words, lock) or None)``: `_pcg_words`' view, kept."""
 
+    _plan = (None,) * 7
+    """`step`'s view of the models (`_step_plan`), kept while they are the same."""
+
     def __init__(
         self,
         world: World,
@@ -166,7 +140,7 @@ class MCL:
         self.n_initial = int(n)
         self.init_std = tuple(float(s) for s in init_std)
         self._scratch = Scratch()
-        self._mine = (None, None)  # the set the last step left (known plain)
+        self._mine = (None, None)  # known plain: the last step's set, `set_particles`'s
         self.reset(init)
 
     # -- set up ---------------------------------------------------------------
@@ -303,7 +277,7 @@ class MCL:
         if self.injection is not None:
             self.injection.update(self._log_mean)
 
-    def _fused_step(self, odo_prev, odo_now, z, checked=False):
+    def _fused_step(self, odo_prev, odo_now, z, checked, plan):
         """Predict, update, estimate (and resample) in one call when the models allow.
 
         The same numbers as `predict`, `update`, `estimate` in turn (the same
@@ -312,14 +286,10 @@ class MCL:
         noise, as `resample` would). Returns False (nothing done) for other
         models, None when the set is still to be resampled, else the
         resampled ``(particles, weights)``. ``checked``: ``z`` is the
-        sensor's `checked_scan` already.
+        sensor's `checked_scan` already; ``plan``: `_step_plan` of the models.
         """
         sensor = self.sensor
-        if not (
-            hasattr(sensor, "_run")  # the exact path with its noise drawn here
-            and (getattr(sensor, "fast", False) or len(self.particles) <= NORMALS_CHUNK)
-            and type(self.motion).sample is OdometryMotionModel.sample
-        ):
+        if not plan[3] or not (plan[4] or len(self.particles) <= NORMALS_CHUNK):
             return False
         rot1, trans, rot2 = odometry_increment(odo_prev, odo_now)
         motion = (rot1, trans, rot2, *_noise_std(self.motion.alphas, rot1, trans, rot2))
@@ -334,18 +304,13 @@ class MCL:
         n = len(p)
         scratch = self._scratch
         noise = scratch.take("normals", (n, 3))
-        policy = self.resampling
-        every = (  # resampled in the call: `ThresholdResampling._resample`'s draw
-            type(policy) is ThresholdResampling
-            and policy.threshold >= 1.0
-            and policy.method in ("systematic", "low_variance")
-        )
+        every = plan[5]
         words = self._pcg_words() if n < PARALLEL_MIN else None
         if words is not None:  # the call draws the noise, then u, from the PCG64
             with words[1]:
-                moved, weights, log_mean, ess, self.last_estimate, new_p, new_w = (
-                    sensor._run(p, w, motion, noise, None, z, scratch,
-                                0.0 if every else -1.0, checked, words[0])
+                moved, weights, log_mean, ess, est, new_p, new_w = sensor._run(
+                    p, w, motion, noise, None, z, scratch, 0.0 if every else -1.0,
+                    checked, words[0],
                 )  # fmt: skip
         else:
             key = None
@@ -354,9 +319,38 @@ class MCL:
             else:  # drawn chunk by chunk in the step
                 key = int(self.rng.integers(np.iinfo(np.int64).max))
             u = self.rng.random() if every else -1.0
-            moved, weights, log_mean, ess, self.last_estimate, new_p, new_w = (
-                sensor._run(p, w, motion, noise, key, z, scratch, u, checked)
+            moved, weights, log_mean, ess, est, new_p, new_w = sensor._run(
+                p, w, motion, noise, key, z, scratch, u, checked
             )
+        self._last_estimate, self._estimate_of = est, None  # `last_estimate`'s setter
+        self.particles = moved
+        self._weighed(weights, log_mean, ess)
+        return None if new_p is None else (new_p, new_w)
+
+    def _small_step(self, odo_prev, odo_now, z, every, words):
+        """`_fused_step` in one call that checks the readings' values itself.
+
+        `step`'s case: a known plain set (`_mine`) below `PARALLEL_MIN`
+        particles, a cone table, the filter's PCG64 ``words`` (`_pcg_words`);
+        ``every`` from `_step_plan`. The same numbers and draws; a refused
+        scan changes nothing, its error coming before the odometry's.
+        """
+        sensor = self.sensor
+        z = sensor._shaped_scan(z)
+        try:
+            rot1, trans, rot2 = odometry_increment(odo_prev, odo_now)
+            sd = _noise_std(self.motion.alphas, rot1, trans, rot2)
+        except Exception:
+            sensor.checked_scan(z)  # raises when the scan is refused
+            raise
+        p, scratch = self.particles, self._scratch
+        noise = scratch.take("normals", (len(p), 3))
+        with words[1]:
+            moved, weights, log_mean, ess, est, new_p, new_w = sensor._small(
+                p, self.weights, (rot1, trans, rot2, *sd), noise, z,
+                0.0 if every else -1.0, scratch, words[0],
+            )  # fmt: skip
+        self._last_estimate, self._estimate_of = est, None  # `last_estimate`'s setter
         self.particles = moved
         self._weighed(weights, log_mean, ess)
         return None if new_p is None else (new_p, new_w)
@@ -470,31 +464,46 @@ class MCL:
         numpy.ndarray, shape (3,)
             The estimate after the update (before resampling).
         """
-        check = getattr(self.sensor, "checked_scan", None)
-        if check is not None:  # before any draw or move: a refused scan changes nothing
-            z = check(z)
-        if self._prebuild is not None:  # its kernels, from numba's cache
-            if not self._prebuild.poll():  # meanwhile the last ones here
-                from ._prebuild import compile_tail
+        sensor, motion, policy = self.sensor, self.motion, self.resampling
+        plan, p = self._plan, self.particles
+        if plan[0] is not sensor or plan[1] is not motion or plan[2] is not policy:
+            plan = self._plan = _step_plan(sensor, motion, policy)
+        small = (  # one call that checks the readings' values itself: `_small_step`
+            plan[3] and plan[4] and p is self._mine[0] and self.weights is self._mine[1]
+            and len(p) < PARALLEL_MIN and self._prebuild is None
+        )  # fmt: skip
+        words = self._pcg_words() if small else None
+        if words is not None:
+            n = len(p)
+            done = self._small_step(odo_prev, odo_now, z, plan[5], words)
+        else:
+            check = getattr(sensor, "checked_scan", None)
+            if check is not None:  # before any draw or move: a refusal changes nothing
+                z = check(z)
+            if self._prebuild is not None:  # its kernels, from numba's cache
+                if not self._prebuild.poll():  # meanwhile the last ones here
+                    from ._prebuild import compile_tail
 
-                compile_tail(self, self._prebuild)
-            self._prebuild.wait()
-            self._prebuild = None
-        n = len(self.particles)
-        done = self._fused_step(odo_prev, odo_now, z, check is not None)
+                    compile_tail(self, self._prebuild)
+                self._prebuild.wait()
+                self._prebuild = None
+            n = len(self.particles)
+            done = self._fused_step(odo_prev, odo_now, z, check is not None, plan)
         fused = done is not False
-        if not fused:
+        if fused:
+            est = self._last_estimate
+        else:
             self.predict(odo_prev, odo_now)
             self.update(z)
-            self.last_estimate = self.estimate()
-        est, log_mean = self.last_estimate, self._log_mean
+            est = self.last_estimate = self.estimate()
+        log_mean = self._log_mean
         lent = (self.particles, self.weights)
         if done:  # resampled in the same call
             resampled, injected, regenerated = self._adopt(*done)
         else:
             resampled, injected, regenerated = self.resample()
         if fused:  # arrays lent by the scratch and still in use are not lent again
-            own = type(self.resampling) in _OWN_POLICIES
+            own = plan[6]
             for a in lent:
                 if not own or a is self.particles or a is self.weights:
                     self._scratch.drop(a)
@@ -547,6 +556,7 @@ class MCL:
         if w.shape != (len(p),):
             raise ValueError("weights must have shape (N,)")
         self.particles, self.weights = p, w
+        self._mine = (p, w if weights is None else None)  # plain: not checked again
 
 
 def _uniform(n: int) -> np.ndarray:
@@ -555,9 +565,6 @@ def _uniform(n: int) -> np.ndarray:
     w.fill(1.0 / n)
     return w
 
-
-_OWN_POLICIES = (ThresholdResampling, KLDResampling, PaperResampling)
-"""Policies known to keep no reference to the particles or weights they resample."""
 
 BEST = {
     "n": 50_000,

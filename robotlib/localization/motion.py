@@ -34,6 +34,8 @@ __all__ = ["odometry_increment", "sample_motion_odometry", "OdometryMotionModel"
 PARALLEL_MIN = 4096
 """Particle count from which kernels run over threads."""
 
+_F64 = np.dtype(np.float64)
+
 NORMALS_CHUNK = 8192
 """Rows of motion noise drawn by one generator, beyond (see `standard_normals`)."""
 
@@ -66,10 +68,10 @@ class Scratch:
     def __init__(self):
         self._arrays: dict[str, np.ndarray] = {}
 
-    def take(self, name: str, shape: tuple, dtype=np.float64) -> np.ndarray:
+    def take(self, name: str, shape: tuple, dtype=_F64) -> np.ndarray:
         """Return the array ``name`` of this shape and dtype (new if none yet)."""
         a = self._arrays.get(name)
-        if a is None or a.shape != shape or a.dtype != dtype:
+        if a is None or a.shape != shape or (a.dtype is not dtype and a.dtype != dtype):
             a = self._arrays[name] = np.empty(shape, dtype=dtype)
         return a
 
@@ -156,7 +158,11 @@ def pcg64_words(rng: np.random.Generator) -> np.ndarray | None:
 
 def _floats(pose) -> list:
     """Return the items of ``pose`` as Python floats (an array: without a loop)."""
-    if type(pose) is np.ndarray and pose.dtype == np.float64 and pose.ndim == 1:
+    if (
+        type(pose) is np.ndarray
+        and pose.ndim == 1
+        and (pose.dtype is _F64 or pose.dtype == _F64)
+    ):  # the canonical dtype compared first: quicker than ``==``
         return pose.tolist()
     return [float(v) for v in pose]
 

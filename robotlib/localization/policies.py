@@ -9,7 +9,8 @@ indexes of the particles to keep (or ``None``: no resampling this step):
   run only when the effective sample size falls below a share of ``N``;
 - `KLDResampling`: KLD-sampling, every step (or below an ESS threshold).
 
-`AugmentedInjection` adds augmented MCL's random particles (Thrun, table 8.3).
+`AugmentedInjection` adds augmented MCL's random particles (Thrun, table 8.3);
+`_step_plan` says how `MCL.step` may run with a policy and its models.
 Imports the localization's own pieces; never `robotlib.localization.mcl`
 (which imports this module) except for type hints.
 """
@@ -24,7 +25,7 @@ import numpy as np
 
 from . import _kernels
 from .kld import kld_resample
-from .motion import _particles
+from .motion import OdometryMotionModel, _particles
 from .paper import RESIZE_FLOOR, resize
 from .resampling import RESAMPLERS, multinomial_resample
 
@@ -43,10 +44,13 @@ def _plain(a, ndim: int) -> bool:
     """Whether ``a`` is a C-contiguous float64 array of ``ndim`` dimensions."""
     return (
         type(a) is np.ndarray
-        and a.dtype == np.float64
         and a.ndim == ndim
+        and (a.dtype is _F64 or a.dtype == _F64)  # the canonical one: no ``==``
         and a.flags.c_contiguous
     )
+
+
+_F64 = np.dtype(np.float64)
 
 
 def _gather(particles: np.ndarray, idx) -> np.ndarray:
@@ -239,3 +243,31 @@ class AugmentedInjection:
     def reset(self) -> None:
         """Forget the averages."""
         self.w_slow = self.w_fast = float("nan")
+
+
+def _step_plan(sensor, motion, policy) -> tuple:
+    """``(sensor, motion, policy, fused, fast, every, own)``: how `MCL.step` may run.
+
+    ``fused``: the models allow the fused step (a sensor model with its
+    ``_run``, the odometry motion model); ``fast``: on the sensor's cone
+    table (else, the exact path, up to `NORMALS_CHUNK` particles);
+    ``every``: the policy resamples every step by low variance, in the call
+    (`ThresholdResampling._resample`'s draw); ``own``: the policy keeps no
+    reference to the sets it resamples (`_OWN_POLICIES`). The models'
+    attributes read here are fixed (frozen dataclasses, a sensor's ``fast``).
+    """
+    fused = (
+        hasattr(sensor, "_run")  # the exact path with its noise drawn here
+        and type(motion).sample is OdometryMotionModel.sample
+    )
+    every = (
+        type(policy) is ThresholdResampling
+        and policy.threshold >= 1.0
+        and policy.method in ("systematic", "low_variance")
+    )
+    fast = bool(getattr(sensor, "fast", False))
+    return sensor, motion, policy, fused, fast, every, type(policy) in _OWN_POLICIES
+
+
+_OWN_POLICIES = (ThresholdResampling, KLDResampling, PaperResampling)
+"""Policies known to keep no reference to the particles or weights they resample."""

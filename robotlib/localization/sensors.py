@@ -31,6 +31,7 @@ from . import _kernels, stepping
 from ._kernels import chunked, exact_models
 from .cones import EXACT_PARALLEL_MIN, cone_table, exact_arguments, expected_readings
 from .motion import PARALLEL_MIN, _particles
+from .stepping import _NONE_P, _NONE_W, _outputs, _small_outputs
 
 __all__ = [
     "innovation_loglik",
@@ -41,14 +42,23 @@ __all__ = [
 
 
 def _scan(z, n_sensors: int) -> np.ndarray:
+    z = _shaped(z, n_sensors)
+    r = z.tolist()  # quicker than NumPy for a few; a NaN makes the sum NaN
+    if r and not (min(r) > 0.0 and (total := sum(r)) == total):
+        raise ValueError(_NOT_POSITIVE)
+    return z
+
+
+def _shaped(z, n_sensors: int) -> np.ndarray:
+    """`_scan` but for the values: ``z`` as a float array (S,), or ``ValueError``."""
     if not (type(z) is np.ndarray and z.dtype is _F64 and z.flags.c_contiguous):
         z = np.ascontiguousarray(z, dtype=np.float64)
     if z.shape != (n_sensors,):
         raise ValueError(f"z must have shape ({n_sensors},), got {z.shape}")
-    r = z.tolist()  # quicker than NumPy for a few; a NaN makes the sum NaN
-    if r and not (min(r) > 0.0 and sum(r) == sum(r)):
-        raise ValueError("sonar readings must be positive")
     return z
+
+
+_NOT_POSITIVE = "sonar readings must be positive"
 
 
 _F64 = np.dtype(np.float64)
@@ -81,29 +91,7 @@ def innovation_loglik(z, zhat, n: int | None = None) -> np.ndarray:
     return out
 
 
-def _outputs(scratch, n: int, s: int) -> tuple:
-    """Arrays a fused step writes: particles (n, 3), weights (n,), and its work.
-
-    The work arrays (heading cosines and sines (n, 2), table entries (n, s)
-    int32) are used by the threaded kernels only. From ``scratch`` (a
-    `robotlib.localization.motion.Scratch`) when given, else new.
-    """
-    if scratch is None:
-        return (
-            np.empty((n, 3)), np.empty(n), np.empty((n, 2)),
-            np.empty((n, s), dtype=np.int32) if s else None,
-        )  # fmt: skip
-    return (
-        scratch.take("particles", (n, 3)),
-        scratch.take("weights", (n,)),
-        scratch.take("cs", (n, 2)),
-        scratch.take("mm", (n, s), np.int32) if s else None,
-    )
-
-
-_NONE_P = np.empty((0, 3))
 _NO_WORDS = np.zeros(4, dtype=np.uint64)  # no PCG64 state: the caller drew
-_NONE_W = np.empty(0)
 
 
 class _ExpectedModel:
@@ -123,6 +111,10 @@ class _ExpectedModel:
     def checked_scan(self, z) -> np.ndarray:
         """Return ``z`` as a float array of shape (S,), or raise ``ValueError``."""
         return _scan(z, len(self.sonar.sensors))
+
+    def _shaped_scan(self, z) -> np.ndarray:
+        """`checked_scan` but for the values, which `_small`'s kernel checks."""
+        return _shaped(z, len(self.sonar.sensors))
 
     def _where(self):
         t = self.table
@@ -145,6 +137,8 @@ class _ExpectedModel:
         if not checked:
             z = _scan(z, len(self.sonar.sensors))
         n = len(particles)
+        if self.table is not None and n < PARALLEL_MIN:  # one serial call
+            return self._small(particles, weights, motion, noise, z, u, scratch, words)
         if u >= 0.0:
             new = (np.empty((n, 3)), np.empty(n))
         else:
@@ -153,25 +147,15 @@ class _ExpectedModel:
             return self._exact_run(
                 particles, weights, motion, noise, z, scratch, u, new, words
             )
-        if n < PARALLEL_MIN:  # one serial call, its scalars one by one
-            if scratch is None:
-                out_p, out_w = np.empty((n, 3)), np.empty(n)
-            else:
-                out_p = scratch.take("particles", (n, 3))
-                out_w = scratch.take("weights", (n,))
-            est = np.empty(3)
-            log_mean, ess = self._small(particles, weights, motion, noise, z, u,
-                                        out_p, out_w, *new, est, words)  # fmt: skip
-        else:
-            out_p, out_w, cs, mm = _outputs(scratch, n, len(z))
-            out = (out_p, out_w, cs, mm, *new)
-            t = self.table
-            where = (float(t.origin[0]), float(t.origin[1]), 1.0 / t.resolution)
-            prm, skip, lut = self._large(z, motion, where, n)
-            log_mean, ess, est = stepping.run_step(
-                self.name, particles, weights, prm, noise, key, self.sonar.sensors,
-                skip, t.table, lut, out, u,
-            )  # fmt: skip
+        out_p, out_w, cs, mm = _outputs(scratch, n, len(z))
+        out = (out_p, out_w, cs, mm, *new)
+        t = self.table
+        where = (float(t.origin[0]), float(t.origin[1]), 1.0 / t.resolution)
+        prm, skip, lut = self._large(z, motion, where, n)
+        log_mean, ess, est = stepping.run_step(
+            self.name, particles, weights, prm, noise, key, self.sonar.sensors,
+            skip, t.table, lut, out, u,
+        )  # fmt: skip
         got = (None, None) if u < 0.0 else new
         return (out_p, out_w, log_mean, ess, est, *got)
 
@@ -296,14 +280,24 @@ class PaperSensorModel(_ExpectedModel):
             :5
         ]
 
-    def _small(self, particles, weights, motion, noise, z, u, out_p, out_w, new_p,
-               new_w, est, words=None):  # fmt: skip
+    def _small(self, particles, weights, motion, noise, z, u, scratch, words=None):
+        """`_run` below `PARALLEL_MIN` particles: `chunked.paper_small`, one call.
+
+        The call checks the readings' values before its draws: ``ValueError``
+        for one not positive, nothing drawn or written.
+        """
+        out_p, out_w, new_p, new_w, est = _small_outputs(scratch, len(particles), u)
         sensors, table, where, _ = self._consts()
-        return chunked.paper_small(
+        log_mean, ess = chunked.paper_small(
             _NO_WORDS if words is None else words, words is not None,
             particles, weights, noise, sensors, table, z, *motion, *where,
             1.0 / len(particles), u, out_p, out_w, new_p, new_w, est,
         )  # fmt: skip
+        if ess < 0.0:  # a reading not positive: refused before any draw or write
+            raise ValueError(_NOT_POSITIVE)
+        if u < 0.0:
+            return out_p, out_w, log_mean, ess, est, None, None
+        return out_p, out_w, log_mean, ess, est, new_p, new_w
 
     def _exact_model(self, n: int) -> tuple:
         return (False, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 1.0, float(n))
@@ -452,16 +446,25 @@ class BeamSensorModel(_ExpectedModel):
             :5
         ]
 
-    def _small(self, particles, weights, motion, noise, z, u, out_p, out_w, new_p,
-               new_w, est, words=None):  # fmt: skip
-        q = self.params
-        sensors, table, where, beam = self._consts(q)
-        return chunked.beam_small(
+    def _small(self, particles, weights, motion, noise, z, u, scratch, words=None):
+        """`_run` below `PARALLEL_MIN` particles: `chunked.beam_small`, one call.
+
+        The call checks the readings' values before its draws: ``ValueError``
+        for one not positive, nothing drawn or written.
+        """
+        out_p, out_w, new_p, new_w, est = _small_outputs(scratch, len(particles), u)
+        sensors, table, where, (beam, rate) = self._consts(self.params)
+        log_mean, ess = chunked.beam_small(
             _NO_WORDS if words is None else words, words is not None,
             particles, weights, noise, sensors, table, z,
-            np.exp(-q.lambda_short * z), *self._norms, *motion, *where, *beam, u,
+            np.exp(z * rate), *self._norms, *motion, *where, *beam, u,
             out_p, out_w, new_p, new_w, est,
         )  # fmt: skip
+        if ess < 0.0:  # a reading not positive: refused before any draw or write
+            raise ValueError(_NOT_POSITIVE)
+        if u < 0.0:
+            return out_p, out_w, log_mean, ess, est, None, None
+        return out_p, out_w, log_mean, ess, est, new_p, new_w
 
     def _exact_model(self, n: int) -> tuple:
         q = self.params
@@ -469,10 +472,16 @@ class BeamSensorModel(_ExpectedModel):
                 q.lambda_short, float(q.exponent), 0.0)  # fmt: skip
 
     def _extra(self, q) -> tuple:
+        """``(scalars, rate)``: `chunked.beam_small`'s model scalars, and more.
+
+        ``rate``: the short readings' rate negated, a 0-d array (``z * rate``
+        is quicker to call than ``-lambda_short * z``: the same products).
+        """
         max_range = float(self.sonar.max_range)
         return (
-            float(q.exponent), max_range - 1e-3, float(q.z_max), q.z_rand / max_range,
-            1.0 / q.sigma_hit, self._u2_skip,
+            (float(q.exponent), max_range - 1e-3, float(q.z_max),
+             q.z_rand / max_range, 1.0 / q.sigma_hit, self._u2_skip),
+            np.array(-q.lambda_short),
         )  # fmt: skip
 
     def _large(self, z, motion, where, n):

@@ -19,8 +19,10 @@ again. A waiting thread sleeps (no OpenMP spinning), so a step keeps its
 pace when another process shares the cores. Same numbers, bit for bit,
 as the models' kernels in turn.
 
-Imports the localization's kernels and `robotlib.localization.motion`;
-never the sensor models or `robotlib.localization.mcl`.
+The arrays a fused step writes come from the filter's scratch
+(`_outputs`, `_small_outputs`). Imports the localization's kernels and
+`robotlib.localization.motion`; never the sensor models or
+`robotlib.localization.mcl`.
 """
 
 from __future__ import annotations
@@ -58,6 +60,46 @@ fifths of the step).
 
 PIECES_PER_THREAD = 2
 """Pieces of a step per thread: a thread that another process slows takes fewer."""
+
+
+def _outputs(scratch, n: int, s: int) -> tuple:
+    """Arrays a fused step writes: particles (n, 3), weights (n,), and its work.
+
+    The work arrays (heading cosines and sines (n, 2), table entries (n, s)
+    int32) are used by the threaded kernels only. From ``scratch`` (a
+    `robotlib.localization.motion.Scratch`) when given, else new.
+    """
+    if scratch is None:
+        return (
+            np.empty((n, 3)), np.empty(n), np.empty((n, 2)),
+            np.empty((n, s), dtype=np.int32) if s else None,
+        )  # fmt: skip
+    return (
+        scratch.take("particles", (n, 3)),
+        scratch.take("weights", (n,)),
+        scratch.take("cs", (n, 2)),
+        scratch.take("mm", (n, s), np.int32) if s else None,
+    )
+
+
+def _small_outputs(scratch, n: int, u: float) -> tuple:
+    """``(out_p, out_w, new_p, new_w, est)`` of a one-call step (`chunked.beam_small`).
+
+    The moved particles (n, 3) and their weights (n,) from ``scratch`` (new
+    when None), the resampled set (new: the filter keeps it) when ``u >=
+    0`` (else empty), the estimate (3,) (new: the step returns it).
+    """
+    if scratch is None:
+        out_p, out_w = np.empty((n, 3)), np.empty(n)
+    else:
+        out_p, out_w = scratch.take("particles", (n, 3)), scratch.take("weights", (n,))
+    if u >= 0.0:
+        return out_p, out_w, np.empty((n, 3)), np.empty(n), np.empty(3)
+    return out_p, out_w, _NONE_P, _NONE_W, np.empty(3)
+
+
+_NONE_P = np.empty((0, 3))
+_NONE_W = np.empty(0)
 
 
 def spans(n: int, parts: int) -> list[tuple[int, int]]:

@@ -229,6 +229,15 @@ def _weigh_into(weights, out_p, cs, out_w, u, new_p, new_w, est):
 
 
 @nb.njit(**JIT, inline="always")
+def _refused(z):
+    """Whether a reading of ``z`` (S,) is not positive (NaN included)."""
+    for i in range(z.shape[0]):
+        if not z[i] > 0.0:
+            return True
+    return False
+
+
+@nb.njit(**JIT, inline="always")
 def _draw(words, draw, noise, u):
     """With ``draw``: ``noise`` := the PCG64's normals, then (``u >= 0``) ``u``.
 
@@ -262,7 +271,12 @@ def beam_small(words, draw, particles, weights, noise, sensors, table, z, e_shor
     state ``words`` (4,) uint64 (`_draw`): ``noise`` (N, 3) receives the
     motion noise and, when ``u >= 0``, ``u`` is drawn after it. Otherwise
     ``noise`` and ``u`` are the caller's (``words`` unused).
+
+    A scan ``z`` with a reading not positive (or NaN) is refused first:
+    nothing drawn or written, ``(nan, -1.0)`` returned.
     """
+    if _refused(z):
+        return np.nan, -1.0
     u = _draw(words, draw, noise, u)
     n = particles.shape[0]
     s_count = sensors.shape[0]
@@ -285,7 +299,12 @@ def beam_small(words, draw, particles, weights, noise, sensors, table, z, e_shor
 def paper_small(words, draw, particles, weights, noise, sensors, table, z, rot1,
                 trans, rot2, sd1, sdt, sd2, x0, y0, inv_res, inv_n, u, out_p, out_w,
                 new_p, new_w, est):  # fmt: skip
-    """`by_reading.paper_table_step`, then (``u >= 0``) resampling, as `beam_small`."""
+    """`by_reading.paper_table_step`, then (``u >= 0``) resampling, as `beam_small`.
+
+    A refused scan as there: ``(nan, -1.0)``.
+    """
+    if _refused(z):
+        return np.nan, -1.0
     u = _draw(words, draw, noise, u)
     n = particles.shape[0]
     skip = np.zeros(sensors.shape[0], dtype=np.bool_)
