@@ -378,6 +378,36 @@ def _ray_entry(t, m, bit, max_range, min_range):
 
 
 @nb.njit(**JIT)
+def strip_order(x0, y0, resolution, ny, nx, c, s, u0, inv_w, n_strips):
+    """Return the cells ``i * nx + j`` strip by strip, shape (ny * nx,) int32.
+
+    Strip ``k`` (offsets across ``(c, s)`` from ``u0 + k / inv_w``, m) is
+    the one `strip_ray` finds for the cell's centre; within a strip the
+    cells keep their row-major order, which runs along the strip. Rays
+    taken in this order find their strip's walls and its finger still in
+    the cache (on the generated large map about a quarter less processor
+    time than row by row); any order gives the same entries.
+    """
+    count = np.zeros(n_strips + 1, dtype=np.int64)
+    for i in range(ny):
+        cy = y0 + (i + 0.5) * resolution
+        for j in range(nx):
+            cx = x0 + (j + 0.5) * resolution
+            count[int((-s * cx + c * cy - u0) * inv_w) + 1] += 1
+    for k in range(n_strips):
+        count[k + 1] += count[k]
+    order = np.empty(ny * nx, dtype=np.int32)
+    for i in range(ny):
+        cy = y0 + (i + 0.5) * resolution
+        for j in range(nx):
+            cx = x0 + (j + 0.5) * resolution
+            k = int((-s * cx + c * cy - u0) * inv_w)
+            order[count[k]] = i * nx + j
+            count[k] += 1
+    return order
+
+
+@nb.njit(**JIT)
 def _direction_rays(
     segments, normals, x0, y0, resolution, b, b2, n_bins, max_range, min_range,
     cos_specular, w, xc, yc, d, n_strips, planes,
@@ -385,8 +415,9 @@ def _direction_rays(
     """Every cell's ray along bin ``b`` and its opposite ``b2`` (unless ``b2 < 0``).
 
     Both directions' rays go through one set of strips (`build_strips`,
-    `strip_ray`, `strip_ray_back`); the entry of cell ``(i, j)``'s ray
-    along ``b`` goes to ``planes[i, b, j]`` (`strip_sweep_table`).
+    `strip_ray`, `strip_ray_back`), a strip's cells one after another
+    (`strip_order`); the entry of cell ``(i, j)``'s ray along ``b`` goes
+    to ``planes[i, b, j]`` (`strip_sweep_table`).
     """
     ny, _, nx = planes.shape
     dx = math.cos(b * _TWO_PI / n_bins)  # as `cone_echo` computes each ray
@@ -403,22 +434,23 @@ def _direction_rays(
     inv_w = 1.0 / w
     finger = start[:n_strips].copy()
     finger2 = start[:n_strips].copy()
-    for i in range(ny):
+    for cell in strip_order(x0, y0, resolution, ny, nx, dx, dy, u0, inv_w, n_strips):
+        i = cell // nx
+        j = cell - i * nx
         cy = y0 + (i + 0.5) * resolution
-        for j in range(nx):
-            cx = x0 + (j + 0.5) * resolution
-            t, m = strip_ray(
-                cx, cy, dx, dy, u0, inv_w, start, firsts, entries, ids, reach,
-                finger, max_range,
-            )  # fmt: skip
-            planes[i, b, j] = _ray_entry(t, m, 1, max_range, min_range)
-            if b2 < 0:
-                continue
-            t, m = strip_ray_back(
-                cx, cy, dx, dy, dx2, dy2, u0, inv_w, start, firsts, entries, ids,
-                reach, finger2, max_range,
-            )  # fmt: skip
-            planes[i, b2, j] = _ray_entry(t, m, 2, max_range, min_range)
+        cx = x0 + (j + 0.5) * resolution
+        t, m = strip_ray(
+            cx, cy, dx, dy, u0, inv_w, start, firsts, entries, ids, reach,
+            finger, max_range,
+        )  # fmt: skip
+        planes[i, b, j] = _ray_entry(t, m, 1, max_range, min_range)
+        if b2 < 0:
+            continue
+        t, m = strip_ray_back(
+            cx, cy, dx, dy, dx2, dy2, u0, inv_w, start, firsts, entries, ids,
+            reach, finger2, max_range,
+        )  # fmt: skip
+        planes[i, b2, j] = _ray_entry(t, m, 2, max_range, min_range)
 
 
 @nb.njit(**JIT_PARALLEL)
