@@ -23,9 +23,10 @@ than `_PARALLEL` (1e-6) rad off the direction). Walls closer to parallel
 than that are tried by every ray of their strip. Why it is fast: the walls
 a ray tries lie side by side in memory (their end point and edge vector
 copied into the strip), about five a ray on ``columbia.map``, most ruled
-out by comparing two numbers; and each direction's rays are written to
-their own plane (a row of cells at a time, in the table's own memory), a
-cone then being the least of its rays' entries (entries grow with the
+out by comparing two numbers; the cells' rays are cast strip by strip
+(`strip_order`), so that a strip's walls are still in the cache for its
+next cell; and each direction's rays are written to their own plane (in
+the table's own memory), a cone then being the least of its rays' entries (entries grow with the
 range, so the least entry is the entry of the least range: the same number
 as the cone's nearest echo gives).
 
