@@ -271,6 +271,7 @@ def table_cache_dir() -> Path | None:
 _SOURCES = (
     "_kernels/tables.py",
     "_kernels/table_strips.py",
+    "_kernels/strip_lists.py",
     "../sensing/_kernels.py",
     "../world/_kernels.py",
 )
