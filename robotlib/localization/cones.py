@@ -353,6 +353,12 @@ def _disk_store_later(key: str | None, table: np.ndarray) -> None:
     thread.start()
 
 
+def wait_for_disk_stores() -> None:
+    """Wait until every table being written to the disk cache is written."""
+    while _STORING:
+        _STORING.popitem()[1].join()
+
+
 def _disk_store(key: str | None, table: np.ndarray, folder: Path | None = None) -> None:
     """Keep ``table`` in the disk cache (atomically; silently not when it fails).
 
