@@ -222,9 +222,10 @@ def test_disk_cache_gives_the_same_table_and_rebuilds_when_unsure(
     monkeypatch.setenv("ROBOTLIB_TABLE_CACHE", str(tmp_path))
     world = square_world(8.0)
     built = ConeTable(world, resolution=0.1)
-    assert not built.from_disk and len(list(tmp_path.glob("*.npy"))) == 1
-    read = ConeTable(world, resolution=0.1)
+    assert not built.from_disk
+    read = ConeTable(world, resolution=0.1)  # waits for the file being written
     assert read.from_disk and not read.table.flags.writeable
+    assert len(list(tmp_path.glob("*.npy"))) == 1
     np.testing.assert_array_equal(read.table, built.table)
     # another grid, sonar or wall: another key
     assert not ConeTable(world, resolution=0.2).from_disk

@@ -68,6 +68,7 @@ def bench_maps(path: Path, resolution: float = 0.05, sample: int = 40) -> dict:
     """Time the preparation of ``path`` for MCL; return the figures (s)."""
     from ..localization import ConeTable
     from ..localization import _kernels as lk
+    from ..localization.cones import wait_for_disk_stores
     from ..world import _kernels as wk
     from ..world import load_world
 
@@ -85,6 +86,7 @@ def bench_maps(path: Path, resolution: float = 0.05, sample: int = 40) -> dict:
             table, t_table, c_table = _timed(
                 lambda: ConeTable(world, resolution=resolution)
             )
+            wait_for_disk_stores()  # written meanwhile; a later run finds it there
             again, t_disk, _ = _timed(lambda: ConeTable(world, resolution=resolution))
         finally:
             if saved is None:

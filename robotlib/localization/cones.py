@@ -20,6 +20,7 @@ import hashlib
 import math
 import os
 import tempfile
+import threading
 import time
 import weakref
 from pathlib import Path
@@ -150,7 +151,7 @@ class ConeTable:
         self.build_seconds = time.perf_counter() - t0
         self.table.setflags(write=False)
         if self.build_seconds >= DISK_MIN_SECONDS:
-            _disk_store(key, self.table)
+            _disk_store_later(key, self.table)
 
     @property
     def nbytes(self) -> int:
@@ -270,6 +271,7 @@ def table_cache_dir() -> Path | None:
 _SOURCES = (
     "_kernels/tables.py",
     "_kernels/table_strips.py",
+    "_kernels/strip_lists.py",
     "../sensing/_kernels.py",
     "../world/_kernels.py",
 )
@@ -302,10 +304,16 @@ def _disk_key(world: World, origin, shape, model) -> str | None:
 
 
 def _disk_load(key: str | None, out: np.ndarray) -> bool:
-    """Fill ``out`` from the disk cache; return whether it held the table."""
+    """Fill ``out`` from the disk cache; return whether it held the table.
+
+    Waits first for a store of ``key`` still being written (`_disk_store_later`).
+    """
     folder = table_cache_dir()
     if folder is None or key is None:
         return False
+    pending = _STORING.pop(key, None)
+    if pending is not None:
+        pending.join()
     try:
         with open(folder / f"{key}.npy", "rb") as f:
             version = np.lib.format.read_magic(f)
@@ -320,9 +328,43 @@ def _disk_load(key: str | None, out: np.ndarray) -> bool:
         return False
 
 
-def _disk_store(key: str | None, table: np.ndarray) -> None:
-    """Keep ``table`` in the disk cache (atomically; silently not when it fails)."""
-    folder = table_cache_dir()
+_STORING: dict[str, threading.Thread] = {}
+"""Tables being written to the disk cache, by key (`_disk_store_later`)."""
+
+
+def _disk_store_later(key: str | None, table: np.ndarray) -> None:
+    """`_disk_store` from a thread of its own: the table is ready meanwhile.
+
+    ``table`` must stay unchanged (the cone table is read-only by then).
+    Writing the 73 MB of the generated large map's table took 0.01-0.7 s
+    of wall time here (slow once the page cache is full), which the filter
+    no longer waits for. Not a daemon: a process that ends first waits for
+    the file; `_disk_load` of the same key waits for it too.
+    """
+    folder = table_cache_dir()  # the directory of now, not of when it runs
+    if key is None or folder is None:
+        return
+    for done in [k for k, t in _STORING.items() if not t.is_alive()]:
+        del _STORING[done]
+    thread = threading.Thread(
+        target=_disk_store, args=(key, table, folder), name="robotlib-table-store"
+    )
+    _STORING[key] = thread
+    thread.start()
+
+
+def wait_for_disk_stores() -> None:
+    """Wait until every table being written to the disk cache is written."""
+    while _STORING:
+        _STORING.popitem()[1].join()
+
+
+def _disk_store(key: str | None, table: np.ndarray, folder: Path | None = None) -> None:
+    """Keep ``table`` in the disk cache (atomically; silently not when it fails).
+
+    ``folder``: the cache's directory, `table_cache_dir` by default.
+    """
+    folder = table_cache_dir() if folder is None else folder
     if folder is None or key is None:
         return
     tmp = None

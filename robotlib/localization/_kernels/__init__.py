@@ -6,6 +6,7 @@
 - `motion`: particles moved by an odometry increment plus drawn noise
 - `tables`: cone tables (expected ranges per cell and heading bin), built and read
 - `table_strips`: the cone-table builder for dense maps (rays through strips)
+- `strip_lists`: the walls of each direction's strips, for `table_strips`
 - `exact`: expected ranges by cone casts against the walls near each sensor
 - `exact_models`: those casts fused with the weighing, and the whole exact-path step
 - `models`: the paper's, the beam and the likelihood-field models on expected ranges
