@@ -1,6 +1,6 @@
 """Print the browser test's timings: each notebook's first cell and Run All, each panel.
 
-The browser test (``tests/test_browser.py``) writes
+The browser test (``tests/notebooks/test_browser.py``) writes
 ``artifacts/browser/timings.json``; this prints it as two tables: per
 notebook, the first cell's and Run All's seconds in JupyterLab; per panel,
 the seconds from a key press to the first sign of a run (the status line or

@@ -2,7 +2,7 @@
 
 The parsers must raise nothing but `robotlib.world.WorldFileError` on any
 bytes, and whatever they accept must be a valid `World`. The bounded
-property tests (``tests/test_robust_worlds.py``) run in every test run; this
+property tests (``tests/world/test_robust_worlds.py``) run in every test run; this
 target is for a developer with time::
 
     pip install -e ".[fuzz]"

@@ -17,7 +17,7 @@ in two parts and corrects a rational approximation of ``exp(r)``
 (|r| <= ln 2 / 2); ``sincos`` reduces ``x = k pi/2 + r`` with ``pi/2`` in
 three parts and evaluates the minimax polynomials of sine and cosine on
 |r| <= pi/4, the quadrant choosing which and with what sign.
-``tests/test_localization_elementary.py`` measures them against the
+``tests/localization/test_localization_elementary.py`` measures them against the
 C library: ``exp`` within 1 ulp; ``sin`` and ``cos`` within 1 ulp on
 headings, with the absolute error near their zeros below 1e-31 (1 + |x|).
 

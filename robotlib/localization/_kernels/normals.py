@@ -9,7 +9,7 @@ compute the same numbers bit for bit, in compiled code: `SeedSequence`'s
 hashing of ``[key, c]`` (NumPy's ``bit_generator.pyx``), SFC64's seeding
 and steps (``sfc64.h``) and NumPy's ziggurat (``random_standard_normal`` in
 ``distributions.c``, as numba's own port, whose tables this module uses).
-``tests/test_localization_normals.py`` checks them against NumPy.
+``tests/localization/test_localization_normals.py`` checks them against NumPy.
 
 The threaded kernels of `fused` from 65,536 particles draw their noise
 with them (`fused.move_and_read_keyed_parallel`). Below, the steps keep

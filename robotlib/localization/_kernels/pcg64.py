@@ -16,7 +16,7 @@ advances the Python generator exactly as NumPy's would):
   numba's tables, as `normals.fill`), filled in C order as
   ``Generator.standard_normal(out=...)`` fills.
 
-``tests/test_localization_normals.py`` checks them against NumPy.
+``tests/localization/test_localization_normals.py`` checks them against NumPy.
 
 Numba kernels: contiguous arrays and scalars in, no Python objects; they
 import nothing of robotlib but the JIT options and `normals` (the tables).

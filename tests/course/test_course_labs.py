@@ -1,0 +1,274 @@
+"""Every lab graded in the sandbox: solution full, released zero, cheats zero.
+
+For each ``solutions/*.ipynb`` one grading run (two submissions at a time,
+the reference run once) holds the solution, the released lab, a partial
+solution (for the labs listed in `PARTIAL`), wrong answers that the lab's
+strict checks must reject (`WRONG`) and two cheating submissions built from
+the exercises' ``writes`` metadata: each exercise with ``writes`` has, in
+one of them, the solution's cell plus a route to its first listed function,
+alternately an aliased import (caught by the static scan) and a run-time
+lookup by a string built at run time (caught by the tripwire when called).
+A cheated exercise scores zero with a note naming the function; every other
+check of that submission full marks.
+New labs are picked up automatically.
+"""
+
+from __future__ import annotations
+
+import copy
+from pathlib import Path
+
+import pytest
+
+from robotlib.course import grade as g
+from robotlib.course.notebooks import (
+    exercises,
+    read_notebook,
+    release_notebook,
+    write_notebook,
+)
+
+from tests.sandboxing import need_sandbox
+
+ROOT = Path(__file__).resolve().parents[2]
+LABS = sorted(p.stem for p in (ROOT / "solutions").glob("*.ipynb"))
+
+# lab -> wrong answers, each graded in the same run: the cells it replaces (cell
+# id -> source), the copy it starts from ("solution" or "released"), and for
+# each check the points expected and, where zero, a piece of the reason
+LAB3_DEAD_RECKONING = """
+def paper_step(world, particles, odo_prev, odo_now, z, lam, floor, rng):
+    particles = paper.predict(particles, odo_prev, odo_now, rng=rng)
+    n = len(particles)
+    return particles, paper.estimate(particles, np.full(n, 1 / n))
+"""
+LAB3_IDENTITY = """
+def low_variance_resample(weights, rng):
+    return np.arange(len(weights))
+"""
+LAB3_UNSORTED = """
+def low_variance_resample(weights, rng):
+    w = np.asarray(weights, dtype=float)
+    cum = np.cumsum(w / w.sum())
+    cum[-1] = 1.0
+    pointers = (rng.random() + np.arange(len(w))) / len(w)
+    idx = np.searchsorted(cum, pointers, side="right")
+    return rng.permutation(idx)
+"""
+LAB3_TABLE_ZEROS = """
+def tempering_table(errors, by=25, tolerance=0.5):
+    return np.zeros(np.shape(errors)[:2], dtype=int)
+"""
+LAB3_TABLE_FIRST_BELOW = """
+def tempering_table(errors, by=25, tolerance=0.5):
+    e = np.asarray(errors, dtype=float)
+    return (e[..., :by] <= tolerance).any(axis=-1).sum(axis=-1)
+"""
+LAB5_CONSTANTS = (
+    "L_OCC, L_FREE, THICKNESS, HALF_CONE, MAX_RANGE = "
+    "0.9, -0.35, 0.1, math.radians(15), 5.0\n\n\n"
+)
+WRONG = {
+    "lab3_mcl": {
+        # ignores the sonar (dead reckoning), never resamples (identity) and
+        # does nothing for the 2 x 2 table (zeros); on the check's route dead
+        # reckoning drifts past 0.3 m, so the first bound rejects it (within
+        # it, "the sonar must help" would)
+        "wrong_dr_identity": (
+            "solution",
+            {
+                "l3-19": LAB3_DEAD_RECKONING,
+                "l3-37": LAB3_IDENTITY,
+                "l3-52": LAB3_TABLE_ZEROS,
+            },
+            {
+                "tracking": "the filter loses the robot",
+                "low_variance": "indexes in order",
+                "global": "the resampler loses the robot",
+                "table": "routes localized by step 4",
+            },
+        ),
+        # low-variance counts right but in shuffled order: only its check
+        # fails; the table counts a run from its first step within the
+        # tolerance, not from the step it stays within it
+        "wrong_unsorted": (
+            "released",
+            {"l3-37": LAB3_UNSORTED, "l3-52": LAB3_TABLE_FIRST_BELOW},
+            {
+                "low_variance": "indexes in order",
+                "global": None,
+                "table": "routes localized by step 4",
+            },
+        ),
+    },
+    "lab5_slam": {
+        # every function returns zeros or its inputs: the outcome checks fail
+        "do_nothing": (
+            "released",
+            {
+                "l5-03": LAB5_CONSTANTS + "def inverse_sonar(cells, sensor_pose, z):\n"
+                "    return np.zeros(np.asarray(cells).shape[:-1])\n",
+                "l5-06": "def sonar_map(world, poses, scans, resolution=0.1):\n"
+                "    return np.zeros(world.occupancy_grid(resolution).shape)\n",
+                "l5-12": "def weigh_and_resample(maps, particles, logw, loglik, "
+                "temperature, rng):\n    return maps, particles, logw\n",
+                "l5-20": "def ekf_update(mu, P, z, j, R):\n    return mu, P\n",
+            },
+            {
+                "sonar_map": "wrong result",
+                "fastslam_outcome": "wrong result",
+                "ekf_outcome": "wrong result",
+            },
+        ),
+    },
+}
+
+# lab -> the solution cells a "partial" student copied (and the checks they pass)
+PARTIAL = {
+    "lab0_getting_started": ({"l0-14"}, {"sonar": 2}),
+    "lab2_avoidance": ({"l2-05"}, {"braitenberg": 2, "explorer": 2}),
+    "lab3_mcl": (
+        {"l3-05", "l3-10", "l3-13", "l3-37"},
+        {"weights": 2, "select": 1, "resize": 2, "low_variance": 2, "global": 2},
+    ),
+    "lab5_slam": (
+        {"l5-03", "l5-20"},
+        {"inverse_sonar": 2, "ekf_update": 3, "ekf_outcome": 2},
+    ),
+}
+
+
+def _alias(listed: str, k: int) -> str:
+    mod, _, attr = listed.rpartition(".")
+    try:
+        import importlib
+
+        importlib.import_module(mod)
+    except ImportError:  # a method: module.Class.attr
+        mod, _, cls = mod.rpartition(".")
+        return f"\nfrom {mod} import {cls} as _cheat{k}\n_cheat{k}.{attr}\n"
+    return f"\nfrom {mod} import {attr} as _cheat{k}\n_cheat{k}\n"
+
+
+def _string(listed: str, k: int) -> str:
+    import importlib
+
+    parts = listed.split(".")
+    for i in range(len(parts) - 1, 0, -1):
+        try:
+            importlib.import_module(".".join(parts[:i]))
+            break
+        except ImportError:
+            continue
+    mod, attrs = ".".join(parts[:i]), parts[i:]
+    code = f"\nimport {mod} as _m{k}\n_f{k} = _m{k}\n"
+    for a in attrs:
+        pieces = [a[: len(a) // 2], a[len(a) // 2 :]]
+        code += f"_f{k} = getattr(_f{k}, ''.join({pieces!r}))\n"
+    return code + f"try:\n    _f{k}()\nexcept Exception:\n    pass\n"
+
+
+def cheats(sol) -> list[tuple[object, dict[str, tuple[str, str]]]]:
+    """Two cheating notebooks: exercise id -> (listed function, route) in each."""
+    exs = [e for e in exercises(sol) if e.writes]
+    out = []
+    for half in (0, 1):
+        nb = copy.deepcopy(sol)
+        cheated = {}
+        for k, e in enumerate(exs):
+            if k % 2 != half:
+                continue
+            route = "alias" if (k // 2 + half) % 2 == 0 else "string"
+            code = (_alias if route == "alias" else _string)(e.writes[0], k)
+            nb.cells[e.index].source = nb.cells[e.index].source + "\n" + code
+            cheated[e.exercise_id] = (e.writes[0], route)
+        if cheated:
+            out.append((nb, cheated))
+    return out
+
+
+@pytest.fixture(scope="module", params=LABS)
+def lab_graded(request, tmp_path_factory):
+    need_sandbox()
+    lab = request.param
+    tmp = tmp_path_factory.mktemp(lab)
+    sol = read_notebook(ROOT / "solutions" / f"{lab}.ipynb")
+    released = read_notebook(ROOT / "labs" / f"{lab}.ipynb")
+    assert released == release_notebook(sol, lab)
+    subs = {"solution": sol, "released": released}
+    if lab in PARTIAL:
+        partial = copy.deepcopy(released)
+        sources = {c.id: c.source for c in sol.cells}
+        for cell in partial.cells:
+            if cell.id in PARTIAL[lab][0]:
+                cell.source = sources[cell.id]
+        subs["partial"] = partial
+    for name, (base, cells, _) in WRONG.get(lab, {}).items():
+        nb = copy.deepcopy(sol if base == "solution" else released)
+        for cell in nb.cells:
+            cell.source = cells.get(cell.id, cell.source)
+        subs[name] = nb
+    plan = cheats(sol)
+    for i, (nb, _) in enumerate(plan):
+        subs[f"cheat{i}"] = nb
+    for name, nb in subs.items():
+        (tmp / "subs" / name).mkdir(parents=True)
+        write_notebook(nb, tmp / "subs" / name / f"{lab}.ipynb")
+    opts = g.Options(cell_timeout=90, timeout=400)
+    results, items = g.grade(tmp / "subs", lab, jobs=2, opts=opts, progress=False)
+    return lab, {r.student: r for r in results}, items, [c for _, c in plan]
+
+
+def test_solution_full_released_zero(lab_graded):
+    lab, rows, items, _ = lab_graded
+    auto = [c for c in items if not c.manual]
+    sol, rel = rows["solution"], rows["released"]
+    assert all(sol.points[c.grade_id] == c.points for c in auto), sol.reasons
+    assert all(v == 0 for v in rel.points.values()), rel.points
+    assert sol.status == "ok" and not sol.flags, (sol.status, sol.flags)
+    if lab in PARTIAL:
+        got = {k: v for k, v in rows["partial"].points.items() if v}
+        assert got == PARTIAL[lab][1], rows["partial"].reasons
+
+
+def test_cheats_score_zero_for_their_exercise_only(lab_graded):
+    lab, rows, items, plans = lab_graded
+    auto = [c for c in items if not c.manual]
+    for i, cheated in enumerate(plans):
+        r = rows[f"cheat{i}"]
+        assert r.status == "ok", (r.status, r.passes, r.details)
+        for c in auto:
+            hit = [e for e in c.exercises if e in cheated]
+            if not hit:
+                assert r.points[c.grade_id] == c.points, (c.grade_id, r.reasons)
+                continue
+            assert r.points[c.grade_id] == 0, (c.grade_id, cheated)
+            listed, route = cheated[hit[0]]
+            assert listed in r.reasons[c.grade_id], r.reasons[c.grade_id]
+            if route == "string":  # only the run-time tripwire can see this one
+                assert "called" in r.reasons[c.grade_id], r.reasons[c.grade_id]
+        assert "answer reaches the library's own version" in r.flags
+
+
+def test_wrong_answers_fail_their_strict_checks(lab_graded):
+    """Lab 3: dead reckoning fails tracking; identity and unsorted fail low-variance;
+    a do-nothing table and one counting a run from its first good step fail table.
+
+    A wrong answer built on the solution keeps every other check; one built
+    on the released lab passes only the checks named with no reason.
+    """
+    lab, rows, items, _ = lab_graded
+    if lab not in WRONG:
+        pytest.skip(f"{lab} has no wrong answers listed")
+    auto = [c for c in items if not c.manual]
+    for name, (base, _, expect) in WRONG[lab].items():
+        r = rows[name]
+        for c in auto:
+            if c.grade_id in expect and expect[c.grade_id] is not None:
+                assert r.points[c.grade_id] == 0, (name, c.grade_id)
+                assert expect[c.grade_id] in r.reasons[c.grade_id], r.reasons
+            elif base == "solution" or c.grade_id in expect:
+                assert r.points[c.grade_id] == c.points, (name, c.grade_id, r.reasons)
+            else:
+                assert r.points[c.grade_id] == 0, (name, c.grade_id)
+        assert not r.flags, (name, r.flags)

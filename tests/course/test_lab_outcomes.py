@@ -1,0 +1,57 @@
+"""Lab 1 and Lab 6: answers that do nothing fail the outcome checks.
+
+Each case runs a check cell (hidden tests included) in-process, with the
+lab's set-up cell, the instructor's definitions the check needs
+(`robotlib.course.plan.lab_plan`) and a do-nothing version of the exercise's
+functions (plausible types, no work): the check must fail on its assertions.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from robotlib.course.notebooks import read_notebook
+from robotlib.course.plan import lab_plan
+
+ROOT = Path(__file__).resolve().parents[2]
+
+LAZY = {
+    "lab1_models": {
+        "alphas": "def fit_alphas(*a):\n    return np.zeros(4)\n",
+        "umbmark": "def umbmark_estimate(*a):\n    return 1.0, 1.0\n",
+        "hist_filter": (
+            "def hist_predict(b, *a):\n    return np.asarray(b, float)\n"
+            "def hist_update(b, lk):\n    return np.asarray(b, float)\n"
+        ),
+        "beam_fit": "def fit_beam(*a, **k):\n    return BeamParameters()\n",
+    },
+    "lab6_real_robot": {
+        "replay": "def localize(world, odo, z, seed):\n    return np.array(odo)\n",
+    },
+}
+
+
+def _run(lab: str, grade_id: str, lazy: str, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setenv("MPLBACKEND", "Agg")
+    sol = read_notebook(ROOT / "solutions" / f"{lab}.ipynb")
+    plan = lab_plan(sol, lab)
+    check = next(c for c in plan.checks if c.grade_id == grade_id)
+    source = sol.cells[check.index].source
+    scope: dict = {}
+    exec(compile(plan.setup, "setup", "exec"), scope)
+    exec(compile(lazy, "lazy answer", "exec"), scope)
+    for d in plan.defs:
+        exec(compile(d, "definitions", "exec"), scope)
+    exec(compile(lazy, "lazy answer", "exec"), scope)  # after defs that named it
+    with pytest.raises(AssertionError):
+        exec(compile(source, grade_id, "exec"), scope)
+
+
+@pytest.mark.parametrize(
+    ("lab", "grade_id"), [(lab, g) for lab, d in LAZY.items() for g in d]
+)
+def test_a_do_nothing_answer_fails(lab, grade_id, tmp_path, monkeypatch):
+    _run(lab, grade_id, LAZY[lab][grade_id], tmp_path, monkeypatch)

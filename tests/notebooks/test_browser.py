@@ -1,0 +1,218 @@
+"""Every solution and released lab, run in JupyterLab in headless Chromium.
+
+Starts JupyterLab on a copy of ``solutions/`` and ``labs/`` (found by glob,
+so new labs are covered as they land), opens each notebook in Debian's
+chromium (driven by playwright, no browser download), runs all cells from
+the menu and checks what a student would see: no error output in a
+solution; in a released lab, only "Exercise N is not done yet" messages of a
+few lines; no browser console errors but those of the external requests the
+test blocks; every panel's image redraws after its first slider moves, and
+shows feedback first; every animation's player advances. Screenshots and
+``timings.json`` go to ``artifacts/browser/`` (git-ignored; CI keeps it).
+
+Skipped where chromium or playwright is missing, unless
+``ROBOTLIB_BROWSER_TEST=1`` (set by ``.ci/run``), which makes that a failure.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import json
+import os
+import time
+from pathlib import Path
+
+import pytest
+
+from tests.browser import (
+    CHROMIUM,
+    Browser,
+    Lab,
+    run_notebook,
+    run_notebooks,
+    unexplained_console_errors,
+)
+
+ROOT = Path(__file__).resolve().parents[2]
+ARTIFACTS = ROOT / "artifacts" / "browser"
+NOTEBOOKS = [
+    str(p.relative_to(ROOT))
+    for folder in ("solutions", "labs")
+    for p in sorted((ROOT / folder).glob("*.ipynb"))
+]
+RUN_ALL_LIMIT = 600.0  # s per notebook: ~60 s under nbval, 4x that on a loaded machine
+PANEL_REDRAW = 60.0  # s from a slider change to the new figure
+PANEL_FEEDBACK = 1.0  # s to the first sign of a run (100 ms on an idle laptop)
+# s from the key press to "running ..." in the page, for a panel with a status
+# line (robotlib's answer in the browser, kernel or no kernel: a few ms)
+PANEL_RUNNING_IN_PAGE = 0.3
+UNSOLVED_LINES = 4
+SHRUNK = 0.7  # a figure shown below 70 % of its own width is too wide for the page
+
+_have = importlib.util.find_spec("playwright") is not None and Path(CHROMIUM).exists()
+if not _have and os.environ.get("ROBOTLIB_BROWSER_TEST") == "1":
+    raise RuntimeError(f"the browser test needs playwright and {CHROMIUM}")
+pytestmark = pytest.mark.skipif(not _have, reason=f"needs playwright and {CHROMIUM}")
+
+
+@pytest.fixture(scope="module")
+def lab(tmp_path_factory):
+    server = Lab(ROOT, tmp=tmp_path_factory.mktemp("jupyterlab"))
+    yield server
+    server.close(keep_log=ARTIFACTS / "jupyterlab.log")  # a CI artefact too
+
+
+@pytest.fixture(scope="module")
+def browser():
+    b = Browser(ARTIFACTS)
+    yield b
+    b.close()
+
+
+def problems(run, solution: bool, races: set[str] = frozenset()) -> list[str]:
+    """What a student would notice in a browser run (empty: nothing).
+
+    ``races``: the server's own failed kernel lists (`Lab.kernel_list_races`).
+    """
+    out = []
+    if not run.finished:
+        out.append(f"Run All did not finish within {run.run_all_s:.0f} s")
+    out += [f"console: {text}" for text in unexplained_console_errors(run, races)]
+    for cell, ename, text in run.errors:
+        lines = text.splitlines()
+        unsolved = "is not done yet" in text and len(lines) <= UNSOLVED_LINES
+        if solution or not unsolved:
+            out.append(f"code cell {cell}: {ename} ({len(lines)} lines): {lines[:1]}")
+    for p in run.panels:
+        if p.get("error"):
+            said = f"shows an error after '{p['slider']}': {p['error']}"
+            out.append(f"panel {p['panel']} {said}")
+        elif p["redraw_s"] is None or p["redraw_s"] > PANEL_REDRAW:
+            out.append(f"panel {p['panel']} did not redraw after '{p['slider']}'")
+        elif p["feedback_s"] is None or p["feedback_s"] > PANEL_FEEDBACK:
+            late = f"panel {p['panel']} showed no feedback within {PANEL_FEEDBACK} s"
+            out.append(late)
+        for when, t in (("", p.get("in_page")), (" while busy", p.get("busy"))):
+            s = None if t is None else t.get("running_s")
+            if p.get("status_line") and t and (s is None or s > PANEL_RUNNING_IN_PAGE):
+                said = f"did not read 'running' within {PANEL_RUNNING_IN_PAGE} s"
+                out.append(f"panel {p['panel']} {said}{when}")
+    for natural, shown in run.figures:
+        if shown < SHRUNK * natural:
+            out.append(f"a {natural} px figure is shrunk to {shown / natural:.0%}")
+    for a in run.animations:
+        if a["after"] <= a["start"]:
+            out.append(f"animation {a['player']} did not advance")
+    return out
+
+
+def _record(run) -> None:
+    path = ARTIFACTS / "timings.json"
+    try:
+        timings = json.loads(path.read_text())
+    except (OSError, ValueError):
+        timings = {}
+    timings[run.path] = {
+        "first_cell_s": run.first_cell_s,
+        "run_all_s": run.run_all_s,
+        "panels": run.panels,
+        "animations": run.animations,
+        "errors": len(run.errors),
+        "figures": run.figures,
+        "cells_s": run.cells_s,
+        "open_s": run.open_s,
+        "check_s": run.check_s,
+        "check_parts": run.check_parts,
+    }
+    path.write_text(json.dumps(timings, indent=1))
+
+
+def test_every_notebook_in_a_real_browser(lab, browser):
+    runs = run_notebooks(
+        lab,
+        browser,
+        NOTEBOOKS,
+        RUN_ALL_LIMIT,
+        PANEL_REDRAW,
+        feedback_bound=PANEL_FEEDBACK,
+    )
+    found, races = {}, lab.kernel_list_races()
+    for run in runs:
+        _record(run)
+        solution = run.path.startswith("solutions/")
+        issues = problems(run, solution, races)
+        if solution and run.first_cell_s is None:
+            issues.append("the first cell never finished")
+        if not solution and run.finished and not run.errors:
+            issues.append("a released lab's checks should fail until it is solved")
+        if issues:
+            found[run.path] = issues
+    assert not found, json.dumps(found, indent=1)
+
+
+SELFTEST = {
+    "cells": [
+        {
+            "cell_type": "code",
+            "metadata": {},
+            "outputs": [],
+            "execution_count": None,
+            "id": f"c{i}",
+            "source": src,
+        }  # fmt: skip
+        for i, src in enumerate(
+            [
+                "import io\n\nimport ipywidgets as w\nfrom matplotlib.figure import"
+                " Figure\n\n\ndef png(v):\n    fig = Figure(figsize=(3, 2))\n"
+                "    fig.add_subplot().plot([0, 1], [0, v])\n    buf = io.BytesIO()\n"
+                "    fig.savefig(buf, format='png')\n    return buf.getvalue()\n\n\n"
+                "def panel(live):\n    s = w.FloatSlider(value=1.0, min=0, max=5,"
+                " step=0.1, continuous_update=False)\n"
+                "    img = w.Image(value=png(1.0))\n"
+                "    label = w.Label('ready')\n\n    def changed(c):\n"
+                "        label.value = 'running'\n        if live:\n"
+                "            img.value = png(c['new'])\n\n"
+                "    s.observe(changed, names='value')\n"
+                "    return w.VBox([s, label, img])",
+                "panel(live=True)",
+                "panel(live=False)  # a panel that stopped redrawing",
+                "from IPython.display import Image, display\n\n\n"
+                "def broken(v=1.0):  # a panel whose redraw fails\n"
+                "    if v != 1.0:\n        raise ValueError('the panel broke')\n"
+                "    display(Image(data=png(v)))\n\n\n"
+                "w.interact(broken, v=w.FloatSlider(value=1.0, min=0, max=5, step=0.1,"
+                " continuous_update=False));",
+            ]
+        )
+    ],
+    "metadata": {
+        "kernelspec": {
+            "name": "python3",
+            "display_name": "Python 3",
+            "language": "python",
+        }
+    },
+    "nbformat": 4,
+    "nbformat_minor": 5,
+}
+
+
+def test_the_browser_test_fails_when_a_panel_stops_redrawing(lab, browser):
+    """A test of the test: the same checks catch a panel whose figure stays put."""
+    (lab.root / "selftest").mkdir(exist_ok=True)
+    (lab.root / "selftest" / "panels.ipynb").write_text(json.dumps(SELFTEST))
+    t0 = time.monotonic()
+    run = run_notebook(lab, browser, "selftest/panels.ipynb", 60, panel_bound=5.0)
+    assert run.finished and not run.errors
+    assert [p["panel"] for p in run.panels] == [0, 1, 2]
+    live, stuck, broken = run.panels
+    assert live["redraw_s"] is not None and live["feedback_s"] is not None
+    assert stuck["redraw_s"] is None  # waited the whole bound, saw no new pixels
+    assert stuck["feedback_s"] is not None  # its label still said "running"
+    assert broken["redraw_s"] is None and "the panel broke" in broken["error"]
+    found = problems(run, solution=True)
+    assert found == [
+        "panel 1 did not redraw after ''",
+        "panel 2 shows an error after 'v': ValueError: the panel broke",
+    ], found
+    assert time.monotonic() - t0 < 90
