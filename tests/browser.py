@@ -1,4 +1,4 @@
-"""Driving JupyterLab in headless Chromium: what tests/notebooks/test_browser.py checks with.
+"""Driving JupyterLab in headless Chromium: the helpers of the browser test.
 
 `Lab` starts JupyterLab on a copy of the notebooks (so autosave never
 writes into the repository) with settings that render every cell and fetch
