@@ -30,7 +30,8 @@ import numpy as np
 from ..sensing import SonarModel
 from ..world import World
 from ..world.index import INDEX_MIN_SEGMENTS, SegmentIndex
-from . import _kernels
+from ._kernels import exact as _exact
+from ._kernels import tables as _tables
 from .motion import PARALLEL_MIN, _particles
 
 __all__ = ["MAX_TABLE_BYTES", "ConeTable", "cone_table", "expected_readings"]
@@ -126,7 +127,7 @@ class ConeTable:
         if ray_step > 0 and not _sweep_builds(world, sonar, ray_step):
             # a dense map: each direction's rays through strips of the walls
             # (the same table, much sooner)
-            _kernels.build_cone_table_strips(
+            _tables.build_cone_table_strips(
                 np.ascontiguousarray(world.obstacles), *self.origin, *model,
                 self.table,
             )  # fmt: skip
@@ -135,16 +136,12 @@ class ConeTable:
             # jumping over clear space by the distance field
             index = _table_index(world, self.resolution)
             field = world.distance_field(self.resolution)
-            _kernels.build_cone_table_indexed(
+            _tables.build_cone_table_indexed(
                 index.segments, *self.origin, *model, *index.args, field.data,
                 self.table,
             )  # fmt: skip
         else:
-            from ._prebuild import forked
-
-            if forked():  # the sweep's other helpers compile there meanwhile
-                _kernels.compile_sweep_helpers()
-            _kernels.build_cone_table(
+            _tables.build_cone_table(
                 np.ascontiguousarray(world.obstacles), *self.origin, *model, 16,
                 self.table,
             )  # fmt: skip
@@ -174,9 +171,9 @@ class ConeTable:
         p = _particles(particles)
         out = np.empty((len(p), len(self.sonar.sensors)))
         kernel = (
-            _kernels.expected_table_parallel
+            _tables.expected_table_parallel
             if len(p) >= PARALLEL_MIN
-            else _kernels.expected_table
+            else _tables.expected_table
         )
         kernel(
             p,
@@ -531,9 +528,9 @@ def expected_readings(
     p = _particles(particles)
     out = np.empty((len(p), len(sonar.sensors)))
     kernel = (
-        _kernels.expected_scan_blocks_parallel
+        _exact.expected_scan_blocks_parallel
         if len(p) >= EXACT_PARALLEL_MIN
-        else _kernels.expected_scan_blocks
+        else _exact.expected_scan_blocks
     )
     kernel(p, *exact_arguments(world, sonar), out)
     return out
@@ -586,6 +583,6 @@ def _wall_blocks(world: World, max_range: float, cone: float | None = None) -> t
     segments = np.ascontiguousarray(world.obstacles, dtype=np.float64).reshape(-1, 4)
     x0, y0, x1, y1 = (float(v) for v in world.bounds)
     side = 0.5 if (x1 - x0) * (y1 - y0) <= FINE_BLOCKS_AREA else 1.0
-    blocks = _kernels.wall_blocks(segments, world.bounds, max_range, side, cone)
+    blocks = _exact.wall_blocks(segments, world.bounds, max_range, side, cone)
     _BLOCKS[key] = (weakref.ref(world, lambda _: _BLOCKS.pop(key, None)), blocks)
     return blocks
