@@ -114,11 +114,35 @@ class MCL:
         self.admissible = world.free_space(self.resolution, self.admissible_radius)
         self.n_initial = int(n)
         self.init_std = tuple(float(s) for s in init_std)
-        fused = getattr(sensor, "fused", None)
-        self._fused = fused if type(self.motion) is OdometryMotionModel else None
         self.reset(init)
 
     # -- set up ---------------------------------------------------------------
+    @property
+    def sensor(self):
+        """The sensor model; setting it chooses the step's path again."""
+        return self._sensor
+
+    @sensor.setter
+    def sensor(self, model) -> None:
+        self._sensor = model
+        self._choose_path()
+
+    @property
+    def motion(self):
+        """The motion model; setting it chooses the step's path again."""
+        return self._motion
+
+    @motion.setter
+    def motion(self, model) -> None:
+        self._motion = model
+        self._choose_path()
+
+    def _choose_path(self) -> None:
+        """Use the sensor's fused kernel when the models allow (see the module)."""
+        fused = getattr(getattr(self, "_sensor", None), "fused", None)
+        odometry = type(getattr(self, "_motion", None)) is OdometryMotionModel
+        self._fused = fused if odometry else None
+
     @classmethod
     def paper(
         cls,

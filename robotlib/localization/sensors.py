@@ -321,10 +321,13 @@ class LikelihoodFieldSensorModel:
 
     def _distance(self, x, y) -> np.ndarray:
         """Distance (m) from points ``x, y`` (any shape) to the nearest wall."""
-        if self.field is not None:  # the distance field's cell, clamped
+        if self.field is not None:  # the distance field's cell; off the map: far
             g = self.field
             ny, nx = g.data.shape
-            col = np.clip(np.floor((x - g.origin[0]) / g.resolution), 0, nx - 1)
-            row = np.clip(np.floor((y - g.origin[1]) / g.resolution), 0, ny - 1)
-            return g.data[row.astype(np.intp), col.astype(np.intp)]
+            col = np.floor((x - g.origin[0]) / g.resolution)
+            row = np.floor((y - g.origin[1]) / g.resolution)
+            inside = (col >= 0) & (col < nx) & (row >= 0) & (row < ny)
+            d = np.full(np.shape(x), np.inf)
+            d[inside] = g.data[row[inside].astype(np.intp), col[inside].astype(np.intp)]
+            return d
         return self.world.distance_to_walls(np.stack([x, y], axis=-1))
