@@ -261,9 +261,7 @@ class MCL:
             self.last_estimate = self.estimate()
         ess, log_mean = self.ess, self.log_mean_likelihood
         resampled, injected, regenerated = self.resample()
-        self.info = StepInfo(
-            n, ess, resampled, self.n, injected, regenerated, log_mean
-        )
+        self.info = StepInfo(n, ess, resampled, self.n, injected, regenerated, log_mean)
         return self.last_estimate
 
     def predict(self, odo_prev, odo_now) -> None:
@@ -292,7 +290,11 @@ class MCL:
         normals = self.rng.standard_normal((self.n, 3))  # as `predict` draws
         serial, threaded = self._fused
         kernel = threaded if self.n >= PARALLEL_MIN else serial
-        moved, weights, est = np.empty_like(self.particles), np.empty(self.n), np.empty(3)
+        moved, weights, est = (
+            np.empty_like(self.particles),
+            np.empty(self.n),
+            np.empty(3),
+        )
         log_mean, ess = kernel(
             self.particles, self.weights, normals, *increment, *std,
             *self.sensor.fused_arguments(z), moved, weights, est,
@@ -353,7 +355,7 @@ class MCL:
         return k
 
     def _regenerate(self) -> int:
-        """The paper's step 3: particles off the admissible area drawn afresh."""
+        """Draw afresh the particles off the admissible area (the paper's step 3)."""
         bad = ~on_grid(self.admissible, self.particles)
         k = int(bad.sum())
         if k:

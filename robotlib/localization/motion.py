@@ -80,7 +80,7 @@ def odometry_increment(odo_prev, odo_now, min_trans: float = 1e-4) -> tuple:
 
 
 def noise_std(alphas, rot1: float, trans: float, rot2: float) -> tuple:
-    """Standard deviations of the noise on ``(rot1, trans, rot2)``, rad, m, rad."""
+    """Return the standard deviations of the noise on rot1, trans, rot2, rad and m."""
     a1, a2, a3, a4 = alphas
     return (
         math.sqrt(a1 * rot1 * rot1 + a2 * trans * trans),

@@ -105,7 +105,7 @@ class _ExpectedRangeModel:
         return self.scan_log_likelihood(z, self.expected(_particles(particles)))
 
     def _table_arguments(self) -> tuple:
-        """The cone table's arguments of the fused kernels."""
+        """Return the cone table's arguments of the fused kernels."""
         t = self.table
         return (
             self.sonar.sensors, t.table, t.origin[0], t.origin[1], 1.0 / t.resolution
@@ -236,7 +236,7 @@ class BeamSensorModel(_ExpectedRangeModel):
         return hit, short
 
     def scan_log_likelihood(self, z, zhat) -> np.ndarray:
-        """``exponent * sum_i log p(z_i | zhat_ji)`` (N,) for ``z`` (S,), ``zhat`` (N, S)."""
+        """Return ``exponent * sum_i log p(z_i | zhat_ji)``, (N,), for z and zhat."""
         q, max_range = self.params, float(self.sonar.max_range)
         hit_norm, short_norm = self._normalisers(zhat)
         p = hit_norm * np.exp(-0.5 * ((z - zhat) / q.sigma_hit) ** 2)

@@ -5,14 +5,11 @@ import math
 import numpy as np
 import pytest
 
-from robotlib.localization import MCL, resampling
-from robotlib.localization._kernels.kld import kld_bound as kld_bound_kernel
-from robotlib.localization.motion import move_particles
 from robotlib.localization import (
+    MCL,
     BeamParameters,
     BeamSensorModel,
     LikelihoodFieldSensorModel,
-    PaperSensorModel,
     cone_table,
     expected_readings,
     kld_bound,
@@ -20,11 +17,14 @@ from robotlib.localization import (
     multinomial_resample,
     odometry_increment,
     paper,
+    resampling,
     residual_resample,
     sample_motion_odometry,
     stratified_resample,
     systematic_resample,
 )
+from robotlib.localization._kernels.kld import kld_bound as kld_bound_kernel
+from robotlib.localization.motion import move_particles
 from robotlib.sensing import SonarModel, expected_ranges
 from tests import naive_mcl as naive
 from tests.worlds import door_corridor
@@ -257,9 +257,7 @@ def test_resampling_variance_ordering():
 def test_kld_bound_hand_computed():
     z = 2.3263478740408408  # 1 - delta = 0.99
     assert kld_bound_kernel(1, 0.05, z) == 1.0
-    assert kld_bound_kernel(10, 0.05, z) == pytest.approx(
-        naive.kld_bound(10, 0.05, z)
-    )
+    assert kld_bound_kernel(10, 0.05, z) == pytest.approx(naive.kld_bound(10, 0.05, z))
     # k = 2: 1/(2 eps) (1 - 2/9 + sqrt(2/9) z)^3
     a = 2 / 9
     assert kld_bound(2, 0.05, 0.01) == math.ceil(10 * (1 - a + math.sqrt(a) * z) ** 3)

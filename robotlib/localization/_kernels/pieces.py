@@ -55,7 +55,7 @@ def sensor_pose(x, y, th, sensors, i):
 
 @nb.njit(**JIT, inline="always")
 def table_mm(table, x0, y0, inv_res, sx, sy, sth):
-    """A cone table's entry (mm) for a sensor at ``(sx, sy)`` pointing along ``sth``.
+    """Return the cone table's entry (mm) for a sensor at ``(sx, sy)`` along ``sth``.
 
     ``table`` (ny, nx, n_bins) holds ranges from each cell's centre; the
     sensor's position selects the cell (clamped to the grid), its heading

@@ -52,7 +52,7 @@ def beam_log_prob(z, e_short, zhat_mm, hit_norm, short_norm, inv_sigma, p_max, p
 
 @nb.njit(**JIT, inline="always")
 def _largest(ll):
-    """The largest entry of ``ll``, or 0 when none is finite (no particle fits)."""
+    """Return the largest entry of ``ll``, or 0 when none is finite."""
     top = -np.inf
     for j in range(ll.shape[0]):
         top = max(top, ll[j])
