@@ -42,10 +42,12 @@ def move(x, y, th, rot1, trans, rot2, sd1, sd2, sd3, n1, n2, n3):
 
 
 @nb.njit(**JIT, inline="always")
-def sensor_pose(x, y, th, sensors, i):
-    """World pose ``(x, y, heading)`` of sensor ``i`` (robot frame) on pose x, y, th."""
-    c = math.cos(th)
-    s = math.sin(th)
+def sensor_pose(x, y, th, c, s, sensors, i):
+    """Return the world pose ``(x, y, heading)`` of sensor ``i`` on pose x, y, th.
+
+    ``sensors`` (S, 3) holds the sensors' poses in the robot's frame; ``c``
+    and ``s`` are the cosine and sine of ``th``, computed once per pose.
+    """
     return (
         x + c * sensors[i, 0] - s * sensors[i, 1],
         y + s * sensors[i, 0] + c * sensors[i, 1],

@@ -113,17 +113,19 @@ def _beam_step(particles, weights, normals, rot1, trans, rot2, sd1, sd2, sd3,
         x, y, th = move(particles[j, 0], particles[j, 1], particles[j, 2],
                         rot1, trans, rot2, sd1, sd2, sd3,
                         normals[j, 0], normals[j, 1], normals[j, 2])  # fmt: skip
+        c = math.cos(th)
+        s = math.sin(th)
         total = 0.0
         for i in range(sensors.shape[0]):
-            sx, sy, sth = sensor_pose(x, y, th, sensors, i)
+            sx, sy, sth = sensor_pose(x, y, th, c, s, sensors, i)
             mm = table_mm(table, x0, y0, inv_res, sx, sy, sth)
             total += beam_log_prob(z[i], e_short[i], mm, hit_norm, short_norm,
                                    inv_sigma, p_max, p_rand, max_range)  # fmt: skip
         out_p[j, 0] = x
         out_p[j, 1] = y
         out_p[j, 2] = th
-        cs[j, 0] = math.cos(th)
-        cs[j, 1] = math.sin(th)
+        cs[j, 0] = c
+        cs[j, 1] = s
         ll[j] = exponent * total
     top = _largest(ll)
     for j in nb.prange(n):
@@ -149,16 +151,18 @@ def _paper_step(particles, weights, normals, rot1, trans, rot2, sd1, sd2, sd3,
         x, y, th = move(particles[j, 0], particles[j, 1], particles[j, 2],
                         rot1, trans, rot2, sd1, sd2, sd3,
                         normals[j, 0], normals[j, 1], normals[j, 2])  # fmt: skip
+        c = math.cos(th)
+        s = math.sin(th)
         d = 0.0
         for i in range(n_sensors):
-            sx, sy, sth = sensor_pose(x, y, th, sensors, i)
+            sx, sy, sth = sensor_pose(x, y, th, c, s, sensors, i)
             zhat = table_mm(table, x0, y0, inv_res, sx, sy, sth) * 0.001
             d += abs((z[i] - zhat) / z[i])
         out_p[j, 0] = x
         out_p[j, 1] = y
         out_p[j, 2] = th
-        cs[j, 0] = math.cos(th)
-        cs[j, 1] = math.sin(th)
+        cs[j, 0] = c
+        cs[j, 1] = s
         ll[j] = math.log(math.exp(-d / n_sensors) + 1.0 / n)
     top = _largest(ll)
     for j in nb.prange(n):
