@@ -66,8 +66,11 @@ def _plain_pipeline():
     path = Path(__file__).resolve().parents[2] / "bench" / "plain_mcl.py"
     if not path.is_file():
         return None
+    if "plain_mcl" in sys.modules:
+        return sys.modules["plain_mcl"]
     spec = importlib.util.spec_from_file_location("plain_mcl", path)
     module = importlib.util.module_from_spec(spec)
+    sys.modules["plain_mcl"] = module  # numba's cache finds the module again
     spec.loader.exec_module(module)
     return module
 

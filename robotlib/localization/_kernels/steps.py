@@ -6,8 +6,9 @@ three passes over the particles:
 
 1. (``prange``) move each particle by the odometry increment plus its
    noise (`pieces.move`), look up what each of its sensors should read in
-   the cone table (`pieces.table_mm`) and add up the log-likelihood of the
-   scan (`beam_log_prob`, `paper_log_weight`);
+   the cone table (`pieces.table_mm`; all the lookups first, so that the
+   processor can wait for them together) and add up the log-likelihood of
+   the scan (`beam_log_prob`, the paper's innovation);
 2. (serial) the largest log-likelihood, so that the exponentials below
    cannot overflow (`_largest`);
 3. (``prange``) multiply each prior weight by its likelihood, then
@@ -106,20 +107,22 @@ def _beam_step(particles, weights, normals, rot1, trans, rot2, sd1, sd2, sd3,
     ``(log_mean, ess)``: the log of the scan's mean likelihood under the
     prior weights and the effective sample size.
     """
-    n = particles.shape[0]
+    n, n_sensors = particles.shape[0], sensors.shape[0]
     ll = np.empty(n)
     cs = np.empty((n, 2))
+    zhat = np.empty((n, n_sensors), dtype=np.uint16)
     for j in nb.prange(n):
         x, y, th = move(particles[j, 0], particles[j, 1], particles[j, 2],
                         rot1, trans, rot2, sd1, sd2, sd3,
                         normals[j, 0], normals[j, 1], normals[j, 2])  # fmt: skip
         c = math.cos(th)
         s = math.sin(th)
-        total = 0.0
-        for i in range(sensors.shape[0]):
+        for i in range(n_sensors):  # what each sensor should read, mm
             sx, sy, sth = sensor_pose(x, y, th, c, s, sensors, i)
-            mm = table_mm(table, x0, y0, inv_res, sx, sy, sth)
-            total += beam_log_prob(z[i], e_short[i], mm, hit_norm, short_norm,
+            zhat[j, i] = table_mm(table, x0, y0, inv_res, sx, sy, sth)
+        total = 0.0
+        for i in range(n_sensors):  # how well the scan agrees
+            total += beam_log_prob(z[i], e_short[i], zhat[j, i], hit_norm, short_norm,
                                    inv_sigma, p_max, p_rand, max_range)  # fmt: skip
         out_p[j, 0] = x
         out_p[j, 1] = y
@@ -143,21 +146,22 @@ def _paper_step(particles, weights, normals, rot1, trans, rot2, sd1, sd2, sd3,
     mean of ``|(z_i - zhat_ij) / z_i|`` over its sensors. Parameters and
     return as `_beam_step`, without the beam model's terms.
     """
-    n = particles.shape[0]
+    n, n_sensors = particles.shape[0], sensors.shape[0]
     ll = np.empty(n)
     cs = np.empty((n, 2))
-    n_sensors = sensors.shape[0]
+    zhat = np.empty((n, n_sensors), dtype=np.uint16)
     for j in nb.prange(n):
         x, y, th = move(particles[j, 0], particles[j, 1], particles[j, 2],
                         rot1, trans, rot2, sd1, sd2, sd3,
                         normals[j, 0], normals[j, 1], normals[j, 2])  # fmt: skip
         c = math.cos(th)
         s = math.sin(th)
-        d = 0.0
-        for i in range(n_sensors):
+        for i in range(n_sensors):  # what each sensor should read, mm
             sx, sy, sth = sensor_pose(x, y, th, c, s, sensors, i)
-            zhat = table_mm(table, x0, y0, inv_res, sx, sy, sth) * 0.001
-            d += abs((z[i] - zhat) / z[i])
+            zhat[j, i] = table_mm(table, x0, y0, inv_res, sx, sy, sth)
+        d = 0.0
+        for i in range(n_sensors):  # the mean relative innovation
+            d += abs((z[i] - zhat[j, i] * 0.001) / z[i])
         out_p[j, 0] = x
         out_p[j, 1] = y
         out_p[j, 2] = th
