@@ -100,9 +100,14 @@ def kld_bound(k, epsilon, z):
     return (k - 1) / (2 * epsilon) * (1 - a + math.sqrt(a) * z) ** 3
 
 
-def paper_weights_unnormalised(z, zhat):
-    d = np.mean(np.abs((z - zhat) / z), axis=1)
-    return np.exp(-d) + 1.0 / len(zhat)
+def kld_count(bins, epsilon, z, n_min):
+    """Draws KLD-sampling keeps: the first ``n >= max(n_min, bound(k))``."""
+    seen = set()
+    for n, b in enumerate(bins, start=1):
+        seen.add(int(b))
+        if n >= n_min and n >= kld_bound(len(seen), epsilon, z):
+            return n
+    return len(bins)
 
 
 def fused_step(particles, weights, motion, normals, loglik):
@@ -111,10 +116,6 @@ def fused_step(particles, weights, motion, normals, loglik):
     moved = sample_odometry(particles, rot1, trans, rot2, sd, normals)
     w, log_mean, ess = update_weights(weights, loglik(moved))
     return moved, w, log_mean, ess, pose_mean(moved, w)
-
-
-def systematic_gather(particles, weights, u, n):
-    return particles[resample_positions(weights, (np.arange(n) + u) / n)]
 
 
 def ray_hit(ox, oy, a, seg):

@@ -288,3 +288,15 @@ def test_uniform_particles_cover_free_space(world):
     assert np.all(paper.admissible(world, p))
     assert w.sum() == pytest.approx(1)
     assert p[:, 0].min() < 1.0 and p[:, 0].max() > 5.0
+
+
+def test_kld_count_matches_reference():
+    from robotlib.localization._kernels.kld import kld_count
+
+    rng = np.random.default_rng(5)
+    for k_bins, n_min in ((3, 10), (50, 10), (400, 300), (5000, 20)):
+        bins = rng.integers(0, k_bins, 3000)
+        occupied = np.zeros(k_bins, dtype=bool)
+        got = kld_count(bins, 0.05, 2.326, n_min, occupied)
+        assert got == naive.kld_count(bins, 0.05, 2.326, n_min)
+        assert not occupied.any()  # left as found
