@@ -42,10 +42,12 @@ def move(x, y, th, rot1, trans, rot2, sd1, sd2, sd3, n1, n2, n3):
 
 
 @nb.njit(**JIT, inline="always")
-def sensor_pose(x, y, th, sensors, i):
-    """World pose ``(x, y, heading)`` of sensor ``i`` (robot frame) on pose x, y, th."""
-    c = math.cos(th)
-    s = math.sin(th)
+def sensor_pose(x, y, th, c, s, sensors, i):
+    """Return the world pose ``(x, y, heading)`` of sensor ``i`` on pose x, y, th.
+
+    ``sensors`` (S, 3) holds the sensors' poses in the robot's frame; ``c``
+    and ``s`` are the cosine and sine of ``th``, computed once per pose.
+    """
     return (
         x + c * sensors[i, 0] - s * sensors[i, 1],
         y + s * sensors[i, 0] + c * sensors[i, 1],
@@ -55,7 +57,7 @@ def sensor_pose(x, y, th, sensors, i):
 
 @nb.njit(**JIT, inline="always")
 def table_mm(table, x0, y0, inv_res, sx, sy, sth):
-    """A cone table's entry (mm) for a sensor at ``(sx, sy)`` pointing along ``sth``.
+    """Return the cone table's entry (mm) for a sensor at ``(sx, sy)`` along ``sth``.
 
     ``table`` (ny, nx, n_bins) holds ranges from each cell's centre; the
     sensor's position selects the cell (clamped to the grid), its heading
