@@ -9,26 +9,23 @@ indexes of the particles to keep (or ``None``: no resampling this step):
   run only when the effective sample size falls below a share of ``N``;
 - `KLDResampling`: KLD-sampling, every step (or below an ESS threshold).
 
-`AugmentedInjection` adds augmented MCL's random particles (Thrun, table 8.3);
-`_step_plan` says how `MCL.step` may run with a policy and its models.
-Imports the localization's own pieces; never `robotlib.localization.mcl`
-(which imports this module) except for type hints.
+`AugmentedInjection` adds augmented MCL's random particles (Thrun, table 8.3).
+A policy of your own needs only ``indexes(mcl)``, reading the filter's
+``particles``, ``weights``, ``ess``, ``world`` and ``rng``. Imports the
+localization's own pieces, never `robotlib.localization.mcl` (which
+imports this module).
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 import numpy as np
 
 from .kld import kld_resample
 from .paper import RESIZE_FLOOR, dispersion_index, resize
 from .resampling import RESAMPLERS, multinomial_resample
-
-if TYPE_CHECKING:
-    from .mcl import MCL
 
 __all__ = [
     "PaperResampling",
@@ -53,7 +50,7 @@ class PaperResampling:
     lam: float = 0.5
     floor: int = RESIZE_FLOOR
 
-    def indexes(self, mcl: MCL) -> np.ndarray:
+    def indexes(self, mcl) -> np.ndarray:
         """Indexes of the new particle set (the resize truncates i.i.d. draws)."""
         idx = multinomial_resample(mcl.weights, mcl.rng)
         ip = dispersion_index(mcl.particles[idx], mcl.world.size)
@@ -81,7 +78,7 @@ class ThresholdResampling:
         if self.method not in RESAMPLERS:
             raise ValueError(f"unknown resampler {self.method!r}")
 
-    def indexes(self, mcl: MCL) -> np.ndarray | None:
+    def indexes(self, mcl) -> np.ndarray | None:
         """Indexes of the new set, or None to keep the weighted set."""
         n = len(mcl.weights)
         if mcl.ess >= self.threshold * n and self.threshold < 1.0:
@@ -113,7 +110,7 @@ class KLDResampling:
     bin_theta: float = math.radians(15.0)
     threshold: float = 1.0
 
-    def indexes(self, mcl: MCL) -> np.ndarray | None:
+    def indexes(self, mcl) -> np.ndarray | None:
         """Indexes of the new set, or None to keep the weighted set."""
         n = len(mcl.weights)
         if self.threshold < 1.0 and mcl.ess >= self.threshold * n:
