@@ -77,6 +77,10 @@ __all__ = [
 GradeOptions = Options
 
 
+OVERLOADED = "machine overloaded: re-grade"
+"""Status of a submission the machine was too busy to grade (the next run does)."""
+
+
 class GradeError(RuntimeError):
     """Grading cannot proceed (the solution fails its own checks, no sandbox)."""
 
@@ -171,6 +175,7 @@ def grade_notebook(
     result.flags += flags
     out = run_submission(plan, cells, opts, slot)
     result.passes = 1 + out.restarts
+    result.flags += out.flags
     for function, ex, *via in out.tripwires:
         ex = ex or plan.owner.get(function)
         name = plan.listed_as(function, ex)
@@ -203,7 +208,7 @@ def grade_notebook(
             result.details[c.grade_id] = why
     for c in plan.manual:
         result.reasons[c.grade_id] = "written answer: graded by hand"
-    result.status = out.status
+    result.status = OVERLOADED if out.status == "overloaded" else out.status
     if out.restarts and result.status == "ok":
         result.status = "restarted (your code hung or crashed)"
     if any(n.startswith("zero:") for n in result.reasons.values()):
@@ -348,7 +353,7 @@ def grade(
     for student, path, status in subs:
         fp = _fingerprint(path, sol_text)
         old = store.load(student) if store and not regrade else None
-        if old is not None and old[1] == fp:
+        if old is not None and old[1] == fp and old[0].status != OVERLOADED:
             results[student] = old[0]
             continue
         todo.append((student, path, status, fp))
@@ -441,9 +446,26 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--jobs", "-j", type=int, help="submissions at once (default: cores)"
     )
-    parser.add_argument("--cell-timeout", type=float, default=60.0, help="s per cell")
     parser.add_argument(
-        "--timeout", type=float, default=600.0, help="s per submission in total"
+        "--cell-timeout",
+        type=float,
+        default=60.0,
+        help="s per student cell, call or check: CPU time, or wall time not spent "
+        "waiting for a CPU (default: %(default)s)",
+    )
+    parser.add_argument(
+        "--timeout",
+        type=float,
+        default=600.0,
+        help="s of CPU time per submission in total (default: %(default)s)",
+    )
+    parser.add_argument(
+        "--backstop",
+        type=float,
+        default=10.0,
+        help="wall-time limit, in multiples of the limits above: a submission "
+        "that reaches it is reported 'machine overloaded: re-grade', never "
+        "scored (default: %(default)s)",
     )
     parser.add_argument(
         "--restarts", type=int, default=3, help="restarts after a hang or crash"
@@ -472,6 +494,7 @@ def run(args: argparse.Namespace) -> int:
     opts = Options(
         cell_timeout=args.cell_timeout,
         timeout=args.timeout,
+        backstop=args.backstop,
         restarts=args.restarts,
         keep=args.keep,
         sandbox=not args.no_sandbox,
@@ -526,6 +549,11 @@ def run(args: argparse.Namespace) -> int:
     feedback = args.feedback or args.out.with_name(f"{args.out.stem}-feedback")
     write_feedback(feedback, results, items, args.lab)
     full = sum(r.total == r.max_points for r in results)
+    if busy := sum(r.status == OVERLOADED for r in results):
+        sys.stderr.write(
+            f"robotlib grade: the machine was too busy to grade {busy} submissions "
+            "within the wall-time backstop; run the same command again to grade them\n"
+        )
     sys.stderr.write(
         f"graded {len(results)} submissions of {args.lab} "
         f"in {time.monotonic() - t0:.1f} s "
