@@ -28,6 +28,7 @@ Imports only the standard library.
 from __future__ import annotations
 
 import os
+import time
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -154,13 +155,11 @@ class Share:
     def __init__(self, slot: int, processes: int, enabled: bool = True):
         self.groups: list[Path] = []
         for base, kind in _controllers() if enabled else []:
-            group = base / "robotlib-grade" / f"slot-{slot}"
+            # beside the machine's other work, not below one shared parent:
+            # each slot weighs as much as one ordinary process
+            group = base / f"robotlib-grade-slot-{slot}"
             try:
-                if kind == "v2":
-                    top = base / "robotlib-grade"
-                    top.mkdir(exist_ok=True)
-                    (top / "cgroup.subtree_control").write_text("+cpu +pids")
-                group.mkdir(parents=True, exist_ok=True)
+                group.mkdir(exist_ok=True)
                 if kind in ("pids", "v2"):
                     (group / "pids.max").write_text(str(processes))
                 if kind == "cpu":
@@ -185,10 +184,21 @@ class Share:
             except OSError:
                 pass
 
-    def close(self) -> None:
-        """Remove the groups once empty (another grading run may still use one)."""
+    def close(self, settle: float = 2.0) -> None:
+        """Remove the groups once empty (another grading run may still use one).
+
+        A killed sandbox's last processes leave their group a moment after
+        their parent was reaped: each removal is retried for ``settle`` s.
+        """
+        deadline = time.monotonic() + settle
         for group in self.groups:
-            try:
-                group.rmdir()
-            except OSError:
-                pass
+            while True:
+                try:
+                    group.rmdir()
+                    break
+                except FileNotFoundError:
+                    break
+                except OSError:
+                    if time.monotonic() > deadline:
+                        break
+                    time.sleep(0.05)

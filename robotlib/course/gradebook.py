@@ -144,7 +144,7 @@ def gradebook_rows(results: list[Result], checks: list[CheckCell]) -> list[dict]
     for r in results:
         row = {"student": r.student}
         for c in checks:  # empty: a written answer not graded yet
-            got = r.points.get(c.grade_id)
+            got = r.points.get(c.grade_id, None if c.manual else 0.0)
             row[c.grade_id] = "" if got is None else f"{got:g}"
         row["total"] = f"{r.total:g}"
         row["max"] = f"{r.max_points:g}"
