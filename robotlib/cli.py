@@ -24,6 +24,10 @@ COMMANDS = {
         "robotlib.pioneer.faults",
         "a proxy to sim-server that delays and drops packets",
     ),
+    "course": (
+        "robotlib.course.folder",
+        "write the released labs and the syllabus into a folder of your own",
+    ),
     "release": ("robotlib.course.release", "write labs/ from solutions/"),
     "grade": ("robotlib.course.grade", "grade a folder of submissions in a sandbox"),
     "warmup": ("robotlib.notebook", "compile the numba kernels the labs use, once"),

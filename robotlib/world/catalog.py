@@ -6,9 +6,9 @@ Imports the world's file readers and model; nothing above the world layer.
 from __future__ import annotations
 
 import os
-import sys
 from pathlib import Path
 
+from .._shipped import shipped_dir
 from .fileformat import WorldFileError
 from .mapfile import read_map
 from .model import World
@@ -17,19 +17,9 @@ from .wld import read_wld
 __all__ = ["WORLDS_DIR", "load_world", "read_world", "world_names"]
 
 
-def _worlds_dir() -> Path:
-    """Return the folder of the shipped worlds.
-
-    The repository's ``worlds/`` (a checkout or an editable install), else
-    where a regular install put them (``share/robotlib/worlds``).
-    """
-    repo = Path(__file__).resolve().parents[2] / "worlds"
-    installed = Path(sys.prefix) / "share" / "robotlib" / "worlds"
-    return repo if repo.is_dir() or not installed.is_dir() else installed
-
-
-WORLDS_DIR = _worlds_dir()
-"""The folder of the shipped worlds (short names are looked up here)."""
+WORLDS_DIR = shipped_dir("worlds")
+"""The folder of the shipped worlds (short names are looked up here): the
+repository's ``worlds/``, or ``share/robotlib/worlds`` of an install."""
 
 
 def read_world(path: str | os.PathLike) -> World:

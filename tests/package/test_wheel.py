@@ -1,0 +1,178 @@
+"""The package as a student installs it: a wheel in a fresh virtual environment.
+
+The wheel is built (``pip wheel --no-deps``) from a copy of the files the
+build reads, in a temporary folder, so the build writes nothing into the
+repository. It is installed into a fresh venv in another temporary folder,
+far from any checkout. The venv sees the test environment's installed
+packages (numpy, numba, Jupyter, pytest, ...) through a ``.pth`` file, which
+is what ``--system-site-packages`` gives when the base interpreter carries
+them, so nothing is downloaded; robotlib itself comes only from the wheel
+(checked). There a student's steps run: ``robotlib course DIR``, ``robotlib
+warmup``, and Lab 0 headless under nbval, with the answers a student would
+write (the exercise cells of ``solutions/``) pasted into the released copy.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import shutil
+import subprocess
+import sys
+import sysconfig
+import zipfile
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[2]
+BUILD_INPUTS = ["pyproject.toml", "README.md", "robotlib", "worlds", "labs", "course"]
+LAB0 = "lab0_getting_started.ipynb"
+
+pytestmark = pytest.mark.slow
+
+
+def _run(cmd, cwd, env, timeout=600):
+    proc = subprocess.run(
+        [str(c) for c in cmd],
+        cwd=cwd,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=timeout,
+    )
+    assert proc.returncode == 0, f"{cmd}\n{proc.stdout[-4000:]}\n{proc.stderr[-4000:]}"
+    return proc.stdout
+
+
+@pytest.fixture(scope="module")
+def wheel(tmp_path_factory):
+    src = tmp_path_factory.mktemp("src")
+    ignore = shutil.ignore_patterns("__pycache__", "*.nbi", "*.nbc", "*.pyc")
+    for name in BUILD_INPUTS:
+        path = ROOT / name
+        if path.is_dir():
+            shutil.copytree(path, src / name, ignore=ignore)
+        else:
+            shutil.copy2(path, src / name)
+    out = tmp_path_factory.mktemp("wheel")
+    env = {**os.environ, "PIP_DISABLE_PIP_VERSION_CHECK": "1"}
+    cmd = [sys.executable, "-m", "pip", "wheel", "--no-deps", "-q", "-w", out, src]
+    _run(cmd, cwd=out, env=env)
+    (whl,) = out.glob("robotlib-*.whl")
+    return whl
+
+
+@pytest.fixture(scope="module")
+def student(tmp_path_factory, wheel):
+    """A fresh venv with the wheel installed: (its python, its scripts, env)."""
+    home = tmp_path_factory.mktemp("student")
+    venv = home / "venv"
+    _run([sys.executable, "-m", "venv", venv], cwd=home, env=os.environ)
+    scripts = venv / ("Scripts" if os.name == "nt" else "bin")
+    python = scripts / ("python.exe" if os.name == "nt" else "python")
+    purelib = _run(
+        [python, "-c", "import sysconfig; print(sysconfig.get_paths()['purelib'])"],
+        cwd=home,
+        env=os.environ,
+    ).strip()
+    ours = {sysconfig.get_paths()["purelib"], sysconfig.get_paths()["platlib"]}
+    (Path(purelib) / "_test_env_packages.pth").write_text("\n".join(sorted(ours)))
+    env = {
+        k: v
+        for k, v in os.environ.items()
+        if k not in {"PYTHONPATH", "VIRTUAL_ENV", "PYTHONHOME"}
+    }
+    env.update(
+        PATH=f"{scripts}{os.pathsep}{env.get('PATH', '')}",
+        MPLBACKEND="Agg",
+        NUMBA_CACHE_DIR=str(home / "numba-cache"),
+        ROBOTLIB_TABLE_CACHE="off",
+        PIP_DISABLE_PIP_VERSION_CHECK="1",
+        PYTEST_DISABLE_PLUGIN_AUTOLOAD="1",
+    )
+    install = [python, "-m", "pip", "install", "-q", "--no-index", "--no-deps"]
+    _run([*install, "--force-reinstall", wheel], cwd=home, env=env)
+    return python, scripts, env, home
+
+
+def test_the_wheel_carries_worlds_labs_and_syllabus_never_solutions(wheel):
+    names = zipfile.ZipFile(wheel).namelist()
+    data = [n for n in names if "/share/robotlib/" in n]
+    labs = sorted(Path(n).name for n in data if "/share/robotlib/labs/" in n)
+    assert labs == sorted(p.name for p in (ROOT / "labs").glob("*.ipynb"))
+    assert any(n.endswith("/share/robotlib/course/syllabus.md") for n in data)
+    for world in ("corridor.wld", "office.map", "clutter.pairs.json"):
+        assert any(n.endswith(f"/share/robotlib/worlds/{world}") for n in data)
+    assert not [n for n in names if "solution" in n.lower()]
+    with zipfile.ZipFile(wheel) as zf:
+        for n in data:
+            if n.endswith(".ipynb"):
+                assert b"BEGIN SOLUTION" not in zf.read(n), n
+
+
+def test_robotlib_comes_from_the_wheel(student):
+    python, _, env, home = student
+    where = _run(
+        [python, "-c", "import robotlib, robotlib.world as w; "
+         "print(robotlib.__file__); print(w.WORLDS_DIR)"],
+        cwd=home, env=env,
+    ).split()  # fmt: skip
+    venv = python.parent.parent
+    assert all(Path(p).is_relative_to(venv) for p in where), where
+    assert not any(Path(p).is_relative_to(ROOT) for p in where)
+
+
+def test_course_folder_then_lab0_headless(student):
+    python, scripts, env, home = student
+    robotlib_cmd = scripts / "robotlib"
+    out = _run([robotlib_cmd, "course", "my-course"], cwd=home, env=env)
+    course = home / "my-course"
+    # The next two commands: warm the kernels, open the folder.
+    assert "robotlib warmup" in out and f"jupyter lab {course}" in out
+    labs = sorted(p.name for p in course.glob("*.ipynb"))
+    assert labs == sorted(p.name for p in (ROOT / "labs").glob("*.ipynb"))
+    for name in labs:
+        assert (course / name).read_text() == (ROOT / "labs" / name).read_text()
+    assert (course / "syllabus.md").read_text() == (
+        ROOT / "course" / "syllabus.md"
+    ).read_text()
+    assert "robotlib warmup" in (course / "README.md").read_text()
+
+    # The student's work survives a second run.
+    answered = _answered_lab0(course / LAB0)
+    (course / LAB0).write_text(answered)
+    again = _run([robotlib_cmd, "course", "my-course"], cwd=home, env=env)
+    assert "wrote 0 files" in again
+    assert (course / LAB0).read_text() == answered
+
+    _run([robotlib_cmd, "warmup", "sim"], cwd=course, env=env)
+    (course / "pytest.ini").write_text("[pytest]\n")
+    nbval = [
+        python, "-m", "pytest", "-p", "nbval.plugin", "-p", "no:cacheprovider",
+        "--nbval-lax", "--nbval-current-env", "--nbval-cell-timeout=120",
+        "-c", course / "pytest.ini", f"--rootdir={course}", "-q", LAB0,
+    ]  # fmt: skip
+    report = _run(nbval, cwd=course, env=env, timeout=900)
+    code_cells = [c for c in json.loads(answered)["cells"] if c["cell_type"] == "code"]
+    assert re.search(r"\b(\d+) passed", report)[1] == str(len(code_cells)), report
+    assert "failed" not in report
+
+
+def _answered_lab0(released: Path) -> str:
+    """The released Lab 0 with a student's answers: the solutions' exercise cells."""
+    solution = json.loads((ROOT / "solutions" / LAB0).read_text())
+    answers = {
+        c["id"]: c["source"]
+        for c in solution["cells"]
+        if c["metadata"].get("robotlib", {}).get("exercise")
+    }
+    nb = json.loads(released.read_text())
+    for cell in nb["cells"]:
+        if cell["id"] in answers:
+            source = "".join(answers[cell["id"]]).splitlines(keepends=True)
+            markers = ("### BEGIN SOLUTION", "### END SOLUTION")
+            cell["source"] = [ln for ln in source if ln.strip() not in markers]
+    assert sum(c["id"] in answers for c in nb["cells"]) == len(answers) > 0
+    return json.dumps(nb, indent=1)
