@@ -1,4 +1,4 @@
-"""MCL step per particle count: robotlib, its exact path, a plain numba pipeline, a peer.
+"""The MCL step per particle count: robotlib, its exact path, a plain pipeline, a peer.
 
 Run ``python bench/bench_mcl.py [--json FILE]`` (the same as
 ``robotlib bench mcl``). Prints milliseconds per step and the ratios
