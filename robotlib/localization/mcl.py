@@ -277,7 +277,12 @@ class MCL:
         ll = np.asarray(self.sensor.log_likelihood(self.particles, z), dtype=float)
         if ll.shape != self.weights.shape:
             raise ValueError(f"log_likelihood gave shape {ll.shape}, not (N,)")
-        top = ll.max() if np.isfinite(ll.max()) else 0.0
+        if np.isnan(ll).any() or np.isposinf(ll).any():
+            raise ValueError("the sensor model's log_likelihood gave NaN or +inf")
+        top = ll.max()
+        if top == -np.inf:  # no particle fits the scan: the weights stay
+            self._weighed(self.weights, top)
+            return top
         w = self.weights * np.exp(ll - top)
         total = w.sum()
         self._weighed(w / total, top + math.log(total / self.weights.sum()))

@@ -156,3 +156,40 @@ def test_particles_set_from_outside(world):
     assert np.all(np.isfinite(est))
     with pytest.raises(ValueError):
         mcl.set_particles(np.zeros((4, 2)))
+
+
+class _Constant:
+    def __init__(self, value):
+        self.value = value
+
+    def log_likelihood(self, particles, z):
+        return np.full(len(particles), self.value)
+
+
+def test_a_model_giving_nan_is_refused_plainly(world):
+    mcl = MCL(world, _Constant(np.nan), n=50, rng=0)
+    odo = np.array([1.0, 1.0, 0.0])
+    with pytest.raises(ValueError, match="NaN"):
+        mcl.step(odo, odo + [0.1, 0, 0], np.ones(8))
+
+
+@pytest.mark.parametrize("fused", [False, True])
+def test_a_scan_no_particle_fits_keeps_the_weights(world, fused):
+    model = _Constant(-np.inf)
+    mcl = MCL(world, model, n=50, rng=0, resampling=ThresholdResampling(threshold=0))
+    w = np.random.default_rng(1).random(50)
+    mcl.set_particles(mcl.particles, w)
+    if fused:  # the kernel's own guard, called directly
+        beam = BeamSensorModel(world, fast=True, params=BeamParameters(z_max=0.0))
+        serial, _ = beam.fused
+        z = np.full(8, 5.0)  # max readings, which z_max = 0 makes impossible
+        out = (np.empty((50, 3)), np.empty(50), np.empty(3))
+        args = (mcl.particles, mcl.weights, np.zeros((50, 3)), 0, 0, 0, 0, 0, 0)
+        log_mean, _ = serial(*args, *beam.fused_arguments(z), *out)
+        np.testing.assert_allclose(out[1], mcl.weights)
+    else:
+        odo = np.array([1.0, 1.0, 0.0])
+        mcl.step(odo, odo, np.ones(8))
+        np.testing.assert_allclose(mcl.weights, w / w.sum())
+        log_mean = mcl.info.log_mean_likelihood
+    assert log_mean == -np.inf

@@ -53,11 +53,11 @@ def beam_log_prob(z, e_short, zhat_mm, hit_norm, short_norm, inv_sigma, p_max, p
 
 @nb.njit(**JIT, inline="always")
 def _largest(ll):
-    """Return the largest entry of ``ll``, or 0 when none is finite."""
+    """Return the largest entry of ``ll`` (``-inf`` when no particle fits the scan)."""
     top = -np.inf
     for j in range(ll.shape[0]):
         top = max(top, ll[j])
-    return top if top > -np.inf else 0.0
+    return top
 
 
 @nb.njit(**JIT, inline="always")
@@ -131,10 +131,10 @@ def _beam_step(particles, weights, normals, rot1, trans, rot2, sd1, sd2, sd3,
         cs[j, 1] = s
         ll[j] = exponent * total
     top = _largest(ll)
-    for j in nb.prange(n):
-        out_w[j] = weights[j] * math.exp(ll[j] - top)
+    for j in nb.prange(n):  # no particle fits the scan: the weights stay as they were
+        out_w[j] = weights[j] * math.exp(ll[j] - top) if top > -np.inf else weights[j]
     ratio, ess = _normalise(weights, out_p, cs, out_w, est)
-    return top + math.log(ratio), ess
+    return (top + math.log(ratio) if top > -np.inf else top), ess
 
 
 def _paper_step(particles, weights, normals, rot1, trans, rot2, sd1, sd2, sd3,
@@ -169,10 +169,10 @@ def _paper_step(particles, weights, normals, rot1, trans, rot2, sd1, sd2, sd3,
         cs[j, 1] = s
         ll[j] = math.log(math.exp(-d / n_sensors) + 1.0 / n)
     top = _largest(ll)
-    for j in nb.prange(n):
-        out_w[j] = weights[j] * math.exp(ll[j] - top)
+    for j in nb.prange(n):  # no particle fits the scan: the weights stay as they were
+        out_w[j] = weights[j] * math.exp(ll[j] - top) if top > -np.inf else weights[j]
     ratio, ess = _normalise(weights, out_p, cs, out_w, est)
-    return top + math.log(ratio), ess
+    return (top + math.log(ratio) if top > -np.inf else top), ess
 
 
 beam_step, beam_step_parallel = serial_and_parallel(_beam_step)
