@@ -73,7 +73,12 @@ JIT_PARALLEL = {**JIT, "parallel": True}
 """Options for ``numba.njit`` on kernels that loop with ``prange``."""
 
 
-def serial_and_parallel(body):
+def jit_inner(fn):
+    """``numba.njit(**JIT)(fn)``: transitional, for the old localization kernels."""
+    return nb.njit(**JIT)(fn)
+
+
+def serial_and_parallel(body, inner: bool = False):
     """Compile one kernel body twice: serially, and over threads.
 
     ``body`` loops over its particles (or poses) with ``numba.prange``, which
@@ -85,6 +90,8 @@ def serial_and_parallel(body):
     ----------
     body : function
         The plain Python function (not yet compiled).
+    inner : bool
+        Ignored (transitional, for the old localization kernels).
 
     Returns
     -------

@@ -143,23 +143,22 @@ def cone_table_cell(walls, cx, cy, n_bins, offsets, max_range, min_range, specul
     w = np.asarray(walls, dtype=np.float64).reshape(-1, 4)
     ex, ey = w[:, 2] - w[:, 0], w[:, 3] - w[:, 1]
     wx, wy = w[:, 0] - cx, w[:, 1] - cy
+    a = [b * (2.0 * math.pi) / n_bins for b in range(n_bins)]
+    dx = np.array([math.cos(v) for v in a])[:, None]  # (n_bins, 1): one ray a row
+    dy = np.array([math.sin(v) for v in a])[:, None]
     with np.errstate(invalid="ignore", divide="ignore"):
         length = np.sqrt(ex * ex + ey * ey)
-        normal = np.column_stack([-ey / length, ex / length])
-    echo = np.full(n_bins, np.inf)
-    for b in range(n_bins):
-        a = b * (2.0 * math.pi) / n_bins
-        dx, dy = math.cos(a), math.sin(a)
-        with np.errstate(invalid="ignore", divide="ignore"):
-            denom = dx * ey - dy * ex
-            t = (wx * ey - wy * ex) / denom
-            s = (wx * dy - wy * dx) / denom
-        hit = np.flatnonzero((np.abs(denom) >= 1e-12) & (t >= 0) & (s >= 0) & (s <= 1))
-        if len(hit) == 0:
-            continue
-        m = hit[np.argmin(t[hit])]
-        if t[m] < max_range and abs(dx * normal[m, 0] + dy * normal[m, 1]) >= specular:
-            echo[b] = t[m]
+        nx, ny = -ey / length, ex / length
+        denom = dx * ey - dy * ex
+        t = (wx * ey - wy * ex) / denom
+        s = (wx * dy - wy * dx) / denom
+    hit = (np.abs(denom) >= 1e-12) & (t >= 0) & (s >= 0) & (s <= 1)
+    t = np.where(hit, t, np.inf)
+    m = np.argmin(t, axis=1)  # the nearest hit, the lowest index among equals
+    rows = np.arange(n_bins)
+    first = t[rows, m]
+    cos_inc = np.abs(dx[:, 0] * nx[m] + dy[:, 0] * ny[m])
+    echo = np.where((first < max_range) & (cos_inc >= specular), first, np.inf)
     out = np.empty(n_bins, dtype=np.uint16)
     for b in range(n_bins):
         z = min(echo[(b + o) % n_bins] for o in offsets)
@@ -179,5 +178,5 @@ def table_lookup(table, x0, y0, resolution, particles, sensors):
             col = min(max(math.floor((px - x0) / resolution), 0), nx - 1)
             row = min(max(math.floor((py - y0) / resolution), 0), ny - 1)
             b = math.floor((th + sth) / (2 * math.pi) * n_bins + 0.5) % n_bins
-            out[n, i] = table[row, col, b] / 1000.0
+            out[n, i] = table[row, col, b] * 0.001
     return out

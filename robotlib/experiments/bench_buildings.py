@@ -5,15 +5,16 @@
 every wall (`robotlib.experiments.bench_mcl.square_world`), and for each
 side, in a fresh process, times what `MCL.best` needs before its first step:
 the admissible free space (`World.free_space`), the cone table (`ConeTable`)
-and the filter itself (its 50,000 particles drawn); it reports each part's seconds, the process's peak resident
-memory (MiB, ``ru_maxrss / 1024``: the unit issue 16's figures were taken
-in) when the filter is ready and at the end, and any error (a table too
-large for `MAX_TABLE_BYTES` says so; then the exact path,
-``MCL.best(fast=False)``, which the error suggests, is set up and timed
-instead). A size that takes longer than ``--timeout`` seconds is reported as
-such. Then, in the same process, it times one step of the path it set up
-with ``--steps`` particles (`MCL.best`'s beam model, systematic resampling),
-and prints a verdict against the side's target (`TARGETS`).
+and the filter itself (its 50,000 particles drawn); it reports each part's
+seconds, the process's peak resident memory (MiB, ``ru_maxrss / 1024``: the
+unit issue 16's figures were taken in) when the filter is ready and at the
+end, and any error (a table too large for `MAX_TABLE_BYTES` says so; then
+the exact path, ``MCL.best(fast=False)``, which the error suggests, is set
+up and timed instead). A size that takes longer than ``--timeout`` seconds
+is reported as such. Then, in the same process, it times one step of the
+path it set up with ``--steps`` particles (`MCL.best`'s beam model,
+systematic resampling), and prints a verdict against the side's target
+(`TARGETS`).
 
 Targets (issue 16, measured and reported, not asserted): 50 m x 50 m at 5 cm
 ready in at most 3 s and 300 MB, 200 m x 200 m in at most 30 s and 1.5 GB,

@@ -143,7 +143,8 @@ class ConeTable:
             float(sonar.min_range),
             float(sonar.cos_specular),
         )
-        key = _disk_key(segments, (self.origin, self.resolution, ny, nx), offsets, model)
+        grid = (self.origin, self.resolution, ny, nx)
+        key = _disk_key(segments, grid, offsets, model)
         t0 = time.perf_counter()
         table = _disk_load(key, (ny, nx, self.n_bins))
         self.from_disk = table is not None
@@ -397,3 +398,8 @@ def exact_arguments(world: World, sonar: SonarModel) -> tuple:
 def free_space(world: World, resolution: float, radius: float):
     """`World.free_space` (the old filter's call)."""
     return world.free_space(resolution, radius)
+
+
+def _sweep_builds(world, sonar, ray_step) -> bool:
+    """Return False: one builder now (the old prebuild helper asks)."""
+    return False

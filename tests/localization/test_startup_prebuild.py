@@ -4,10 +4,7 @@
 kernels into numba's cache while the filter is built; the first step then
 compiles nothing, gives the numbers a process without the helper gives, the
 made-up table of the helper's room never reaches the table cache, and the
-helper ends with its parent. Beside it, what a start skips: the admissible
-area read back from the tables' disk cache (`cones.free_space`), helpers
-compiled without numba's Python wrapper (`robotlib._config.JIT_INNER`), and
-the strips builder's normals in NumPy with the kernel's bits.
+helper ends with its parent.
 """
 
 from __future__ import annotations
@@ -172,103 +169,6 @@ def test_the_fake_table_fills_every_entry_in_range():
 
 
 # -- start-up without the helper: what a cold or a warm process skips ---------------
-
-
-@pytest.fixture
-def table_cache(tmp_path, monkeypatch):
-    folder = tmp_path / "tables"
-    monkeypatch.setenv("ROBOTLIB_TABLE_CACHE", str(folder))
-    return folder
-
-
-def test_the_admissible_area_comes_back_from_the_disk_cache_the_same(table_cache):
-    """`cones.free_space`: stored once, read by a fresh world, the same cells."""
-    from robotlib.localization import cones
-    from robotlib.world import load_world
-
-    built = cones.free_space(load_world("corridor"), 0.05, 0.25)
-    files = sorted(p.name for p in table_cache.glob("free-*.npy"))
-    assert len(files) == 1
-    world = load_world("corridor")  # a fresh world: nothing in its memo
-    read = cones.free_space(world, 0.05, 0.25)
-    assert read.data.dtype == np.bool_ and not read.data.flags.writeable
-    assert np.array_equal(read.data, built.data) and read.data.any()
-    assert read.origin == built.origin and read.resolution == built.resolution
-    assert world.free_space(0.05, 0.25) is read  # where `World.free_space` keeps it
-    assert np.array_equal(read.data, load_world("corridor").free_space(0.05, 0.25).data)
-    # another radius, or a wall moved: another entry, computed
-    wider = cones.free_space(load_world("corridor"), 0.05, 0.4)
-    assert wider.data.sum() < read.data.sum()
-    moved = load_world("corridor")
-    segments = moved.segments.copy()
-    segments[0, :2] += 0.3
-    from robotlib.world import World
-
-    other = World(segments, start=moved.start, name="moved")
-    got = cones.free_space(other, 0.05, 0.25)
-    assert np.array_equal(got.data, World(segments, start=moved.start).free_space(
-        0.05, 0.25).data)  # fmt: skip
-    assert len(list(table_cache.glob("free-*.npy"))) == 3
-
-
-def test_a_damaged_admissible_area_file_is_computed_again(table_cache):
-    from robotlib.localization import cones
-    from robotlib.world import load_world
-
-    good = cones.free_space(load_world("corridor"), 0.05, 0.25)
-    (path,) = table_cache.glob("free-*.npy")
-    path.write_bytes(path.read_bytes()[:-7])  # cut short
-    again = cones.free_space(load_world("corridor"), 0.05, 0.25)
-    assert np.array_equal(again.data, good.data)
-
-
-def _normals_kernel():
-    import numba
-
-    from robotlib.localization._kernels import tables
-
-    @numba.njit
-    def call(segments):  # `_unit_normals` has no Python wrapper (`JIT_INNER`)
-        return tables._unit_normals(segments)
-
-    return call
-
-
-def test_the_numpy_unit_normals_are_the_kernels_bit_for_bit():
-    """`tables.unit_normals` (the strips builder's) against `_unit_normals`."""
-    from robotlib.localization._kernels import tables
-
-    rng = np.random.default_rng(7)
-    segments = np.concatenate([
-        rng.uniform(-50, 50, (400, 4)),
-        rng.uniform(-1, 1, (100, 4)) * 10.0 ** rng.integers(-9, 4, (100, 1)),
-        [[0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, -2.0], [1.0, 1.0, 1.0 + 1e-12, 1.0]],
-    ])  # fmt: skip
-    got = tables.unit_normals(segments)
-    want = _normals_kernel()(segments)
-    assert got.tobytes() == want.tobytes()
-
-
-def test_inner_helpers_are_not_callable_from_python_but_their_callers_are():
-    """`jit_inner` helpers: no Python wrapper; the kernels that call them run."""
-    from robotlib._config import JIT_INNER
-    from robotlib.localization._kernels import fused, tables
-    from robotlib.world import _kernels as wk
-
-    for helper in (tables._ray_echoes, tables._near_walls, wk.point_segment_distance,
-                   fused.move_and_read):  # fmt: skip
-        assert helper.targetoptions.get("no_cpython_wrapper") is True
-    assert JIT_INNER["cache"] is True
-    with pytest.raises(TypeError, match="only compiled code calls it"):
-        wk.point_segment_distance(0.0, 0.0, 1.0, 1.0, 2.0, 1.0)  # not a crash
-    # a kernel calling it: the distance to the nearest wall, as plain NumPy has it
-    pts = np.array([[0.0, 0.0], [3.0, 4.0]])
-    segs = np.array([[1.0, -1.0, 1.0, 1.0], [0.0, 5.0, 5.0, 5.0]])
-    out = np.empty(2)
-    wk.min_distance_to_segments_serial(pts, segs, out)
-    assert out.tolist() == [1.0, 1.0]
-    with pytest.raises(TypeError):  # compiled now (for its caller): still refused
-        wk.point_segment_distance(0.0, 0.0, 1.0, 1.0, 2.0, 1.0)
 
 
 TAIL = textwrap.dedent("""

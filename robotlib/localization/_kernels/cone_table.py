@@ -1,4 +1,4 @@
-"""The cone table: expected sonar ranges per grid cell and direction bin, built and read.
+"""The cone table: expected sonar ranges per cell and direction bin, built and read.
 
 ``table[i, j, b]`` (uint16, mm) is what a noise-free sonar at the centre of
 cell ``(i, j)`` (``x0 + (j + 0.5) * res``, ``y0 + (i + 0.5) * res``),
@@ -67,8 +67,9 @@ def strip_ray(
     """Nearest hit ``(t, m)`` of the ray ``o + t d`` on the walls of its strip.
 
     ``start, firsts, entries, ids, reach`` are `cone_strips.build_strips`'
-    strips for ``(dx, dy)``; ``m`` is the wall's code there (-1 for none). The very ``t`` and wall a cast
-    against every wall finds whenever that hit is nearer than ``limit``
+    strips for ``(dx, dy)``; ``m`` is the wall's code there (-1 for none).
+    The very ``t`` and wall a cast against every wall finds whenever that
+    hit is nearer than ``limit``
     (else a hit beyond it, or none). ``finger[k]`` remembers where strip
     ``k``'s last ray began its search (rays of nearby cells begin nearby).
     """
@@ -371,10 +372,13 @@ def _expected_table(particles, sensors, table, x0, y0, inv_res, out):
     nearest direction bin (`pieces.table_mm`).
     """
     for n in nb.prange(particles.shape[0]):
+        x = particles[n, 0]
+        y = particles[n, 1]
+        th = particles[n, 2]
+        c = math.cos(th)
+        s = math.sin(th)
         for i in range(sensors.shape[0]):
-            sx, sy, sth = sensor_pose(
-                particles[n, 0], particles[n, 1], particles[n, 2], sensors, i
-            )
+            sx, sy, sth = sensor_pose(x, y, th, c, s, sensors, i)
             out[n, i] = table_mm(table, x0, y0, inv_res, sx, sy, sth) * 0.001
 
 
