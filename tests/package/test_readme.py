@@ -11,7 +11,7 @@ def readme_commands():
 def test_readme_opens_with_the_main_and_the_test_command():
     main, tests = readme_commands()[:2]
     assert "pip install -e ." in main and "jupyter lab labs/" in main
-    assert "pytest" in tests
+    assert "pytest" in tests and "--durations=25" in tests  # CI lists the slowest
 
 
 def test_ci_runs_the_readmes_test_command_verbatim():
