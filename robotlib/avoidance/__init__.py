@@ -24,11 +24,13 @@ from .episode import OUTCOMES, Episode, run_episode, run_episodes
 from .potential import PotentialField, force_field, potential_force
 from .reactive import BRAITENBERG, Braitenberg, WallFollower, sonar_activation
 from .vfh import VFH, choose_direction, polar_histogram, smooth_histogram
+from .vfh_settings import VFHSettings
 from .worlds import AVOID_WORLDS, StartGoal, pair_regions, start_goal_pairs
 
 __all__ = [
     "Controller",
     "VFH",
+    "VFHSettings",
     "polar_histogram",
     "choose_direction",
     "smooth_histogram",

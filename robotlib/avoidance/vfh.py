@@ -24,7 +24,8 @@ the increment three times the decrement the door stayed painted shut (0 of
 The public functions are what a student writes in Lab 2; `VFH` accepts
 replacements for them (``histogram=``, ``direction=``).
 
-Imports: numpy, the kernels, `robotlib.avoidance.base`; never plotting.
+Imports: numpy, the kernels, `robotlib.avoidance.base` and `.vfh_settings`;
+never plotting.
 """
 
 from __future__ import annotations
@@ -33,9 +34,10 @@ import math
 
 import numpy as np
 
-from ..p3dx import ROBOT_RADIUS, SONAR_CONE
+from ..p3dx import ROBOT_RADIUS
 from . import _kernels
 from .base import Controller
+from .vfh_settings import VFHSettings
 
 __all__ = ["VFH", "polar_histogram", "choose_direction", "smooth_histogram"]
 
@@ -192,56 +194,20 @@ class VFH(Controller):
     goal : array_like, shape (2,), optional
         Goal in the odometry frame, m; settable later (attribute ``goal``) or
         per call (``command(sonar, pose, goal)``).
-    resolution : float
-        Certainty grid cell, m.
-    extent : float
-        Side of the square certainty grid, m, centred on the first pose seen.
-    window : float
-        Radius of the active window, m.
-    enlarge : float
-        Robot radius plus safety distance, m.
-    n_sectors : int
-        Polar histogram sectors.
-    threshold_low, threshold_high : float
-        Binary histogram hysteresis: a sector becomes blocked above
-        ``threshold_high`` and free again below ``threshold_low``.
-    wide : int
-        Sectors that make a valley wide.
-    increment, decrement, cmax : float
-        Certainty grid update: added at an echo, taken from each cell of the
-        cone nearer than the echo, ceiling.
-    cone : float
-        Full opening of a sonar's cone, rad (the grid clears inside it).
-    clear_range : float
-        Cells further than this are never cleared, m.
-    fade : float
-        Each cycle the cells within the sonar's range are multiplied by
-        this (1: no fading), so that what is no longer seen is forgotten.
-    mu : tuple of float
-        VFH+'s cost weights of a candidate direction's angle to the goal, to
-        the current heading and to the previous choice.
-    escape : bool
-        Escape traps by following the obstacle's boundary (see `_escape`).
-    patience, progress : float
-        A trap is declared when the distance to the goal has not shrunk by
-        ``progress`` m in ``patience`` s.
-    follow_margin : int
-        Sectors between the boundary and the direction followed.
-    max_speed, max_turn : float
-        Command limits, m/s and rad/s.
-    turn_gain : float
-        Rotational velocity per radian of steering error, 1/s.
+    settings : VFHSettings, optional
+        The grid, histogram, valley, escape and speed knobs, read here
+        (default: `VFHSettings()`).
     histogram : callable, optional
         ``histogram(points, certainty, pose) -> (n_sectors,)`` to use instead
         of `polar_histogram` (Lab 2 plugs the student's in here).
     direction : callable, optional
         ``direction(hist, threshold, target) -> rad`` instead of
         `choose_direction` with the hysteresis.
-    tolerance : float
-        Goal reached within this distance, m.
 
     Attributes
     ----------
+    settings : VFHSettings
+        The knobs it was built with.
     grid : numpy.ndarray, shape (ny, nx)
         The certainty grid (odometry frame), rows are y.
     origin : numpy.ndarray, shape (2,)
@@ -262,58 +228,36 @@ class VFH(Controller):
     def __init__(
         self,
         goal=None,
+        settings: VFHSettings | None = None,
         *,
-        resolution: float = 0.1,
-        extent: float = 40.0,
-        window: float = 1.8,
-        enlarge: float = ROBOT_RADIUS + 0.05,
-        n_sectors: int = 72,
-        threshold_low: float = 75.0,
-        threshold_high: float = 150.0,
-        wide: int = 16,
-        increment: float = 1.0,
-        decrement: float = 1.0,
-        cmax: float = 30.0,
-        cone: float = SONAR_CONE,
-        clear_range: float = 2.5,
-        fade: float = 1.0,
-        mu: tuple[float, float, float] = (5.0, 2.0, 2.0),
-        escape: bool = True,
-        patience: float = 8.0,
-        progress: float = 0.3,
-        follow_margin: int = 4,
-        max_speed: float = 0.5,
-        max_turn: float = math.radians(90.0),
-        turn_gain: float = 1.5,
         histogram=None,
         direction=None,
-        tolerance: float = 0.3,
     ):
-        self.resolution = float(resolution)
-        self.n_cells = int(math.ceil(extent / resolution))
-        self.window = float(window)
-        self.enlarge = float(enlarge)
-        self.n_sectors = int(n_sectors)
-        self.threshold_low = float(threshold_low)
-        self.threshold_high = float(threshold_high)
-        self.wide = int(wide)
-        self.increment, self.decrement, self.cmax = (
-            float(increment),
-            float(decrement),
-            float(cmax),
-        )
-        self.turn_gain = float(turn_gain)
-        self.half_cone = 0.5 * float(cone)
-        self.clear_range = float(clear_range)
-        self.fade = float(fade)
-        self.escape = bool(escape)
-        self.patience = float(patience)
-        self.progress = float(progress)
-        self.follow_margin = int(follow_margin)
-        self.mu_goal, self.mu_heading, self.mu_previous = (float(m) for m in mu)
+        s = VFHSettings() if settings is None else settings
+        if not isinstance(s, VFHSettings):
+            raise TypeError(f"settings must be a VFHSettings, got {type(s).__name__}")
+        self.settings = s
+        self.resolution = s.resolution
+        self.n_cells = int(math.ceil(s.extent / s.resolution))
+        self.window = s.window
+        self.enlarge = s.enlarge
+        self.n_sectors = s.n_sectors
+        self.threshold_low = s.threshold_low
+        self.threshold_high = s.threshold_high
+        self.wide = s.wide
+        self.increment, self.decrement, self.cmax = s.increment, s.decrement, s.cmax
+        self.turn_gain = s.turn_gain
+        self.half_cone = 0.5 * s.cone
+        self.clear_range = s.clear_range
+        self.fade = s.fade
+        self.escape = s.escape
+        self.patience = s.patience
+        self.progress = s.progress
+        self.follow_margin = s.follow_margin
+        self.mu_goal, self.mu_heading, self.mu_previous = s.mu
         self.histogram_fn = histogram
         self.direction_fn = direction
-        super().__init__(goal, tolerance, max_speed, max_turn)
+        super().__init__(goal, s.tolerance, s.max_speed, s.max_turn)
 
     def _reset(self) -> None:
         self.grid = np.zeros((self.n_cells, self.n_cells))

@@ -46,6 +46,7 @@ from . import cache as numba_cache
 from . import sandbox as sb
 from .astlock import format_exc
 from .gradebook import (
+    HandGrades,
     Records,
     Result,
     export_manual,
@@ -55,7 +56,7 @@ from .gradebook import (
 )
 from .notebooks import META_KEY, NotebookError, notebook_text, read_notebook
 from .parallel import Bar, dask_map, raise_interrupt, thread_map
-from .plan import LabPlan, lab_plan, scan_submission, student_cells
+from .plan import LabPlan, lab_plan, normalized, scan_submission, student_cells
 from .release import project_dir
 from .session import JOB_ENV, Options, run_submission
 from .submissions import find_submissions
@@ -77,11 +78,21 @@ __all__ = [
 GradeOptions = Options
 
 
+UNGRADED = "written answer: not graded by hand yet"
+OVERLOADED = "machine overloaded: re-grade"
+"""Status of a submission the machine was too busy to grade (the next run does)."""
+
+
 class GradeError(RuntimeError):
     """Grading cannot proceed (the solution fails its own checks, no sandbox)."""
 
 
 def _answers(plan: LabPlan, nb: dict) -> dict[str, str]:
+    """Return the student's written answers, by grade id.
+
+    A markdown cell is a written answer by its metadata, its id, or, when
+    both were lost (an old nbformat, pasted cells), by the question it holds.
+    """
     by_id = {c.cell_id: c.grade_id for c in plan.manual}
     gids = set(by_id.values())
     out = {}
@@ -90,10 +101,14 @@ def _answers(plan: LabPlan, nb: dict) -> dict[str, str]:
             continue
         meta = (cell.get("metadata") or {}).get(META_KEY) or {}
         gid = meta.get("grade_id") if isinstance(meta, dict) else None
+        src = cell.get("source", "")
+        src = "".join(src) if isinstance(src, list) else str(src)
+        text = normalized(src)
+        by_text = [g for g, q in plan.prompts.items() if q and q in text]
         gid = gid if gid in gids else by_id.get(cell.get("id"))
+        gid = gid or (by_text[0] if len(by_text) == 1 else None)
         if gid and gid not in out:
-            src = cell.get("source", "")
-            out[gid] = "".join(src) if isinstance(src, list) else str(src)
+            out[gid] = src
     return out
 
 
@@ -143,7 +158,9 @@ def grade_notebook(
         Grading slot (chooses the sandbox's uids).
     """
     items = plan.checks + plan.manual
-    result = Result(student, {c.grade_id: 0.0 for c in items}, {}, plan.max_points)
+    result = Result(
+        student, {c.grade_id: 0.0 for c in plan.checks}, {}, plan.max_points
+    )
     t0 = time.monotonic()
     if not opts.sandbox:
         result.flags.append("graded without sandbox (--no-sandbox)")
@@ -171,6 +188,7 @@ def grade_notebook(
     result.flags += flags
     out = run_submission(plan, cells, opts, slot)
     result.passes = 1 + out.restarts
+    result.flags += out.flags
     for function, ex, *via in out.tripwires:
         ex = ex or plan.owner.get(function)
         name = plan.listed_as(function, ex)
@@ -202,8 +220,8 @@ def grade_notebook(
         elif len(why) > 300:
             result.details[c.grade_id] = why
     for c in plan.manual:
-        result.reasons[c.grade_id] = "written answer: graded by hand"
-    result.status = out.status
+        result.reasons[c.grade_id] = UNGRADED
+    result.status = OVERLOADED if out.status == "overloaded" else out.status
     if out.restarts and result.status == "ok":
         result.status = "restarted (your code hung or crashed)"
     if any(n.startswith("zero:") for n in result.reasons.values()):
@@ -348,7 +366,7 @@ def grade(
     for student, path, status in subs:
         fp = _fingerprint(path, sol_text)
         old = store.load(student) if store and not regrade else None
-        if old is not None and old[1] == fp:
+        if old is not None and old[1] == fp and old[0].status != OVERLOADED:
             results[student] = old[0]
             continue
         todo.append((student, path, status, fp))
@@ -411,15 +429,26 @@ def grade(
     return [results[k] for k in sorted(results)], items
 
 
-def fold_manual(results: list[Result], items, scores: dict) -> None:
-    """Put the instructor's scores of written answers into ``results``."""
-    manual = [c for c in items if c.manual]
+def fold_manual(results: list[Result], items, hand: HandGrades) -> int:
+    """Put the instructor's hand grades into ``results``; return how many are missing.
+
+    A written answer without a score has no points entry (the gradebook
+    shows it empty, not 0); a comment reaches the feedback.
+    """
+    missing = 0
     for r in results:
-        for c in manual:
-            got = scores.get(r.student, {}).get(c.grade_id)
-            if got is not None:
-                r.points[c.grade_id] = got
-                r.reasons.pop(c.grade_id, None)
+        for c in (c for c in items if c.manual):
+            got = hand.get(r.student, c.grade_id)
+            comment = f": {got['comment']}" if got.get("comment") else ""
+            if "score" in got:
+                r.points[c.grade_id] = float(got["score"])
+                r.reasons[c.grade_id] = f"graded by hand{comment}"
+            else:
+                r.points.pop(c.grade_id, None)  # a record of an older release: 0
+                if c.grade_id in r.answers:
+                    missing += 1
+                    r.reasons[c.grade_id] = UNGRADED + comment
+    return missing
 
 
 # -- command line ------------------------------------------------------------------
@@ -441,9 +470,26 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--jobs", "-j", type=int, help="submissions at once (default: cores)"
     )
-    parser.add_argument("--cell-timeout", type=float, default=60.0, help="s per cell")
     parser.add_argument(
-        "--timeout", type=float, default=600.0, help="s per submission in total"
+        "--cell-timeout",
+        type=float,
+        default=60.0,
+        help="s per student cell, call or check: CPU time, or wall time not spent "
+        "waiting for a CPU (default: %(default)s)",
+    )
+    parser.add_argument(
+        "--timeout",
+        type=float,
+        default=600.0,
+        help="s of CPU time per submission in total (default: %(default)s)",
+    )
+    parser.add_argument(
+        "--backstop",
+        type=float,
+        default=10.0,
+        help="wall-time limit, in multiples of the limits above: a submission "
+        "that reaches it is reported 'machine overloaded: re-grade', never "
+        "scored (default: %(default)s)",
     )
     parser.add_argument(
         "--restarts", type=int, default=3, help="restarts after a hang or crash"
@@ -472,6 +518,7 @@ def run(args: argparse.Namespace) -> int:
     opts = Options(
         cell_timeout=args.cell_timeout,
         timeout=args.timeout,
+        backstop=args.backstop,
         restarts=args.restarts,
         keep=args.keep,
         sandbox=not args.no_sandbox,
@@ -511,24 +558,36 @@ def run(args: argparse.Namespace) -> int:
         )
         items = items.checks + items.manual
         status = 130
-    if args.manual:
-        try:
-            fold_manual(results, items, read_manual(args.manual, items))
-        except (OSError, ValueError) as exc:
-            sys.stderr.write(f"robotlib grade: {exc}\n")
-            return 2
-    write_gradebook(args.out, results, items)
     manual = [c for c in items if c.manual]
+    sheet = args.out.with_name(f"{args.out.stem}-manual.csv")
+    try:  # what the instructor typed into the sheet is kept before it is rewritten
+        hand = HandGrades(args.out.with_name(f"{args.out.stem}-hand.json"))
+        for src in (sheet if sheet.exists() else None, args.manual):
+            if src is not None and manual:
+                hand.merge(read_manual(src, manual))
+        if hand.grades:
+            hand.save()
+    except (OSError, ValueError) as exc:
+        sys.stderr.write(f"robotlib grade: {exc}\n")
+        return 2
+    ungraded = fold_manual(results, items, hand)
+    write_gradebook(args.out, results, items)
     if manual:
-        export_manual(
-            args.out.with_name(f"{args.out.stem}-manual.csv"), results, manual
-        )
+        export_manual(sheet, results, manual, hand)
     feedback = args.feedback or args.out.with_name(f"{args.out.stem}-feedback")
     write_feedback(feedback, results, items, args.lab)
-    full = sum(r.total == r.max_points for r in results)
+    auto = [c for c in items if not c.manual]
+    full = sum(all(r.points.get(c.grade_id) == c.points for c in auto) for r in results)
+    if busy := sum(r.status == OVERLOADED for r in results):
+        sys.stderr.write(
+            f"robotlib grade: the machine was too busy to grade {busy} submissions "
+            "within the wall-time backstop; run the same command again to grade them\n"
+        )
     sys.stderr.write(
         f"graded {len(results)} submissions of {args.lab} "
         f"in {time.monotonic() - t0:.1f} s "
-        f"({full} full marks); gradebook {args.out}, feedback in {feedback}/\n"
+        f"({full} full marks on the automatic checks"
+        + (f", {ungraded} written answers to grade in {sheet}" if ungraded else "")
+        + f"); gradebook {args.out}, feedback in {feedback}/\n"
     )
     return status

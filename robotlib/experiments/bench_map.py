@@ -16,6 +16,7 @@ from __future__ import annotations
 import argparse
 import json
 import time
+from dataclasses import replace
 
 import numpy as np
 
@@ -30,7 +31,7 @@ from ..mapping import (
     run_fastslam,
 )
 from ..mapping.ekfslam import chi2_band, run_ekfslam
-from ..mapping.fastslam import SONAR_DEFAULTS, SONAR_PARTICLES
+from ..mapping.fastslam_settings import SONAR_PARTICLES, SONAR_SETTINGS
 from ..sensing import SonarModel
 from ..sensing.laser import laser_poses
 
@@ -148,7 +149,7 @@ def speed(out: dict) -> None:
          f"CPU {run['cpu_ms']:6.2f} ms a step")  # fmt: skip
     state = (f.maps.copy(), f.particles.copy(), f.logw.copy(), f._odo.copy())
     diff0 = f._diff.copy()
-    state_resample = f.resample_below
+    settings = f.settings
     resampled = []
 
     def one_step(whole=False):
@@ -169,10 +170,10 @@ def speed(out: dict) -> None:
     whole = _time(lambda: one_step(True)) - copy
     out["fastslam_step_whole_copies_ms"] = whole * 1e3
     out["fastslam_step_resamples"] = bool(resampled[-1])
-    f.resample_below = 2.0  # the same step, made to resample
+    f.settings = replace(settings, resample_below=2.0)  # made to resample
     rs = _time(one_step) - copy
     rs_whole = _time(lambda: one_step(True)) - copy
-    f.resample_below = state_resample
+    f.settings = settings
     out["fastslam_resampling_step_ms"] = rs * 1e3
     out["fastslam_resampling_step_whole_copies_ms"] = rs_whole * 1e3
     out["fastslam_step_ms"] = step * 1e3
@@ -181,7 +182,7 @@ def speed(out: dict) -> None:
     w = _time(lambda: f.weigh_laser(f.particles, log.laser[t]))
     wn = _time(lambda: _numpy_weigh(
         f.maps, f.origin, 0.05, lp, f.laser.angles[::2], log.laser[t][::2],
-        f.laser.max_range, f.p_rand,
+        f.laser.max_range, f.settings.p_rand,
     ))  # fmt: skip
     out["fastslam_weigh_us"] = w * 1e6
     out["fastslam_weigh_numpy_us"] = wn * 1e6
@@ -203,9 +204,10 @@ def quality(out: dict, seeds: int, ekf_seeds: int, first: int = 0,
 
     Sonar FastSLAM runs ``streams`` times per log, with the filter's seeds
     ``seed + 1000 k``: its outcome depends much on the filter's own draws.
-    ``sonar_kw``: more `GridFastSLAM` parameters for the sonar runs.
+    ``sonar_kw``: `SONAR_SETTINGS` changed for the sonar runs.
     """
     sonar_kw = sonar_kw or {}
+    sonar_settings = replace(SONAR_SETTINGS, **sonar_kw)
     log = record_drive("office", seed=0, every=2)
     w = log.world
     s = map_score(map_sonar(w, log.truth, log.sonar, 0.1), w, 0.1)
@@ -215,12 +217,12 @@ def quality(out: dict, seeds: int, ekf_seeds: int, first: int = 0,
         f"office, known poses: sonar F1 {s.f1:.3f} (10 cm), laser F1 {la.f1:.3f} (5 cm)"
     )
     rows, per_stream = [], []
-    walls = SONAR_DEFAULTS.get("sonar_walls")
+    walls = sonar_settings.sonar_walls
     for seed in range(first, first + seeds):
         log = record_drive("loop", seed=seed, every=2)
         a = run_fastslam(log, 30, "laser", rng=seed)
         bs = [run_fastslam(log, sonar_particles, "sonar", rng=seed + 1000 * k,
-                           **sonar_kw)
+                           settings=sonar_settings)
               for k in range(streams)]  # fmt: skip
         per_stream.append([(b.rms, b.score.mean_distance) for b in bs])
         odo = map_score(

@@ -20,7 +20,7 @@ with ``"laser_angles"`` and ``"laser_max_range"``), and the last
 message types are skipped. A malformed line stops the reading there, with a
 `LogError` naming the file and line; what came before stays readable.
 
-Imports the robot's state record only.
+Imports the robot's state record and the log errors only.
 """
 
 from __future__ import annotations
@@ -30,6 +30,7 @@ import math
 import numpy as np
 
 from ..robot import RobotState
+from .errors import LogError
 
 __all__ = ["read_carmen_into", "parse_carmen_line"]
 
@@ -114,8 +115,6 @@ def parse_carmen_line(line: str) -> tuple[str, dict] | None:
 
 def read_carmen_into(run) -> None:
     """Fill a `RecordedRun` (its ``path`` set) from a CARMEN log."""
-    from .replay import LogError
-
     odom = {"pose": [0.0, 0.0, 0.0], "velocity": (0.0, 0.0), "time": 0.0}
     sonar = np.zeros(0)
     truth = None

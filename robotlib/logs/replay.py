@@ -11,7 +11,8 @@ recorded state, so code that only reads (MCL, mapping) runs on it unchanged;
 motion commands raise `ReplayError`; after the last state a poll raises
 `EndOfLog`, or the file's `LogError` if it was damaged there.
 
-Imports the robot interface; never a backend.
+Imports the robot interface, the CARMEN reader and the errors; never a
+backend.
 """
 
 from __future__ import annotations
@@ -25,6 +26,8 @@ import numpy as np
 from ..robot import Robot, RobotState
 from . import _cdr
 from . import _messages as m
+from .carmen import read_carmen_into
+from .errors import EndOfLog, LogError, ReplayError
 
 __all__ = [
     "LogError",
@@ -34,18 +37,6 @@ __all__ = [
     "read_log",
     "LogRobot",
 ]
-
-
-class LogError(ValueError):
-    """A recorded run's file is damaged or not a run; names the file and record."""
-
-
-class EndOfLog(EOFError):
-    """A replayed robot was polled past its last recorded state."""
-
-
-class ReplayError(RuntimeError):
-    """A motion command was sent to a replayed (recorded) robot."""
 
 
 @dataclass
@@ -200,8 +191,6 @@ def read_log(path) -> RecordedRun:
     if path.suffix.lower() == ".mcap":
         _read_mcap(run)
     else:
-        from .carmen import read_carmen_into
-
         read_carmen_into(run)
     if not run.states:
         raise run.error or LogError(f"{path}: no polls recorded")

@@ -11,6 +11,7 @@ from .fastslam import (
     resample_parents,
 )
 from .fastslam_run import FastSLAMResult, run_fastslam
+from .fastslam_settings import SONAR_SETTINGS, FastSLAMSettings
 from .metrics import MapScore, dilate, heading_rms, map_score, trajectory_rms
 from .motion import apply_arc, arc_increment, arc_noise_cov, sample_arc_motion
 from .occupancy import (
@@ -29,6 +30,8 @@ __all__ = [
     "ROUTES",
     "DriveLog",
     "FastSLAMResult",
+    "FastSLAMSettings",
+    "SONAR_SETTINGS",
     "GridFastSLAM",
     "apply_arc",
     "arc_increment",

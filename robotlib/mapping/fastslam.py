@@ -34,11 +34,11 @@ from .._random import as_rng
 from ..localization.resampling import effective_sample_size, systematic_resample
 from ..sensing import SonarModel
 from ..sensing.laser import LaserModel, laser_poses
-from ..sim import OdometryNoise
 from ..world import World
 from . import _kernels, _kernels_copy, _kernels_window
+from .fastslam_settings import FastSLAMSettings
 from .motion import sample_arc_motion
-from .occupancy import InverseLaserModel, InverseSonarModel, OccupancyGrid
+from .occupancy import OccupancyGrid
 from .resampling import normalise_log_weights, resample_maps, resample_parents
 from .sharing import MapDiff
 from .sonar_walls import incidence_marks, sonar_groups, update_sonar_marks
@@ -48,46 +48,8 @@ PARALLEL_MIN = 64
 a thread pool's wake-up costs more than it saves, the more so on a busy
 machine)."""
 
-SONAR_WALL_SENSORS = (0, 3, 4, 7)
-"""The P3-DX ring's sonars at +-90 and +-10 degrees: along a corridor or a
-wall they meet the side walls and the walls ahead near their normal, where
-the echo comes from the cone's axis (the +-30 and +-50 degree ones meet the
-side walls 40-60 degrees off their normal, and echo from the cone's edge)."""
-
-SONAR_DEFAULTS = {
-    "temperature": 0.03,
-    "inflate": 1.0,
-    "resample_below": 0.5,
-    "p_rand": 0.2,
-    "sonar_sigma": 0.1,
-    "sonar_walls": SONAR_WALL_SENSORS,
-    "best_by": "path",
-    "estimate": "mean",
-}
-"""`run_fastslam`'s defaults for the sonar (measured on the loop world: eight
-wide cones tell little per record, so each weighs little; only the sonars
-that meet walls near their normal mark walls, which leaves the known-pose
-map's error at 0.067 m instead of 0.12 m, and an echo's range is then
-trusted to 0.1 m about the map's). The run reports the posterior mean
-trajectory and its map (``estimate="mean"``): on seeds 0-9 with 200
-particles it cut the position RMS from 0.39 m (the best particle) to
-0.29 m, filter streams k = 0-3 (session 7). The outcome depends much on
-the filter's own draws: see the note of session 5 (``bench slam
---streams``)."""
-
-SONAR_PARTICLES = 200
-"""Particles the bench gives sonar FastSLAM. With `SONAR_DEFAULTS`, the loop
-world's seeds 0-9, mean position RMS and map error over odometry mapping's,
-filter seeds ``seed + 1000 k``, k = 0-3: 100 particles 0.33 m, 0.46; 200
-particles 0.29 m, 0.43; held-out seeds 10-19, 200 particles, k = 0-1:
-0.23 m, 0.39 (session 7; with the best particle instead of the mean,
-session 6: 100 particles 0.45-0.58 m, 0.57-0.59)."""
-
 __all__ = [
     "PARALLEL_MIN",
-    "SONAR_DEFAULTS",
-    "SONAR_PARTICLES",
-    "SONAR_WALL_SENSORS",
     "GridFastSLAM",
     "normalise_log_weights",
     "resample_maps",
@@ -108,80 +70,13 @@ class GridFastSLAM:
         Particles (and maps).
     sensor : {"laser", "sonar"}
         Which readings `step` takes.
-    laser, sonar : optional
-        The sensor models.
-    laser_model, sonar_model : optional
-        Their inverse models (map updates).
-    motion : OdometryNoise, optional
-        Slip assumed by the prediction (default: the simulator's).
-    inflate : float
-        Motion noise standard deviations times this.
-    beam_step : int
-        Weigh with every ``beam_step``-th laser beam.
-    p_rand : float
-        Floor of each beam's likelihood (a random reading).
-    temperature : float
-        Log-likelihoods times this before they are added to the weights.
-    resample_below : float
-        Resample when the effective sample size is below this share of N.
-    match : bool
-        Laser only: after the motion sample, fit each particle's pose to its
-        own map by hill-climbing on the scan's end points (`match_laser`), a
-        cheap version of GMapping's scan-matched proposal.
-    match_step : tuple of float
-        First hill-climbing steps, m and rad (halved ``match_levels`` times).
-    match_levels : int
-        How many times the steps are halved.
-    match_beam_step : int
-        Fit with every ``match_beam_step``-th beam.
-    match_prior : tuple of float
-        ``(w_xy, w_th)``: the fit's score less ``w_xy d^2 + w_th a^2`` for a
-        move ``d`` m and a turn ``a`` rad from the motion's sample, so a
-        scan that does not pin the pose along a corridor leaves it where the
-        motion put it ((0, 0): none; without it, seed 9 of the bench's loop
-        drives was pulled 0.9 m back along the west corridor).
-    sonar_likelihood : {"beam", "endpoint"}
-        Sonar weighing: the beam model (`_kernels.sonar_beam_loglik`) or the
-        end-point model over the arc (as the laser's).
-    sonar_sigma : float
-        Beam model: standard deviation of an echo about the expected range, m.
-    sonar_occ : float
-        Beam model: log-odds above which a cell is a wall (confirmed by
-        several echoes, so the arcs' stray cells do not count).
-    sonar_unknown : float
-        Beam model: weight of an echo from cells the map has not seen.
-    sonar_walls : sequence of int, optional
-        Sonar only: the sonars (indexes into ``sonar.sensors``) whose echoes
-        mark the arc occupied in the particles' maps; the others' readings
-        free their cones only. None: all. A cone that meets a wall obliquely
-        echoes from its edge nearest the wall's normal, so its arc puts
-        occupied cells in free space (a P3-DX in a corridor: the 30 and 50
-        degree sonars, 0.1-0.3 m inside the corridor);
-        `SONAR_WALL_SENSORS` are the ones that meet the walls it drives
-        along or towards near their normal.
-    sonar_incidence : float, optional
-        Sonar only: choose per reading and particle, instead, which echoes mark
-        walls: those whose wall in the particle's map (the log-odds gradient
-        at the echo) is within this angle (rad) of facing the sonar; where
-        the map shows no wall there yet, ``sonar_walls`` decides. None: off.
-    window : int
-        Sonar only: keep each particle's last ``window`` records out of its
-        map (0: none) and weigh by them (``window_weigh``) in the map of the
-        records before them; the oldest joins the map as a record arrives.
-    window_weigh : {"window", "last"}
-        Weigh by every record of the window (their log-likelihoods summed)
-        or by the newest only.
-    best_by : {"weight", "path"}
-        Which particle `best` picks: the largest weight (the evidence since
-        the last resampling) or the largest summed log-likelihood of every
-        reading along its lineage (``path_loglik``, the whole run's evidence).
-    sonar_range_to : {"entry", "centre"}
-        Sonar beam model: a ray's expected range is where it enters its
-        first wall cell, or that cell's centre (`_kernels.sonar_beam_loglik`).
-    estimate : {"best", "mean"}
-        What `run_fastslam` reports: the best particle's lineage and map, or
-        the posterior mean trajectory (`mean_path`, the weighted mean of
-        every particle's lineage) and its map (`mean_map`).
+    settings : FastSLAMSettings, optional
+        Every other knob, with its default (`FastSLAMSettings()`; for the
+        sonar, `robotlib.mapping.fastslam_settings.SONAR_SETTINGS` is tuned).
+        The attribute may be replaced between steps; ``sonar_walls`` is read
+        here only.
+    laser, sonar : LaserModel, SonarModel, optional
+        The robot's sensors (default: the simulator's).
     rng : numpy.random.Generator, int or None
         Motion noise and resampling.
     """
@@ -194,80 +89,30 @@ class GridFastSLAM:
         start,
         n_particles: int = 30,
         sensor: str = "laser",
+        settings: FastSLAMSettings | None = None,
+        *,
         laser: LaserModel | None = None,
         sonar: SonarModel | None = None,
-        laser_model: InverseLaserModel | None = None,
-        sonar_model: InverseSonarModel | None = None,
-        motion: OdometryNoise | None = None,
-        inflate: float = 1.5,
-        beam_step: int = 2,
-        p_rand: float = 0.1,
-        temperature: float = 0.5,
-        resample_below: float = 0.5,
-        match: bool = True,
-        match_step: tuple[float, float] = (0.04, 0.02),
-        match_levels: int = 3,
-        match_beam_step: int = 4,
-        match_prior: tuple[float, float] = (300.0, 300.0),
-        sonar_likelihood: str = "beam",
-        sonar_sigma: float = 0.15,
-        sonar_occ: float = 2.0,
-        sonar_unknown: float = 0.5,
-        sonar_walls=None,
-        window: int = 0,
-        window_weigh: str = "window",
-        sonar_incidence: float | None = None,
-        best_by: str = "weight",
-        sonar_range_to: str = "entry",
-        estimate: str = "best",
         rng: np.random.Generator | int | None = None,
     ):
         if sensor not in ("laser", "sonar"):
             raise ValueError(f"sensor must be 'laser' or 'sonar', got {sensor!r}")
         if n_particles < 1:
             raise ValueError("n_particles must be at least 1")
-        if best_by not in ("weight", "path"):
-            raise ValueError("best_by must be 'weight' or 'path'")
-        self.best_by = best_by
-        if sonar_range_to not in ("entry", "centre"):
-            raise ValueError("sonar_range_to must be 'entry' or 'centre'")
-        self.sonar_range_to = sonar_range_to
-        if estimate not in ("best", "mean"):
-            raise ValueError("estimate must be 'best' or 'mean'")
-        self.estimate = estimate
-        if sonar_likelihood not in ("beam", "endpoint"):
-            raise ValueError("sonar_likelihood must be 'beam' or 'endpoint'")
+        self.settings = FastSLAMSettings() if settings is None else settings
+        if not isinstance(self.settings, FastSLAMSettings):
+            kind = type(self.settings).__name__
+            raise TypeError(f"settings must be a FastSLAMSettings, got {kind}")
         self.sensor = sensor
-        self.sonar_likelihood = sonar_likelihood
-        self.sonar_sigma = float(sonar_sigma)
-        self.sonar_occ = float(sonar_occ)
-        self.sonar_unknown = float(sonar_unknown)
         self.laser = LaserModel() if laser is None else laser
         self.sonar = SonarModel() if sonar is None else sonar
-        self.laser_model = InverseLaserModel() if laser_model is None else laser_model
-        self.sonar_model = InverseSonarModel() if sonar_model is None else sonar_model
-        self.motion = OdometryNoise() if motion is None else motion
-        self._wall_groups = sonar_groups(len(self.sonar.sensors), sonar_walls)
+        walls = self.settings.sonar_walls
+        self._wall_groups = sonar_groups(len(self.sonar.sensors), walls)
         self._default_marks = np.zeros(len(self.sonar.sensors), dtype=bool)
         for k, marks in self._wall_groups:
             self._default_marks[slice(None) if k is None else k] = marks
-        self.sonar_incidence = sonar_incidence and float(sonar_incidence)
         self._angle_cache: dict = {}
         self._lp_last = None
-        self.inflate = float(inflate)
-        self.beam_step = int(beam_step)
-        self.p_rand = float(p_rand)
-        self.temperature = float(temperature)
-        self.resample_below = float(resample_below)
-        self.match = bool(match) and sensor == "laser"
-        self.match_step = (float(match_step[0]), float(match_step[1]))
-        self.match_levels = int(match_levels)
-        self.match_beam_step = int(match_beam_step)
-        self.match_prior = (float(match_prior[0]), float(match_prior[1]))
-        self.window = int(window) if sensor == "sonar" else 0
-        if window_weigh not in ("window", "last"):
-            raise ValueError("window_weigh must be 'window' or 'last'")
-        self.window_weigh = window_weigh
         self.rng = as_rng(rng)
         self.origin = (float(origin[0]), float(origin[1]))
         self.resolution = float(resolution)
@@ -292,6 +137,16 @@ class GridFastSLAM:
         truth = world.occupancy_grid(resolution)
         kw.setdefault("start", world.start)
         return cls(truth.shape, truth.origin, resolution, **kw)
+
+    @property
+    def match(self) -> bool:
+        """Whether the laser's scans are matched (`FastSLAMSettings.match`)."""
+        return self.settings.match and self.sensor == "laser"
+
+    @property
+    def window(self) -> int:
+        """Records kept out of the maps (`FastSLAMSettings.window`; sonar only)."""
+        return self.settings.window if self.sensor == "sonar" else 0
 
     @property
     def n(self) -> int:
@@ -331,44 +186,45 @@ class GridFastSLAM:
     def weigh_laser(self, poses, scan) -> np.ndarray:
         """Log-likelihood (N,) of a laser scan in each particle's map at ``poses``."""
         lp = self._laser_poses(poses)
-        k = self.beam_step
+        k = self.settings.beam_step
         out = np.empty(len(lp))
         self._kernel("laser_loglik_many")(
             self.maps, *self._geometry(), lp, self._angles(k),
             np.ascontiguousarray(np.asarray(scan, dtype=float)[::k]),
-            self.laser.max_range, self.p_rand, out,
+            self.laser.max_range, self.settings.p_rand, out,
         )  # fmt: skip
         return out
 
     def weigh_sonar(self, poses, ranges) -> np.ndarray:
         """Log-likelihood (N,) of a sonar ring reading in each particle's map."""
         out = np.empty(len(poses))
-        if self.sonar_likelihood == "beam":
+        s = self.settings
+        if s.sonar_likelihood == "beam":
             self._kernel("sonar_beam_loglik_many")(
                 self.maps, *self._geometry(), np.ascontiguousarray(poses, dtype=float),
                 self.sonar.sensors, np.ascontiguousarray(ranges, dtype=float),
-                self.sonar.cone / 2, self.sonar.max_range, 5, self.sonar_sigma,
-                self.p_rand, self.sonar_occ, self.sonar_unknown, out,
-                self.sonar_range_to == "centre",
+                self.sonar.cone / 2, self.sonar.max_range, 5, s.sonar_sigma,
+                s.p_rand, s.sonar_occ, s.sonar_unknown, out,
+                s.sonar_range_to == "centre",
             )  # fmt: skip
             return out
         self._kernel("sonar_loglik_many")(
             self.maps, *self._geometry(), np.ascontiguousarray(poses, dtype=float),
             self.sonar.sensors, np.ascontiguousarray(ranges, dtype=float),
-            self.sonar.cone / 2, self.sonar.max_range, 5, self.p_rand, out,
+            self.sonar.cone / 2, self.sonar.max_range, 5, self.settings.p_rand, out,
         )  # fmt: skip
         return out
 
     def match_laser(self, poses, scan) -> np.ndarray:
         """Fit each pose (N, 3) to the scan in its particle's map; return the fits."""
-        k = self.match_beam_step
+        k = self.settings.match_beam_step
         out = np.empty((len(poses), 3))
         self._kernel("match_laser_many")(
             self.maps, *self._geometry(), np.ascontiguousarray(poses, dtype=float),
             np.asarray(self.laser.mount, dtype=float), self._angles(k),
             np.ascontiguousarray(np.asarray(scan, dtype=float)[::k]),
-            self.laser.max_range, *self.match_step, self.match_levels,
-            *self.match_prior, out,
+            self.laser.max_range, *self.settings.match_step, self.settings.match_levels,
+            *self.settings.match_prior, out,
         )  # fmt: skip
         return out
 
@@ -385,16 +241,16 @@ class GridFastSLAM:
             # (maps replaced from outside: resampling will copy whole maps)
             self._track_writes(poses, z)
         if self.sensor == "laser":
-            m = self.laser_model
+            m = self.settings.laser_model
             self._kernel("laser_update_many")(
                 maps, *self._geometry(),
                 self._laser_poses(poses), self._angles(), z, self.laser.max_range,
                 m.l_occ, m.l_free, m.l_min, m.l_max,
             )  # fmt: skip
-        elif self.sonar_incidence is not None:
+        elif self.settings.sonar_incidence is not None:
             self._update_sonar_incidence(maps, poses, z)
         else:
-            m = self.sonar_model
+            m = self.settings.sonar_model
             for k, marks in self._wall_groups:
                 self._kernel("sonar_update_many")(
                     maps, *self._geometry(), poses,
@@ -409,12 +265,13 @@ class GridFastSLAM:
         """Add a ring reading, each echo marking walls by its incidence (``maps``)."""
         par = self.n >= PARALLEL_MIN
         marks = incidence_marks(
-            maps, self._geometry(), poses, z, self.sonar, self.sonar_incidence,
+            maps, self._geometry(), poses, z, self.sonar, self.settings.sonar_incidence,
             self._default_marks, par,
         )  # fmt: skip
         update_sonar_marks(
-            maps, self._geometry(), poses, z, marks, self.sonar, self.sonar_model, par
-        )
+            maps, self._geometry(), poses, z, marks, self.sonar,
+            self.settings.sonar_model, par,
+        )  # fmt: skip
 
     def _tracked_diff(self) -> MapDiff:
         """Return the maps' `MapDiff` (whole-grid boxes if ``maps`` was replaced)."""
@@ -436,7 +293,7 @@ class GridFastSLAM:
             )  # fmt: skip
         else:
             reach = np.where(
-                z < self.sonar.max_range, z + 0.5 * self.sonar_model.thickness,
+                z < self.sonar.max_range, z + 0.5 * self.settings.sonar_model.thickness,
                 self.sonar.max_range,
             ).max()  # fmt: skip
             offset = np.hypot(*self.sonar.sensors[:, :2].T).max()
@@ -459,14 +316,15 @@ class GridFastSLAM:
         """Return the log-likelihoods (N,) of the windows' records."""
         wins = np.ascontiguousarray(self._win)
         scans = np.ascontiguousarray(self._win_scans)
-        if self.window_weigh == "last":
+        s = self.settings
+        if s.window_weigh == "last":
             return self.weigh_sonar(self.particles, scan)
         ll = np.empty(self.n)
         self._kernel("window_loglik_many", _kernels_window)(
             self.maps, *self._geometry(), wins, self.sonar.sensors, scans,
             self.sonar.cone / 2,
-            self.sonar.max_range, 5, self.sonar_sigma, self.p_rand, self.sonar_occ,
-            self.sonar_unknown, ll, self.sonar_range_to == "centre",
+            self.sonar.max_range, 5, s.sonar_sigma, s.p_rand, s.sonar_occ,
+            s.sonar_unknown, ll, s.sonar_range_to == "centre",
         )  # fmt: skip
         return ll
 
@@ -477,10 +335,11 @@ class GridFastSLAM:
         The first call only adds the reading to the maps.
         """
         odo = np.asarray(odometry, dtype=float)
+        s = self.settings
         parents = np.arange(self.n)
         if self._odo is not None:
             self.particles = sample_arc_motion(
-                self.particles, self._odo, odo, self.motion, self.inflate, self.rng
+                self.particles, self._odo, odo, s.motion, s.inflate, self.rng
             )
             if self.sensor == "laser":
                 if self.match:
@@ -491,10 +350,10 @@ class GridFastSLAM:
                 ll = self._window_step(scan)
             else:
                 ll = self.weigh_sonar(self.particles, scan)
-            self.logw = self.logw + self.temperature * ll
+            self.logw = self.logw + s.temperature * ll
             self.path_loglik = self.path_loglik + ll
             self.logw -= self.logw.max()
-            if effective_sample_size(self.weights) < self.resample_below * self.n:
+            if effective_sample_size(self.weights) < s.resample_below * self.n:
                 idx = systematic_resample(self.weights, rng=self.rng)
                 parents = resample_parents(idx, self.n)
                 self.copied += self._tracked_diff().resample(self.maps, parents)
@@ -514,7 +373,7 @@ class GridFastSLAM:
     # -- results ------------------------------------------------------------
     def best(self) -> int:
         """Index of the particle with the largest weight (or path likelihood)."""
-        if self.best_by == "path":
+        if self.settings.best_by == "path":
             return int(np.argmax(self.path_loglik))
         return int(np.argmax(self.logw))
 

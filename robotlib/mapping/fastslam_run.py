@@ -1,18 +1,19 @@
 """Running grid FastSLAM over a recorded drive: `run_fastslam` and its result.
 
 `run_fastslam` builds a `robotlib.mapping.fastslam.GridFastSLAM` on the
-drive's world (for the sonar with `SONAR_DEFAULTS`), steps it through every
+drive's world (for the sonar with `SONAR_SETTINGS`), steps it through every
 record and scores its trajectory and map against the truth. Imports the
 filter and the metrics; never plots.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
-from .fastslam import SONAR_DEFAULTS, GridFastSLAM
+from .fastslam import GridFastSLAM
+from .fastslam_settings import SONAR_SETTINGS, FastSLAMSettings
 from .metrics import MapScore, map_score, trajectory_rms
 from .occupancy import OccupancyGrid
 
@@ -49,7 +50,12 @@ class FastSLAMResult:
 
 
 def run_fastslam(
-    log, n_particles: int = 30, sensor: str = "laser", resolution=None, rng=0, **kw
+    log,
+    n_particles: int = 30,
+    sensor: str = "laser",
+    resolution: float | None = None,
+    rng=0,
+    settings: FastSLAMSettings | None = None,
 ) -> FastSLAMResult:
     """Run grid FastSLAM over a `robotlib.mapping.drive.DriveLog`.
 
@@ -65,28 +71,32 @@ def run_fastslam(
         Cell side, m (default 0.05 for the laser, 0.1 for the sonar).
     rng : numpy.random.Generator, int or None
         The filter's randomness.
-    **kw
-        More `GridFastSLAM` parameters (for the sonar, `SONAR_DEFAULTS`
-        unless given).
+    settings : FastSLAMSettings, optional
+        The filter's knobs (default: `FastSLAMSettings()` for the laser,
+        `SONAR_SETTINGS` for the sonar, marking walls with every sonar when
+        the ring is not a P3-DX's eight).
 
     Returns
     -------
     FastSLAMResult
     """
     res = (0.05 if sensor == "laser" else 0.1) if resolution is None else resolution
-    if sensor == "sonar":
-        walls_given = "sonar_walls" in kw
-        kw = {**SONAR_DEFAULTS, **kw}
-        if not walls_given and len(log.sonar_model.sensors) != 8:
-            kw["sonar_walls"] = None  # (the default names a P3-DX ring's sonars)
+    if settings is None:
+        settings = FastSLAMSettings()
+        if sensor == "sonar":
+            settings = SONAR_SETTINGS
+            if len(log.sonar_model.sensors) != 8:
+                # (the default names a P3-DX ring's sonars)
+                settings = replace(settings, sonar_walls=None)
     f = GridFastSLAM.for_world(
         log.world, res, start=log.odometry[0], n_particles=n_particles,
-        sensor=sensor, laser=log.laser_model, sonar=log.sonar_model, rng=rng, **kw,
+        sensor=sensor, settings=settings, laser=log.laser_model,
+        sonar=log.sonar_model, rng=rng,
     )  # fmt: skip
     scans = log.laser if sensor == "laser" else log.sonar
     for t in range(len(log)):
         f.step(log.odometry[t], scans[t])
-    if f.estimate == "mean":
+    if f.settings.estimate == "mean":
         path, m = f.mean_path()[1:], f.mean_map(scans)
     else:
         path, m = f.best_path()[1:], f.best_map()

@@ -29,7 +29,7 @@ from .grid import (
     wavefront_field,
     weighted_astar,
 )
-from .navigate import Navigation, navigate
+from .navigate import Navigation, Navigator, NavSettings, navigate
 from .rrt import Tree, edge_free, path_free, rrt, rrt_star, shortcut
 from .scenarios import GOALS, OFFICE_BOXES, office_with_boxes, with_boxes
 
@@ -38,6 +38,8 @@ __all__ = [
     "OFFICE_BOXES",
     "CSpace",
     "Navigation",
+    "Navigator",
+    "NavSettings",
     "PathFollower",
     "PurePursuit",
     "StopAndTurn",

@@ -14,7 +14,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -39,10 +38,7 @@ from ..sensing.laser import simulate_laser
 from ..world import _kernels as _world_kernels
 from ..world.geometry import wrap_angle
 
-if TYPE_CHECKING:
-    from .simulator import Simulator
-
-__all__ = ["OdometryNoise", "SimBody", "footprint_segments"]
+__all__ = ["OdometryNoise", "SimBody", "footprint_segments", "scene_obstacles"]
 
 
 _STOPPED_V = 0.004
@@ -186,6 +182,29 @@ def footprint_segments(pose: np.ndarray) -> np.ndarray:
     return np.array([[*xy[i], *xy[(i + 1) % 4]] for i in range(4)])
 
 
+def scene_obstacles(obstacles: np.ndarray, bodies, body) -> np.ndarray:
+    """Return what ``body`` senses: the walls and every other body's outline.
+
+    Parameters
+    ----------
+    obstacles : numpy.ndarray, shape (K, 4)
+        The world's wall segments ``(x1, y1, x2, y2)``, m.
+    bodies : sequence of SimBody
+        Every robot of the simulator (``body`` among them).
+    body : SimBody
+        The robot that looks.
+
+    Returns
+    -------
+    numpy.ndarray, shape (K + 4 (len(bodies) - 1), 4)
+        ``obstacles`` itself when ``body`` is alone.
+    """
+    others = [footprint_segments(b.true_pose) for b in bodies if b is not body]
+    if not others:
+        return obstacles
+    return np.ascontiguousarray(np.concatenate([obstacles, *others]))
+
+
 class SimBody:
     """One simulated Pioneer 3-DX inside a `Simulator`.
 
@@ -193,7 +212,7 @@ class SimBody:
     `command`); `state` is what the robot reports after the last cycle.
     """
 
-    def __init__(self, sim: Simulator, pose, rng: np.random.Generator):
+    def __init__(self, sim, pose, rng: np.random.Generator):
         self._sim = sim
         self._rng = rng
         self._initial = np.array(pose, dtype=float)
@@ -327,7 +346,8 @@ class SimBody:
         """
         if self._laser_rng is None:
             self._laser_rng = self._rng.spawn(1)[0]
-        obstacles = self._sim._obstacles_for(self)
+        sim = self._sim
+        obstacles = scene_obstacles(sim.world.obstacles, sim.bodies, self)
         return simulate_laser(
             obstacles, self.true_pose, self._sim.laser, self._laser_rng
         )[0]

@@ -18,7 +18,7 @@ from ..robot import Robot, RobotState
 from ..sensing import LaserModel, SonarModel
 from ..world import World, load_world
 from ..world.geometry import wrap_angle
-from .body import OdometryNoise, SimBody, footprint_segments
+from .body import OdometryNoise, SimBody, scene_obstacles
 
 __all__ = ["Simulator", "SimRobot"]
 
@@ -77,20 +77,13 @@ class Simulator:
         self.bodies.append(body)
         return body
 
-    def _obstacles_for(self, body: SimBody) -> np.ndarray:
-        """World obstacles plus the outlines of every other robot."""
-        others = [footprint_segments(b.true_pose) for b in self.bodies if b is not body]
-        if not others:
-            return self.world.obstacles
-        return np.ascontiguousarray(np.concatenate([self.world.obstacles, *others]))
-
     def step(self) -> None:
         """Advance every robot by one cycle (`robotlib.p3dx.CYCLE`, 100 ms)."""
         for body in self.bodies:
             others = [b.true_pose for b in self.bodies if b is not body]
             body._advance(self.world.obstacles, others)
         for body in self.bodies:
-            body._sense(self._obstacles_for(body))
+            body._sense(scene_obstacles(self.world.obstacles, self.bodies, body))
         self.time += CYCLE
 
     def reset(self) -> None:

@@ -30,6 +30,7 @@ from ..avoidance import (
     Braitenberg,
     Bug2,
     PotentialField,
+    VFHSettings,
     run_episode,
     start_goal_pairs,
 )
@@ -81,12 +82,8 @@ def make_controller(
     passes the student's).
     """
     if kind == "VFH":
-        return VFH(
-            threshold_high=threshold,
-            threshold_low=threshold / 2,
-            histogram=histogram,
-            direction=direction,
-        )
+        gains = VFHSettings(threshold_high=threshold, threshold_low=threshold / 2)
+        return VFH(settings=gains, histogram=histogram, direction=direction)
     if kind == "potential field":
         if force is not None:
             return PotentialField(force=partial(force, k_rep=k_rep, d0=d0))

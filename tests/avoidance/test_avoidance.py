@@ -17,6 +17,7 @@ from robotlib.avoidance import (
     Bug2,
     Controller,
     PotentialField,
+    VFHSettings,
     WallFollower,
     choose_direction,
     polar_histogram,
@@ -180,6 +181,19 @@ def test_controller_checks_shapes_and_stops_at_goal():
     assert c.status == "ok"
     with pytest.raises(ValueError, match="shape"):
         c.command(np.ones(5), np.zeros(3))
+
+
+def test_vfh_takes_checked_settings():
+    c = VFH(settings=VFHSettings(threshold_high=200, n_sectors=36, max_speed=0.25))
+    assert c.threshold_high == 200.0 and isinstance(c.threshold_high, float)
+    assert c.histogram.shape == (36,) and c.max_speed == 0.25
+    assert c.settings.threshold_low == VFHSettings().threshold_low
+    with pytest.raises(ValueError, match="threshold_low"):
+        VFHSettings(threshold_low=200.0, threshold_high=100.0)
+    with pytest.raises(ValueError, match="fade"):
+        VFHSettings(fade=0.0)
+    with pytest.raises(TypeError, match="VFHSettings"):
+        VFH(settings={"window": 2.0})
 
 
 def test_vfh_grid_remembers_what_it_saw():

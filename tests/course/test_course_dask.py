@@ -19,7 +19,7 @@ import pytest
 
 from robotlib.course.notebooks import read_notebook, release_notebook, write_notebook
 
-from tests.sandboxing import need_sandbox, procs_with
+from tests.sandboxing import adopt_orphans, need_sandbox, procs_with
 
 TINY = Path(__file__).parents[1] / "data" / "course" / "tiny.ipynb"
 
@@ -36,6 +36,7 @@ def test_grade_on_a_local_dask_cluster(tmp_path):
     except ImportError:
         pytest.skip("dask.distributed is not installed (extra grade-dask)")
     need_sandbox()
+    adopt_orphans()
     sol = read_notebook(TINY)
     subs = {
         "solution_a": sol,

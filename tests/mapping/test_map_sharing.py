@@ -6,7 +6,7 @@ import math
 import numpy as np
 import pytest
 
-from robotlib.mapping import GridFastSLAM, record_drive
+from robotlib.mapping import FastSLAMSettings, GridFastSLAM, record_drive
 from robotlib.mapping import _kernels as kern
 from robotlib.mapping import _kernels_copy as _copy
 from robotlib.mapping.sharing import EMPTY_BOX, MapDiff
@@ -66,7 +66,8 @@ def test_fastslam_copies_less_and_gives_the_same_maps_as_whole_copies(sensor):
     for whole in (False, True):
         f = GridFastSLAM.for_world(
             log.world, 0.05 if sensor == "laser" else 0.1, start=log.odometry[0],
-            n_particles=8, sensor=sensor, resample_below=0.9, rng=3,
+            n_particles=8, sensor=sensor,
+            settings=FastSLAMSettings(resample_below=0.9), rng=3,
         )  # fmt: skip
         scans = log.laser if sensor == "laser" else log.sonar
         for t in range(len(log)):
@@ -161,7 +162,7 @@ def test_windowed_sonar_fastslam_is_seeded_and_maps_the_window():
     for _ in range(2):
         f = GridFastSLAM.for_world(
             log.world, 0.1, start=log.odometry[0], n_particles=6, sensor="sonar",
-            window=5, temperature=0.006, rng=4,
+            settings=FastSLAMSettings(window=5, temperature=0.006), rng=4,
         )  # fmt: skip
         for t in range(len(log)):
             f.step(log.odometry[t], log.sonar[t])

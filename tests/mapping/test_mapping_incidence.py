@@ -1,15 +1,17 @@
 """Sonar walls chosen per reading by the angle of incidence in a particle's map."""
 
 import math
+from dataclasses import replace
 
 import numpy as np
 
-from robotlib.mapping import GridFastSLAM, record_drive, run_fastslam
+from robotlib.mapping import SONAR_SETTINGS, GridFastSLAM, record_drive, run_fastslam
 from robotlib.mapping import _kernels_incidence as kin
 from tests import naive_mapping as naive
 
 ORIGIN = (0.0, 0.0)
 RES = 0.1
+INCIDENCE = replace(SONAR_SETTINGS, sonar_incidence=0.35)
 
 
 def _numpy_incidence(L, pose, sensors, ranges, max_range, g_min):
@@ -64,7 +66,7 @@ def test_incidence_matches_numpy_and_the_walls_direction():
 def test_marks_update_matches_the_reference_per_reading():
     rng = np.random.default_rng(7)
     sensors = GridFastSLAM((1, 1), ORIGIN, RES, (0, 0, 0), sensor="sonar").sonar
-    s, m = sensors, GridFastSLAM((1, 1), ORIGIN, RES, (0, 0, 0)).sonar_model
+    s, m = sensors, GridFastSLAM((1, 1), ORIGIN, RES, (0, 0, 0)).settings.sonar_model
     poses = np.column_stack([rng.uniform(1.5, 3.5, 3), rng.uniform(1.5, 3.5, 3),
                              rng.uniform(-3, 3, 3)])  # fmt: skip
     z = rng.uniform(0.4, 3.0, 8)
@@ -90,9 +92,9 @@ def test_marks_update_matches_the_reference_per_reading():
 def test_fastslam_with_incidence_walls_is_seeded_and_differs():
     log = record_drive("loop", [(12.0, 1.5), (19.5, 1.5), (19.5, 4.0)], seed=4,
                        every=4)  # fmt: skip
-    a = run_fastslam(log, 6, "sonar", rng=2, sonar_incidence=0.35)
-    b = run_fastslam(log, 6, "sonar", rng=2, sonar_incidence=0.35)
+    a = run_fastslam(log, 6, "sonar", rng=2, settings=INCIDENCE)
+    b = run_fastslam(log, 6, "sonar", rng=2, settings=INCIDENCE)
     np.testing.assert_array_equal(a.path, b.path)
     np.testing.assert_array_equal(a.map.logodds, b.map.logodds)
-    c = run_fastslam(log, 6, "sonar", rng=2, sonar_incidence=None)
+    c = run_fastslam(log, 6, "sonar", rng=2)
     assert not np.array_equal(a.map.logodds, c.map.logodds)

@@ -1,9 +1,12 @@
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
 
 from robotlib.mapping import (
+    SONAR_SETTINGS,
+    FastSLAMSettings,
     GridFastSLAM,
     apply_arc,
     arc_increment,
@@ -74,6 +77,17 @@ def test_sonar_fastslam_runs_seeded(leg_log):
 def test_fastslam_rejects_bad_sensors():
     with pytest.raises(ValueError, match="sensor"):
         GridFastSLAM((10, 10), (0, 0), 0.1, (0, 0, 0), sensor="radar")
+    with pytest.raises(TypeError, match="FastSLAMSettings"):
+        GridFastSLAM((10, 10), (0, 0), 0.1, (0, 0, 0), settings={"temperature": 1})
+    with pytest.raises(ValueError, match="sonar_likelihood"):
+        FastSLAMSettings(sonar_likelihood="cone")
+    with pytest.raises(ValueError, match="beam_step"):
+        FastSLAMSettings(beam_step=0)
+    s = FastSLAMSettings(temperature=1, match_step=(1, 2), sonar_walls=[0, 3])
+    assert isinstance(s.temperature, float) and s.match_step == (1.0, 2.0)
+    assert s.sonar_walls == (0, 3)
+    sonar = GridFastSLAM((10, 10), (0, 0), 0.1, (0, 0, 0), sensor="sonar", settings=s)
+    assert not sonar.match and sonar.window == 0  # scan matching: the laser's
 
 
 def _numeric_jacobian(f, x, eps=1e-6):
@@ -143,7 +157,7 @@ def test_sonar_walls_mark_arcs_of_the_chosen_sonars_only():
 
     f = GridFastSLAM(
         (50, 70), (0.0, 0.0), 0.1, (2.0, 2.5, 0.3), n_particles=3, sensor="sonar",
-        sonar_walls=(0, 3, 4, 7),
+        settings=FastSLAMSettings(sonar_walls=(0, 3, 4, 7)),
     )  # fmt: skip
     f.particles = f.particles + np.array([[0.0, 0.0, 0.0], [0.3, -0.2, 0.1],
                                           [-0.1, 0.4, -0.2]])  # fmt: skip
@@ -152,7 +166,7 @@ def test_sonar_walls_mark_arcs_of_the_chosen_sonars_only():
     z[5] = f.sonar.max_range
     for _ in range(2):
         f.update_maps(z)
-    m, s = f.sonar_model, f.sonar
+    m, s = f.settings.sonar_model, f.sonar
     walls, others = [0, 3, 4, 7], [1, 2, 5, 6]
     for n in range(3):
         want = np.zeros((50, 70))
@@ -174,11 +188,13 @@ def test_sonar_walls_mark_arcs_of_the_chosen_sonars_only():
 
 def test_sonar_fastslam_with_wall_sonars_is_seeded(leg_log):
     log = leg_log.every(2)
-    a = run_fastslam(log, 8, "sonar", rng=1, sonar_walls=(0, 3, 4, 7))
-    b = run_fastslam(log, 8, "sonar", rng=1, sonar_walls=(0, 3, 4, 7))
+    a = run_fastslam(log, 8, "sonar", rng=1, settings=SONAR_SETTINGS)
+    b = run_fastslam(log, 8, "sonar", rng=1, settings=SONAR_SETTINGS)
     np.testing.assert_array_equal(a.path, b.path)
     np.testing.assert_array_equal(a.map.logodds, b.map.logodds)
-    c = run_fastslam(log, 8, "sonar", rng=1, sonar_walls=None)
+    c = run_fastslam(
+        log, 8, "sonar", rng=1, settings=replace(SONAR_SETTINGS, sonar_walls=None)
+    )
     assert not np.array_equal(a.map.logodds, c.map.logodds)
 
 
@@ -195,7 +211,7 @@ def test_map_sonar_with_wall_sonars_matches_the_reference():
     scans = rng.uniform(0.3, 5.0, (4, 8))
     g = map_sonar(room, poses, scans, 0.1, walls=[1, 6])
     f = GridFastSLAM((1, 1), (0, 0), 0.1, (0, 0, 0), n_particles=1, sensor="sonar")
-    m, s = f.sonar_model, f.sonar
+    m, s = f.settings.sonar_model, f.sonar
     want = np.zeros(g.shape)
     for p, z in zip(poses, scans, strict=True):
         for k, l_occ in (([1, 6], m.l_occ), ([0, 2, 3, 4, 5, 7], 0.0)):

@@ -1,10 +1,12 @@
 """Grid FastSLAM's estimates: lineage likelihood, posterior mean path and map."""
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
 from robotlib.mapping import GridFastSLAM, record_drive, run_fastslam
-from robotlib.mapping.fastslam import SONAR_DEFAULTS
+from robotlib.mapping.fastslam_settings import SONAR_SETTINGS
 from robotlib.world.geometry import wrap_angle
 
 LEG = [(8.0, 1.5), (12.0, 1.5)]
@@ -16,10 +18,10 @@ def log():
 
 
 def _filter(log, n, **kw):
-    kw = {**SONAR_DEFAULTS, "temperature": 0.3, "resample_below": 0.9, **kw}
+    settings = replace(SONAR_SETTINGS, temperature=0.3, resample_below=0.9, **kw)
     return GridFastSLAM.for_world(
         log.world, 0.1, start=log.odometry[0], n_particles=n, sensor="sonar",
-        sonar=log.sonar_model, rng=5, **kw,
+        settings=settings, sonar=log.sonar_model, rng=5,
     )  # fmt: skip
 
 
@@ -53,7 +55,7 @@ def test_path_loglik_sums_each_lineage_and_picks_the_best(log):
             want[n] += lls[u - 2][k]
     np.testing.assert_allclose(f.path_loglik, want, rtol=1e-12)
     assert f.best() == int(np.argmax(want))
-    f.best_by = "weight"
+    f.settings = replace(f.settings, best_by="weight")
     assert f.best() == int(np.argmax(f.logw))
     with pytest.raises(ValueError, match="best_by"):
         _filter(log, 2, best_by="max")
@@ -93,6 +95,8 @@ def test_sonar_run_reports_the_mean_and_is_seeded(log):
     np.testing.assert_array_equal(a.path, b.path)
     np.testing.assert_array_equal(a.map.logodds, b.map.logodds)
     np.testing.assert_array_equal(a.path, a.filter.mean_path()[1:])
-    c = run_fastslam(log, 8, "sonar", rng=2, estimate="best")
+    c = run_fastslam(
+        log, 8, "sonar", rng=2, settings=replace(SONAR_SETTINGS, estimate="best")
+    )
     np.testing.assert_array_equal(c.path, c.filter.best_path()[1:])
     np.testing.assert_array_equal(c.map.logodds, c.filter.best_map().logodds)

@@ -1,9 +1,10 @@
 """The house rules of ARCHITECTURE.md, read off the source with ast.
 
 Every import between robotlib's modules (at the top of a module or inside a
-function) goes down the layers or stays inside its package; the module-level
-imports form no circle; kernels import nothing of ours but the JIT options
-and other kernels; no module is long; every module says what it holds.
+function) goes down the layers or stays inside its package; the imports,
+counting those inside functions, form no circle; kernels import nothing of
+ours but the JIT options and other kernels; no module is long; every module
+says what it holds.
 """
 
 from __future__ import annotations
@@ -84,13 +85,16 @@ def _resolve(name: str) -> str:
     return name
 
 
-def _imports(module: str, path: Path, top_only: bool, parents: bool = True) -> set[str]:
+def _imports(
+    module: str, path: Path, top_only: bool, parents: bool = True, source: str = ""
+) -> set[str]:
     """Our modules that ``module`` imports, with the packages whose ``__init__`` runs.
 
     Importing ``a.b.c`` runs ``a`` and ``a.b`` first, unless they are
     packages ``module`` itself lives in (those are already running).
+    ``source``: read instead of the file.
     """
-    tree = ast.parse(path.read_text(encoding="utf-8"))
+    tree = ast.parse(source or path.read_text(encoding="utf-8"))
     is_pkg = path.name == "__init__.py"
     base = module.split(".") if is_pkg else module.split(".")[:-1]
     mine = {".".join(base[:k]) for k in range(1, len(base) + 1)}
@@ -145,23 +149,83 @@ def test_kernels_import_only_config_and_kernels(module):
         assert target == "robotlib._config" or "_kernels" in target, (module, target)
 
 
-def test_no_import_circles():
-    graph = {m: _imports(m, p, top_only=True) for m, p in MODULES.items()}
-    state: dict[str, int] = {}
+def _circles(graph: dict[str, set[str]]) -> list[list[str]]:
+    """The strongly connected groups of more than one module (Tarjan), sorted."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    out = []
 
-    def visit(m, trail):
-        state[m] = 1
+    def visit(m):
+        index[m] = low[m] = len(index)
+        stack.append(m)
         for t in sorted(graph.get(m, ())):
-            if state.get(t) == 1:
-                cycle = trail[trail.index(t) :] + [t] if t in trail else [m, t]
-                raise AssertionError("import circle: " + " -> ".join(cycle))
-            if t not in state:
-                visit(t, trail + [t])
-        state[m] = 2
+            if t not in index:
+                visit(t)
+                low[m] = min(low[m], low[t])
+            elif t in stack:
+                low[m] = min(low[m], index[t])
+        if low[m] == index[m]:
+            group = []
+            while True:
+                t = stack.pop()
+                group.append(t)
+                if t == m:
+                    break
+            if len(group) > 1:
+                out.append(sorted(group))
 
     for m in sorted(graph):
-        if m not in state:
-            visit(m, [m])
+        if m not in index:
+            visit(m)
+    return sorted(out)
+
+
+def _loop_in(group: list[str], graph: dict[str, set[str]]) -> list[str]:
+    """One import loop through ``group``'s first module (for the message)."""
+    start, inside = group[0], set(group)
+    trail, seen = [start], {start}
+    while True:
+        nxt = sorted(t for t in graph[trail[-1]] if t in inside)
+        if start in nxt:
+            return trail + [start]
+        step = next((t for t in nxt if t not in seen), nxt[0])
+        if step in seen:
+            return trail[trail.index(step) :] + [step]
+        trail.append(step)
+        seen.add(step)
+
+
+TEMPORARY_CIRCLES = ("robotlib.localization",)
+"""Packages whose inner circles are tolerated for now. TEMPORARY: the lead is
+rebuilding robotlib.localization (mcl -> _prebuild -> policies -> paper ->
+sensors -> cones -> _prebuild, through function-level imports); remove this
+allowance when that lands."""
+
+
+def _tolerated(group: list[str]) -> bool:
+    return all(
+        any(m == p or m.startswith(p + ".") for p in TEMPORARY_CIRCLES) for m in group
+    )
+
+
+def test_no_import_circles():
+    """No circle, counting imports inside functions and TYPE_CHECKING blocks."""
+    graph = {m: _imports(m, p, top_only=False) for m, p in MODULES.items()}
+    bad = [g for g in _circles(graph) if not _tolerated(g)]
+    assert not bad, "import circles:\n" + "\n".join(
+        " -> ".join(_loop_in(g, graph)) for g in bad
+    )
+
+
+def test_the_circle_check_sees_function_level_imports():
+    graph = {"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}}
+    assert _circles(graph) == [["a", "b", "c"]]
+    assert _loop_in(["a", "b", "c"], graph) == ["a", "b", "c", "a"]
+    src = "import robotlib.world\ndef f():\n    from robotlib import sim\n"
+    tmp = ROOT.parent / "robotlib" / "world" / "geometry.py"
+    found = _imports("robotlib.world.geometry", tmp, top_only=False, source=src)
+    assert "robotlib.sim" in found
 
 
 @pytest.mark.parametrize("module", sorted(MODULES))

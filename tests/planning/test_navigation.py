@@ -7,6 +7,8 @@ from robotlib.localization import MCL
 from robotlib.pioneer.server import SimServer
 from robotlib.planning import (
     GOALS,
+    Navigator,
+    NavSettings,
     PathFollower,
     PurePursuit,
     StopAndTurn,
@@ -100,6 +102,23 @@ def test_bad_goal_is_a_clear_error(office):
         navigate(r, office, (5.0, 3.0))
 
 
+def test_navigator_takes_checked_settings_and_runs_once(office):
+    with pytest.raises(ValueError, match="filter_every"):
+        NavSettings(filter_every=0)
+    with pytest.raises(ValueError, match="speed"):
+        NavSettings(speed=-0.3)
+    with pytest.raises(TypeError, match="NavSettings"):
+        Navigator(office, (2.5, 3.0), settings={"speed": 0.3})
+    mcl = MCL.best(office, rng=0, n=300, init=office.start)
+    nav = Navigator(office, (2.5, 3.0), mcl=mcl, settings=NavSettings(speed=0.2))
+    r = SimRobot(Simulator(office, seed=0))
+    record = nav.run(r, max_time=1.0)
+    assert record.outcome == "timeout" and nav.outcome == "timeout"
+    assert np.abs(record.command[:, 0]).max() <= 0.2  # (spins in place first)
+    with pytest.raises(RuntimeError, match="runs once"):
+        nav.run(r)
+
+
 def run(world_map, world_sim, goal, seed):
     r = SimRobot(Simulator(world_sim, seed=seed))
     return navigate(r, world_map, goal, rng=seed)
@@ -131,7 +150,9 @@ def test_navigate_over_tcp(office):
         r = robot(srv.addresses[0])
         try:
             mcl = MCL.best(office, rng=0, n=2000, init=start)  # tracking start
-            nav = navigate(r, office, (2.5, 3.0), mcl=mcl, min_filter_steps=3)
+            nav = navigate(
+                r, office, (2.5, 3.0), mcl=mcl, settings=NavSettings(min_filter_steps=3)
+            )
         finally:
             r.disconnect()
     assert nav.reached, nav.outcome

@@ -126,14 +126,26 @@ def test_heading_done_never_flickers_whatever_the_limits(angle, rate, accel):
 
 
 def test_mcl_route_is_unchanged_in_length_by_the_profile():
-    # the paper's loop still completes each move and turn (no lost "done")
+    # the paper's loop (0.5 m moves, half turns) still completes each move and
+    # turn (no lost "done", else RobotTimeout) and covers its length: the
+    # profile changes how the robot gets there, not how far it goes
     r = robot("sim:corridor", seed=0)
-    for _ in range(4):
-        r.move(0.5)
-        r.wait_move_done(10)
-        r.setdeltaheading(math.pi)
-        r.wait_heading_done(10)
-    r.disconnect()
+    try:
+        start = r.state.pose.copy()
+        for _ in range(4):
+            p0 = r.state.pose.copy()
+            r.move(0.5)
+            r.wait_move_done(10)
+            r.setdeltaheading(math.pi)
+            r.wait_heading_done(10)
+            p1 = r.state.pose.copy()
+            assert math.hypot(*(p1[:2] - p0[:2])) == pytest.approx(0.5, abs=0.005)
+            turned = math.remainder(p1[2] - p0[2] - math.pi, 2 * math.pi)
+            assert abs(turned) <= math.radians(3.5)  # (isheadingdone: 3 degrees)
+        # out and back twice: the odometry is where it began
+        assert math.hypot(*(r.state.pose[:2] - start[:2])) < 0.01
+    finally:
+        r.disconnect()
 
 
 # -- arguments: one ValueError, nothing stored -------------------------------------
