@@ -31,11 +31,9 @@ submissions are kept, nothing keeps running.
 
 from __future__ import annotations
 
-import argparse
 import hashlib
 import os
 import signal
-import sys
 import threading
 import time
 from pathlib import Path
@@ -45,20 +43,13 @@ import nbformat
 from . import cache as numba_cache
 from . import sandbox as sb
 from .astlock import format_exc
-from .gradebook import (
-    Records,
-    Result,
-    export_manual,
-    read_manual,
-    write_feedback,
-    write_gradebook,
-)
-from .notebooks import META_KEY, NotebookError, notebook_text, read_notebook
+from .gradebook import Again, Records, Result, write_gradebook
+from .notebooks import META_KEY, notebook_text, read_notebook
 from .parallel import Bar, dask_map, raise_interrupt, thread_map
-from .plan import LabPlan, lab_plan, scan_submission, student_cells
+from .plan import LabPlan, lab_plan, normalized, scan_submission, student_cells
 from .release import project_dir
 from .session import JOB_ENV, Options, run_submission
-from .submissions import find_submissions
+from .submissions import check_lab, find_submissions, pick
 
 __all__ = [
     "GradeError",
@@ -69,12 +60,16 @@ __all__ = [
     "grade",
     "grade_notebook",
     "reference_run",
+    "solution_path",
     "write_gradebook",
-    "add_arguments",
-    "run",
 ]
 
 GradeOptions = Options
+
+
+UNGRADED = "written answer: not graded by hand yet"
+OVERLOADED = "machine overloaded: re-grade"
+"""Status of a submission the machine was too busy to grade (the next run does)."""
 
 
 class GradeError(RuntimeError):
@@ -82,6 +77,11 @@ class GradeError(RuntimeError):
 
 
 def _answers(plan: LabPlan, nb: dict) -> dict[str, str]:
+    """Return the student's written answers, by grade id.
+
+    A markdown cell is a written answer by its metadata, its id, or, when
+    both were lost (an old nbformat, pasted cells), by the question it holds.
+    """
     by_id = {c.cell_id: c.grade_id for c in plan.manual}
     gids = set(by_id.values())
     out = {}
@@ -90,10 +90,14 @@ def _answers(plan: LabPlan, nb: dict) -> dict[str, str]:
             continue
         meta = (cell.get("metadata") or {}).get(META_KEY) or {}
         gid = meta.get("grade_id") if isinstance(meta, dict) else None
+        src = cell.get("source", "")
+        src = "".join(src) if isinstance(src, list) else str(src)
+        text = normalized(src)
+        by_text = [g for g, q in plan.prompts.items() if q and q in text]
         gid = gid if gid in gids else by_id.get(cell.get("id"))
+        gid = gid or (by_text[0] if len(by_text) == 1 else None)
         if gid and gid not in out:
-            src = cell.get("source", "")
-            out[gid] = "".join(src) if isinstance(src, list) else str(src)
+            out[gid] = src
     return out
 
 
@@ -143,7 +147,9 @@ def grade_notebook(
         Grading slot (chooses the sandbox's uids).
     """
     items = plan.checks + plan.manual
-    result = Result(student, {c.grade_id: 0.0 for c in items}, {}, plan.max_points)
+    result = Result(
+        student, {c.grade_id: 0.0 for c in plan.checks}, {}, plan.max_points
+    )
     t0 = time.monotonic()
     if not opts.sandbox:
         result.flags.append("graded without sandbox (--no-sandbox)")
@@ -171,6 +177,7 @@ def grade_notebook(
     result.flags += flags
     out = run_submission(plan, cells, opts, slot)
     result.passes = 1 + out.restarts
+    result.flags += out.flags
     for function, ex, *via in out.tripwires:
         ex = ex or plan.owner.get(function)
         name = plan.listed_as(function, ex)
@@ -202,8 +209,8 @@ def grade_notebook(
         elif len(why) > 300:
             result.details[c.grade_id] = why
     for c in plan.manual:
-        result.reasons[c.grade_id] = "written answer: graded by hand"
-    result.status = out.status
+        result.reasons[c.grade_id] = UNGRADED
+    result.status = OVERLOADED if out.status == "overloaded" else out.status
     if out.restarts and result.status == "ok":
         result.status = "restarted (your code hung or crashed)"
     if any(n.startswith("zero:") for n in result.reasons.values()):
@@ -231,6 +238,16 @@ def reference_run(plan: LabPlan, solution: dict, opts: Options) -> dict:
         why = "; ".join(f"{k}: {v}" for k, v in failed.items()) or "; ".join(res.flags)
         raise GradeError(f"the solution of {plan.name} fails its own checks: {why}")
     return res.check_lines
+
+
+def solution_path(lab: str) -> Path:
+    """Return ``solutions/<lab>.ipynb``; a clear error lists the labs if absent."""
+    folder = project_dir() / "solutions"
+    path = folder / f"{lab}.ipynb"
+    if not path.exists():
+        labs = ", ".join(sorted(p.stem for p in folder.glob("*.ipynb"))) or "none"
+        raise GradeError(f"no lab {lab!r} in {folder} (labs: {labs})")
+    return path
 
 
 def _fingerprint(path: Path | None, solution_text: str) -> str:
@@ -290,6 +307,7 @@ def grade(
     records: str | Path | None = None,
     regrade: bool = False,
     scheduler: str | None = None,
+    students: list[str] | None = None,
 ) -> tuple[list[Result], list]:
     """Grade every submission of a folder.
 
@@ -315,6 +333,8 @@ def grade(
         Grade every submission again.
     scheduler : str, optional
         ``"local"`` or a ``dask.distributed`` scheduler address.
+    students : list of str, optional
+        Grade (again) only these students; the others are left as recorded.
 
     Returns
     -------
@@ -333,22 +353,29 @@ def grade(
     opts = opts or Options()
     if opts.sandbox and (why := sb.available()):
         raise GradeError(f"no sandbox: {why}; pass --no-sandbox to grade without")
-    solution = (
-        Path(solution) if solution else project_dir() / "solutions" / f"{lab}.ipynb"
-    )
-    sol_text = notebook_text(read_notebook(solution))
+    solution = Path(solution) if solution else solution_path(lab)
+    sol_nb = read_notebook(solution)
+    sol_text = notebook_text(sol_nb)
     plan = _plan(sol_text, lab)
     subs = find_submissions(submissions, lab)
+    if not subs:
+        raise GradeError(f"no submissions in {submissions}")
+    try:
+        check_lab(sol_nb, lab, [p for _, p, _ in subs if p is not None])
+        subs = pick(subs, students) if students else subs
+    except ValueError as exc:
+        raise GradeError(str(exc)) from None
     jobs = max(1, jobs or os.cpu_count() or 1)
     store = Records(records, lab) if records else None
+    again = Again(store, [s for s, _, _ in subs] if regrade or students else None)
     stop = threading.Event()
     opts.stop = stop
     results: dict[str, Result] = {}
     todo = []
     for student, path, status in subs:
         fp = _fingerprint(path, sol_text)
-        old = store.load(student) if store and not regrade else None
-        if old is not None and old[1] == fp:
+        old = store.load(student) if store and student not in again else None
+        if old is not None and old[1] == fp and old[0].status != OVERLOADED:
             results[student] = old[0]
             continue
         todo.append((student, path, status, fp))
@@ -365,10 +392,20 @@ def grade(
             opts.numba_cache.mkdir()
             opts.mpl_cache = Path(c) / "matplotlib"
             opts.mpl_cache.mkdir()
-            numba_cache.prewarm(plan.setup, opts.mpl_cache)
-            numba_cache.seed(opts.numba_cache)
-            reference = reference_run(plan, read_notebook(solution), opts)
-            bar.advance("(reference run)")
+            saved = store.folder / ".reference" if store else None
+            key = numba_cache.reference_key(sol_text, lab)
+            reference = None
+            if saved is not None and not regrade:
+                reference = numba_cache.load_reference(saved, key, opts)
+            if reference is None:
+                numba_cache.prewarm(plan.setup, opts.mpl_cache)
+                numba_cache.seed(opts.numba_cache)
+                reference = reference_run(plan, sol_nb, opts)
+                if saved is not None:
+                    numba_cache.save_reference(saved, key, reference, opts)
+                bar.advance("(reference run)")
+            else:
+                bar.advance("(reference run: saved)")
             fps = {t[0]: t[3] for t in todo}
 
             def done(data: dict) -> None:
@@ -376,6 +413,7 @@ def grade(
                 results[r.student] = r
                 if store is not None and not r.status.startswith("interrupted"):
                     store.save(r, fps[r.student])
+                    again.done(r.student)
                 bar.advance(f"{r.student}: {r.total:g}/{r.max_points:g}")
 
             tasks = []
@@ -409,126 +447,3 @@ def grade(
         if old_term is not None:
             signal.signal(signal.SIGTERM, old_term)
     return [results[k] for k in sorted(results)], items
-
-
-def fold_manual(results: list[Result], items, scores: dict) -> None:
-    """Put the instructor's scores of written answers into ``results``."""
-    manual = [c for c in items if c.manual]
-    for r in results:
-        for c in manual:
-            got = scores.get(r.student, {}).get(c.grade_id)
-            if got is not None:
-                r.points[c.grade_id] = got
-                r.reasons.pop(c.grade_id, None)
-
-
-# -- command line ------------------------------------------------------------------
-
-
-def add_arguments(parser: argparse.ArgumentParser) -> None:
-    """Add the ``grade`` options to ``parser``."""
-    parser.add_argument("submissions", type=Path, help="folder of submissions")
-    parser.add_argument("--lab", required=True, help="lab name (solutions/<lab>.ipynb)")
-    parser.add_argument(
-        "--out", type=Path, default=Path("gradebook.csv"), help="gradebook CSV"
-    )
-    parser.add_argument(
-        "--feedback",
-        type=Path,
-        help="feedback folder (default: <out>-feedback/ next to --out)",
-    )
-    parser.add_argument("--solution", type=Path, help="the lab's source notebook")
-    parser.add_argument(
-        "--jobs", "-j", type=int, help="submissions at once (default: cores)"
-    )
-    parser.add_argument("--cell-timeout", type=float, default=60.0, help="s per cell")
-    parser.add_argument(
-        "--timeout", type=float, default=600.0, help="s per submission in total"
-    )
-    parser.add_argument(
-        "--restarts", type=int, default=3, help="restarts after a hang or crash"
-    )
-    parser.add_argument("--memory", type=float, default=6.0, help="GiB per process")
-    parser.add_argument("--regrade", action="store_true", help="grade all again")
-    parser.add_argument(
-        "--manual", type=Path, help="fold in the written answers' scores (CSV)"
-    )
-    parser.add_argument(
-        "--no-sandbox",
-        action="store_true",
-        help="grade without bubblewrap (recorded in the gradebook)",
-    )
-    parser.add_argument(
-        "--scheduler",
-        help="grade on Dask: 'local' or a scheduler address (extra grade-dask)",
-    )
-    parser.add_argument("--keep", action="store_true", help="keep the working folders")
-    parser.add_argument("--quiet", "-q", action="store_true", help="no progress bar")
-
-
-def run(args: argparse.Namespace) -> int:
-    """Run ``robotlib grade``; return the exit status."""
-    limits = sb.Limits(memory=int(args.memory * (1 << 30)))
-    opts = Options(
-        cell_timeout=args.cell_timeout,
-        timeout=args.timeout,
-        restarts=args.restarts,
-        keep=args.keep,
-        sandbox=not args.no_sandbox,
-        limits=limits,
-    )
-    t0 = time.monotonic()
-    records = args.out.with_name(f"{args.out.stem}-records")
-    status = 0
-    try:
-        results, items = grade(
-            args.submissions,
-            args.lab,
-            args.solution,
-            args.jobs,
-            opts,
-            not args.quiet,
-            records,
-            args.regrade,
-            args.scheduler,
-        )
-    except (GradeError, NotebookError, FileNotFoundError, ImportError) as exc:
-        sys.stderr.write(f"robotlib grade: {exc}\n")
-        return 2
-    except KeyboardInterrupt:
-        sys.stderr.write(
-            "robotlib grade: interrupted; finished submissions are kept in "
-            f"{records}/, run again to resume\n"
-        )
-        results = Records(records, args.lab).all()
-        items = _plan(
-            notebook_text(
-                read_notebook(
-                    args.solution or project_dir() / "solutions" / f"{args.lab}.ipynb"
-                )
-            ),
-            args.lab,
-        )
-        items = items.checks + items.manual
-        status = 130
-    if args.manual:
-        try:
-            fold_manual(results, items, read_manual(args.manual, items))
-        except (OSError, ValueError) as exc:
-            sys.stderr.write(f"robotlib grade: {exc}\n")
-            return 2
-    write_gradebook(args.out, results, items)
-    manual = [c for c in items if c.manual]
-    if manual:
-        export_manual(
-            args.out.with_name(f"{args.out.stem}-manual.csv"), results, manual
-        )
-    feedback = args.feedback or args.out.with_name(f"{args.out.stem}-feedback")
-    write_feedback(feedback, results, items, args.lab)
-    full = sum(r.total == r.max_points for r in results)
-    sys.stderr.write(
-        f"graded {len(results)} submissions of {args.lab} "
-        f"in {time.monotonic() - t0:.1f} s "
-        f"({full} full marks); gradebook {args.out}, feedback in {feedback}/\n"
-    )
-    return status

@@ -8,10 +8,13 @@
 - `feedback_text` / `write_feedback`: a Markdown file per student, named by a
   slug plus a hash of the student's name (names differing by case, spaces or
   accents never collide).
+- `HandGrades`: the instructor's scores and comments of written answers, a
+  record of their own (``<out>-hand.json``) that no grading run resets.
 - `export_manual` / `read_manual`: the written answers of every student in
   one file for the instructor (``<out>-manual.csv``: student, grade id,
-  points, rubric, answer, a ``score`` column to fill in); `read_manual`
-  reads it back to fold the points into the results.
+  points, rubric, answer, ``score`` (empty until graded), ``comment``);
+  `read_manual` reads it back (UTF-8 with or without Excel's byte-order
+  mark) to merge into `HandGrades`.
 
 Imports `notebooks` only.
 """
@@ -32,11 +35,13 @@ from .notebooks import CheckCell
 
 __all__ = [
     "Result",
+    "Again",
     "Records",
     "write_gradebook",
     "gradebook_rows",
     "feedback_text",
     "write_feedback",
+    "HandGrades",
     "export_manual",
     "read_manual",
     "slug",
@@ -125,13 +130,59 @@ class Records:
         """Every stored result."""
         out = []
         for p in sorted(self.folder.glob("*.json")):
+            if p.name.startswith("."):
+                continue  # the grader's own lists
             try:
                 data = json.loads(p.read_text(encoding="utf-8"))
             except (OSError, ValueError):
                 continue
-            if data.get("lab") == self.lab:
+            if isinstance(data, dict) and data.get("lab") == self.lab:
                 out.append(Result.from_json(data))
         return out
+
+
+class Again:
+    """Students to grade again, kept on disk until each is graded (``--regrade``).
+
+    An interrupted ``--regrade`` (or ``--student``) is finished by the next
+    plain run: without this, the students it had not reached yet would keep
+    their earlier grades silently.
+
+    Parameters
+    ----------
+    store : Records or None
+        Where the list is kept (``.again.json`` in the records folder).
+    students : list of str, optional
+        Start grading these again (None: take up the list left on disk).
+    """
+
+    def __init__(self, store: Records | None, students: list[str] | None):
+        self.path = store.folder / ".again.json" if store is not None else None
+        self.left: set[str] = set(students or ())
+        if students is None and self.path is not None and self.path.exists():
+            try:
+                self.left = set(json.loads(self.path.read_text(encoding="utf-8")))
+            except (OSError, ValueError):
+                self.left = set()
+        self.resumed = students is None and bool(self.left)
+        self._write()
+
+    def __contains__(self, student: str) -> bool:
+        return student in self.left
+
+    def done(self, student: str) -> None:
+        """Strike ``student`` off the list."""
+        if student in self.left:
+            self.left.discard(student)
+            self._write()
+
+    def _write(self) -> None:
+        if self.path is None:
+            return
+        if self.left:
+            _atomic(self.path, json.dumps(sorted(self.left)))
+        elif self.path.exists():
+            self.path.unlink()
 
 
 def gradebook_rows(results: list[Result], checks: list[CheckCell]) -> list[dict]:
@@ -139,7 +190,9 @@ def gradebook_rows(results: list[Result], checks: list[CheckCell]) -> list[dict]
     rows = []
     for r in results:
         row = {"student": r.student}
-        row.update({c.grade_id: f"{r.points.get(c.grade_id, 0.0):g}" for c in checks})
+        for c in checks:  # empty: a written answer not graded yet
+            got = r.points.get(c.grade_id, None if c.manual else 0.0)
+            row[c.grade_id] = "" if got is None else f"{got:g}"
         row["total"] = f"{r.total:g}"
         row["max"] = f"{r.max_points:g}"
         row["status"] = r.status
@@ -178,11 +231,10 @@ def feedback_text(result: Result, checks: list[CheckCell], lab: str) -> str:
         "|---|---|---|",
     ]
     for c in checks:
-        got = result.points.get(c.grade_id, 0.0)
+        got = result.points.get(c.grade_id)
         why = result.reasons.get(c.grade_id, "passed")
-        if c.manual and c.grade_id not in result.reasons and not got:
-            why = "graded by hand"
-        lines.append(f"| {c.grade_id} | {got:g} / {c.points:g} | {_cell(why)} |")
+        shown = "-" if got is None else f"{got:g}"
+        lines.append(f"| {c.grade_id} | {shown} / {c.points:g} | {_cell(why)} |")
     if result.status != "ok":
         lines += ["", f"Status: {result.status}."]
     for gid, text in result.details.items():
@@ -204,20 +256,62 @@ def write_feedback(folder: str | Path, results: list[Result], checks, lab: str) 
         _atomic(folder / f"{slug(r.student)}.md", feedback_text(r, checks, lab))
 
 
-MANUAL_FIELDS = ["student", "grade_id", "points", "rubric", "answer", "score"]
+MANUAL_FIELDS = [
+    "student", "grade_id", "points", "rubric", "answer", "score", "comment",
+]  # fmt: skip
 
 
-def export_manual(path: str | Path, results: list[Result], manual: list[CheckCell]):
-    """Write every student's written answers to one CSV, a ``score`` to fill in.
+class HandGrades:
+    """The instructor's scores of written answers: a record no grading run resets.
 
-    Scores already folded in (``--manual``) are kept in the ``score`` column.
+    One JSON file (``<out>-hand.json``): ``{student: {grade_id: {"score":
+    points, "comment": text}}}``, written atomically. Scores come in only
+    through `merge` (from the ``<out>-manual.csv`` the instructor edits, or
+    ``--manual``); a score left empty there changes nothing.
+    """
+
+    def __init__(self, path: str | Path):
+        self.path = Path(path)
+        try:
+            self.grades = json.loads(self.path.read_text(encoding="utf-8"))
+        except FileNotFoundError:
+            self.grades = {}
+        except ValueError as exc:
+            raise ValueError(f"{self.path}: not a hand-grade record ({exc})") from None
+
+    def merge(self, entries: dict) -> int:
+        """Take ``{student: {grade_id: {"score", "comment"}}}``; return the changes."""
+        changed = 0
+        for student, by_gid in entries.items():
+            mine = self.grades.setdefault(student, {})
+            for gid, entry in by_gid.items():
+                new = {**mine.get(gid, {}), **entry}
+                changed += new != mine.get(gid)
+                mine[gid] = new
+        return changed
+
+    def save(self) -> None:
+        """Write the record (atomically)."""
+        _atomic(self.path, json.dumps(self.grades, indent=1, ensure_ascii=False))
+
+    def get(self, student: str, gid: str) -> dict:
+        """Return ``{"score"?, "comment"?}`` of one written answer ({}: ungraded)."""
+        return self.grades.get(student, {}).get(gid, {})
+
+
+def export_manual(
+    path: str | Path, results: list[Result], manual: list[CheckCell], hand: HandGrades
+):
+    """Write every student's written answers to one CSV, ``score`` and ``comment``.
+
+    ``score`` is empty until graded by hand (ungraded is not 0).
     """
     buf = io.StringIO()
     writer = csv.DictWriter(buf, fieldnames=MANUAL_FIELDS, lineterminator="\n")
     writer.writeheader()
     for r in results:
         for c in manual:
-            score = r.points.get(c.grade_id)
+            got = hand.get(r.student, c.grade_id)
             writer.writerow(
                 {
                     "student": r.student,
@@ -225,34 +319,55 @@ def export_manual(path: str | Path, results: list[Result], manual: list[CheckCel
                     "points": f"{c.points:g}",
                     "rubric": c.rubric,
                     "answer": r.answers.get(c.grade_id, ""),
-                    "score": "" if score is None else f"{score:g}",
+                    "score": f"{got['score']:g}" if "score" in got else "",
+                    "comment": got.get("comment", ""),
                 }
             )
     _atomic(Path(path), buf.getvalue())
 
 
 def read_manual(path: str | Path, manual: list[CheckCell]) -> dict:
-    """Read the instructor's scores: ``{student: {grade_id: points}}``.
+    """Read the instructor's scores: ``{student: {grade_id: {"score", "comment"}}}``.
+
+    Accepts UTF-8 with or without a byte-order mark (Excel) and a comma or
+    semicolon as separator; rows with neither a score nor a comment are
+    skipped.
 
     Raises
     ------
     ValueError
-        On an unknown grade id or a score outside ``[0, points]``.
+        On missing columns, an unknown grade id or a score outside
+        ``[0, points]``.
     """
     limits = {c.grade_id: float(c.points) for c in manual}
-    out: dict[str, dict[str, float]] = {}
-    with open(path, newline="", encoding="utf-8") as f:
-        for n, row in enumerate(csv.DictReader(f), 2):
-            gid, score = row.get("grade_id", ""), (row.get("score") or "").strip()
-            if not score:
-                continue
-            if gid not in limits:
-                raise ValueError(f"{path}, line {n}: unknown written answer {gid!r}")
-            value = float(score)
+    out: dict[str, dict[str, dict]] = {}
+    with open(path, newline="", encoding="utf-8-sig") as f:
+        text = f.read()
+    first = text.split("\n", 1)[0]
+    delimiter = ";" if first.count(";") > first.count(",") else ","
+    reader = csv.DictReader(io.StringIO(text), delimiter=delimiter)
+    missing = {"student", "grade_id", "score"} - set(reader.fieldnames or [])
+    if missing:
+        raise ValueError(f"{path}: no column {', '.join(sorted(missing))}")
+    for n, row in enumerate(reader, 2):
+        gid, score = row.get("grade_id", ""), (row.get("score") or "").strip()
+        comment = (row.get("comment") or "").strip()
+        if not score and not comment:
+            continue
+        if gid not in limits:
+            raise ValueError(f"{path}, line {n}: unknown written answer {gid!r}")
+        entry: dict = {"comment": comment} if comment else {}
+        if score:
+            try:
+                value = float(score.replace(",", "."))
+            except ValueError:
+                why = f"{path}, line {n}: score {score!r} is not a number"
+                raise ValueError(why) from None
             if not 0 <= value <= limits[gid]:
                 raise ValueError(
                     f"{path}, line {n}: score {value:g} of {gid!r} is not in "
                     f"[0, {limits[gid]:g}]"
                 )
-            out.setdefault(row["student"], {})[gid] = value
+            entry["score"] = value
+        out.setdefault(row["student"], {})[gid] = entry
     return out

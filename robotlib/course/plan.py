@@ -9,9 +9,9 @@
   exercises' names are left. A check never sees a name the student's
   notebook defines, except the exercises' own, through proxies.
 - `student_cells` (per submission): the student's code for each exercise
-  (their cell matched by exercise id, else by cell id) and the cells they
-  added, in order; check cells, the lab's other cells and edited copies of
-  them are left out.
+  (their cell matched by exercise id, cell id, or the names it defines) and
+  the cells they added, in order; check cells and the lab's other cells
+  (matched by content, whatever their ids) are left out.
 - `scan_submission`: the static answers-not-shipped pass over those cells.
 
 Imports `notebooks` and `answers` only.
@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import ast
 import builtins
+import difflib
 import symtable
 from dataclasses import dataclass, field
 
@@ -31,6 +32,7 @@ from .astlock import parse
 from .notebooks import (
     HIDDEN,
     META_KEY,
+    SOLUTION,
     CheckCell,
     Exercise,
     check_cells,
@@ -40,7 +42,7 @@ from .notebooks import (
 )
 from .worker import HIDDEN_MARK
 
-__all__ = ["LabPlan", "lab_plan", "student_cells", "scan_submission"]
+__all__ = ["LabPlan", "lab_plan", "normalized", "student_cells", "scan_submission"]
 
 
 @dataclass
@@ -59,6 +61,8 @@ class LabPlan:
     owner: dict[str, str]  # listed function -> exercise
     aliases: dict[str, str] = field(default_factory=dict)
     solution_ids: set[str] = field(default_factory=set)
+    lab_sources: set[str] = field(default_factory=set)  # `normalized` lab cells
+    prompts: dict[str, str] = field(default_factory=dict)  # written answer -> question
     same: dict[str, list[str]] = field(default_factory=dict)  # listed -> equals
 
     def listed_as(self, function: str, exercise: str | None) -> str:
@@ -214,6 +218,10 @@ def lab_plan(solution: NotebookNode, name: str) -> LabPlan:
     plan.aliases = answers.aliases(writes) if writes else {}
     plan.same = answers.equivalents(writes) if writes else {}
     plan.solution_ids = {c.get("id") for c in solution.cells}
+    plan.lab_sources = _lab_sources(solution, exs)
+    for c in manual:  # the question, above the solution region
+        question = solution.cells[c.index].source.split(SOLUTION[0])[0]
+        plan.prompts[c.grade_id] = normalized(question)
     return plan
 
 
@@ -230,32 +238,116 @@ def _source(cell: dict) -> str:
     return "".join(src) if isinstance(src, list) else str(src)
 
 
+def normalized(source: str) -> str:
+    """Return a cell's source as compared by content: no trailing or blank lines."""
+    return "\n".join(ln.rstrip() for ln in source.splitlines() if ln.strip())
+
+
+def _lab_sources(solution: NotebookNode, exs: list[Exercise]) -> set[str]:
+    """Return the lab's own code cells' sources, as released and as solved.
+
+    Exercise cells are left out; check cells are there without their hidden
+    tests (as students have them).
+    """
+    own = {e.index for e in exs}
+    out = set()
+    for i, cell in enumerate(solution.cells):
+        if cell.cell_type == "code" and i not in own:
+            out.add(normalized(cell.source))
+            out.add(normalized(_without_hidden(cell.source)))
+    out.discard("")
+    return out
+
+
+def _without_hidden(source: str) -> str:
+    lines, hidden = [], False
+    for line in source.splitlines():
+        if line.strip() in HIDDEN:
+            hidden = line.strip() == HIDDEN[0]
+        elif not hidden:
+            lines.append(line)
+    return "\n".join(lines)
+
+
+def _is_lab_cell(plan: LabPlan, source: str) -> bool:
+    """Return whether ``source`` is one of the lab's own cells (or a near copy).
+
+    A near copy (90 % of its characters in common with a lab cell of three
+    lines or more) is a demonstration the student touched (a parameter
+    changed): like an edited lab cell that kept its id, it is not run. An
+    empty cell is nobody's.
+    """
+    src = normalized(source)
+    if not src or src in plan.lab_sources:
+        return True
+    for lab in plan.lab_sources:
+        if lab.count("\n") < 2:
+            continue
+        m = difflib.SequenceMatcher(None, src, lab, autojunk=False)
+        if m.real_quick_ratio() >= 0.9 and m.quick_ratio() >= 0.9 and m.ratio() >= 0.9:
+            return True
+    return False
+
+
 def student_cells(plan: LabPlan, student: dict) -> list[dict]:
     """Return the student's cells the student process runs, in notebook order.
 
     Each is ``{"id", "exercise", "source"}``; ``exercise`` is None for a
-    cell the student added.
+    cell the student added. Cells are told apart by metadata and content
+    first, ids last (an old nbformat has none, pasting a cell into another
+    notebook or duplicating one gives it a new one):
+
+    - a cell tagged with a ``grade_id`` is a check (run by the check process);
+    - a cell tagged with an ``exercise`` is that exercise's;
+    - a cell whose source is one of the lab's own cells (set-up,
+      demonstrations, checks as released) is the lab's, whatever its id or
+      metadata, and does not run;
+    - a cell with an exercise cell's id is that exercise's;
+    - a cell that defines an exercise's name (``def steer``) is that
+      exercise's, if no cell above claimed it;
+    - another cell with one of the lab's ids is the lab's, edited;
+    - anything else was added by the student.
     """
     by_cell = {e.cell_id: e for e in plan.exercises}
     by_id = {e.exercise_id: e for e in plan.exercises}
-    out, done = [], set()
+    kinds: list[tuple[str, dict, object]] = []  # (kind, cell, exercise)
     for n, cell in enumerate(student.get("cells", [])):
         if not isinstance(cell, dict) or cell.get("cell_type") != "code":
             continue
         meta = cell.get("metadata", {})
         meta = meta.get(META_KEY) if isinstance(meta, dict) else None
         meta = meta if isinstance(meta, dict) else {}
+        src = _source(cell)
+        cell = {**cell, "id": str(cell.get("id") or f"cell{n}")[:64]}
         if "grade_id" in meta:
             continue  # a check cell (canonical ones run in the check process)
-        ex = by_id.get(meta.get("exercise")) or by_cell.get(cell.get("id"))
-        cid = str(cell.get("id") or f"cell{n}")[:64]
+        ex = by_id.get(meta.get("exercise"))
+        if ex is None and _is_lab_cell(plan, src):
+            continue
+        ex = ex or by_cell.get(cell["id"])
         if ex is not None:
+            kinds.append(("exercise", cell, ex))
+        else:
+            defines = _bound_all(src) & set(plan.names)
+            kinds.append(("maybe", cell, {plan.names[d]["exercise"] for d in defines}))
+    claimed = {ex.exercise_id for kind, _, ex in kinds if kind == "exercise"}
+    out, done = [], set()
+    for kind, cell, ex in kinds:
+        if kind == "maybe":
+            free = sorted(e for e in ex if e not in claimed)
+            if len(free) == 1:
+                claimed.add(free[0])
+                kind, ex = "exercise", by_id[free[0]]
+        if kind == "exercise":
             if ex.exercise_id in done:
                 continue
             done.add(ex.exercise_id)
-            out.append({"id": cid, "exercise": ex.exercise_id, "source": _source(cell)})
-        elif cell.get("id") not in plan.solution_ids:
-            out.append({"id": cid, "exercise": None, "source": _source(cell)})
+            ex = ex.exercise_id
+        elif cell["id"] in plan.solution_ids:
+            continue  # the lab's cell, edited
+        else:
+            ex = None
+        out.append({"id": cell["id"], "exercise": ex, "source": _source(cell)})
     return out
 
 

@@ -587,12 +587,12 @@ def test_a_process_that_cannot_start_is_restarted(tmp_path, monkeypatch):
     """The system refusing a process (out of pids) is a restart, not a grader error."""
     import errno
 
-    from robotlib.course import session
+    from robotlib.course import processes
 
     need_sandbox()
     (tmp_path / "subs" / "sol").mkdir(parents=True)
     write_notebook(solution(), tmp_path / "subs" / "sol" / "tiny.ipynb")
-    real, students = session.subprocess.Popen, []
+    real, students = processes.subprocess.Popen, []
 
     def popen(cmd, *args, **kwargs):
         if "student" in cmd:
@@ -601,7 +601,7 @@ def test_a_process_that_cannot_start_is_restarted(tmp_path, monkeypatch):
                 raise OSError(errno.EAGAIN, "Resource temporarily unavailable")
         return real(cmd, *args, **kwargs)
 
-    monkeypatch.setattr(session.subprocess, "Popen", popen)
+    monkeypatch.setattr(processes.subprocess, "Popen", popen)
     opts = g.Options(cell_timeout=CELL_TIMEOUT, timeout=120)
     results, _ = g.grade(tmp_path / "subs", "tiny", TINY, jobs=1, opts=opts, progress=False)  # fmt: skip
     (r,) = results

@@ -1,0 +1,115 @@
+"""Grades do not depend on the machine's load or on the classmates graded alongside.
+
+A correct answer that is slow (its ``mean`` burns about a third of the cell
+limit in CPU time per call) is graded alone, then again beside a classmate
+whose notebook forks busy loops and under busy processes this test starts
+(in its own process tree, ended at the end): on two shared cores its calls
+then take several times the cell limit in wall time, which a wall-clock
+limit would fail. Its points must be the same; the classmate is flagged.
+"""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+import time
+
+import pytest
+
+from robotlib.course import cpu
+from robotlib.course import grade as g
+from robotlib.course.notebooks import write_notebook
+from tests.course.test_course_grade import FULL, MEAN, TINY, solution, with_cell
+from tests.sandboxing import need_sandbox
+
+CELL_LIMIT = 5.0
+
+
+def _loop_count(cpu_seconds: float) -> int:
+    """Iterations of the slow answer's loop that take ``cpu_seconds`` of CPU here."""
+    n = 2_000_000
+    t0 = time.process_time()
+    t = 0
+    for i in range(n):
+        t += i % 7
+    per = (time.process_time() - t0) / n
+    return int(cpu_seconds / max(per, 1e-9))
+
+
+def _slow_mean(n: int) -> str:
+    return (
+        "def mean(xs):\n    t = 0\n"
+        f"    for i in range({n}):  # a slow but correct answer\n"
+        "        t += i % 7\n"
+        "    return sum(xs) / len(xs) + 0 * t\n"
+    )
+
+
+HOG = (
+    "import os\n"
+    "for _ in range(4):  # busy loops that never end\n"
+    "    if os.fork() == 0:\n        while True:\n            pass\n"
+    "def mean(xs):\n    return sum(xs) / len(xs)\n"
+)
+
+
+def _grade(folder, jobs):
+    opts = g.Options(cell_timeout=CELL_LIMIT, timeout=60, backstop=20)
+    results, _ = g.grade(folder, "tiny", TINY, jobs=jobs, opts=opts, progress=False)
+    return {r.student: r for r in results}
+
+
+@pytest.mark.slow
+def test_same_grade_alone_beside_a_hog_and_under_load(tmp_path):
+    need_sandbox()
+    slow = with_cell(solution(), MEAN, _slow_mean(_loop_count(CELL_LIMIT / 3)))
+    alone = tmp_path / "alone"
+    (alone / "slow").mkdir(parents=True)
+    write_notebook(slow, alone / "slow" / "tiny.ipynb")
+    first = _grade(alone, jobs=1)["slow"]
+    assert {k: first.points[k] for k in FULL} == {k: float(v) for k, v in FULL.items()}
+    assert first.status == "ok", (first.status, first.reasons)
+
+    crowd = tmp_path / "crowd"
+    for name, nb in (("slow", slow), ("hog", with_cell(solution(), MEAN, HOG))):
+        (crowd / name).mkdir(parents=True)
+        write_notebook(nb, crowd / name / "tiny.ipynb")
+    busy = [
+        subprocess.Popen([sys.executable, "-c", "while True:\n    pass"])
+        for _ in range(6)
+    ]
+    try:
+        rows = _grade(crowd, jobs=2)
+    finally:
+        for p in busy:
+            p.kill()
+            p.wait()
+    again = rows["slow"]
+    assert again.points == first.points, again.reasons
+    assert again.status == "ok", (again.status, again.reasons)
+    assert any("busy processes" in f for f in rows["hog"].flags), rows["hog"].flags
+
+
+def test_cpu_time_counts_the_whole_tree_and_not_sleep():
+    """A busy child's CPU time is its parent's; a sleeping tree uses none."""
+    code = (
+        "import os, time\n"
+        "if os.fork() == 0:\n    t = time.process_time()\n"
+        "    while time.process_time() - t < 0.6:\n        pass\n    os._exit(0)\n"
+        "time.sleep(30)\n"
+    )
+    proc = subprocess.Popen([sys.executable, "-c", code])
+    try:
+        deadline = time.monotonic() + 30
+        u = cpu.usage(proc.pid, proc.pid)
+        while u.cpu < 0.6 and time.monotonic() < deadline:
+            time.sleep(0.1)
+            u = cpu.usage(proc.pid, proc.pid)
+        assert u.cpu >= 0.6  # the child's time, ended or not
+        before = cpu.usage(proc.pid, proc.pid).cpu
+        time.sleep(0.5)
+        assert cpu.usage(proc.pid, proc.pid).cpu - before < 0.2  # asleep
+        assert cpu.find_worker(proc.pid, [sys.executable, "-c"]) == proc.pid
+    finally:
+        proc.kill()
+        proc.wait()
