@@ -1,8 +1,10 @@
 """Numba options shared by every kernel in robotlib (one place to change them).
 
-Also `serial_and_parallel`, which compiles one kernel body both ways. Only
-kernels import this module, and the package's ``__init__`` (first, so that
-numba is imported lean: `_import_numba`); it imports nothing of robotlib's but
+Also `serial_and_parallel`, which compiles one kernel body both ways, and
+`readonly`, with which public functions hand kernels one array type. Only
+kernels (and, for `readonly`, the functions calling them) import this
+module, and the package's ``__init__`` (first, so that numba is imported
+lean: `_import_numba`); it imports nothing of robotlib's but
 `robotlib._kernel_cache`, which it runs once: cached kernels whose sources
 changed are deleted before any is loaded. Everything here uses numba's
 public API only (``numba.njit`` and its options).
@@ -99,3 +101,28 @@ def serial_and_parallel(body):
     twin.__qualname__ = body.__qualname__ + "_parallel"
     twin.__doc__ = body.__doc__
     return nb.njit(**JIT)(body), nb.njit(**JIT_PARALLEL)(twin)
+
+
+def readonly(array):
+    """Return ``array`` if it is read-only, else a read-only view of it (no copy).
+
+    Numba types a writable and a read-only array apart and compiles a kernel
+    once for each; a copied or unpickled array (a deep copy, a worker
+    process) is writable while the one `robotlib warmup` used was not. A
+    public function passes its input arrays through this, so one compiled
+    signature serves both.
+
+    Parameters
+    ----------
+    array : numpy.ndarray
+
+    Returns
+    -------
+    numpy.ndarray
+        Same data, ``flags.writeable`` False.
+    """
+    if not array.flags.writeable:
+        return array
+    view = array.view()
+    view.flags.writeable = False
+    return view

@@ -107,7 +107,9 @@ def _warm_avoidance() -> None:
         VFH,
         Bug2,
         PotentialField,
+        VFHSettings,
         WallFollower,
+        choose_direction,
         polar_histogram,
         run_episode,
         smooth_histogram,
@@ -115,17 +117,55 @@ def _warm_avoidance() -> None:
     from .world import World
 
     box = World(segments=[[0, 0, 4, 0], [4, 0, 4, 3], [4, 3, 0, 3], [0, 3, 0, 0]])
-    for c in (VFH(), PotentialField(), Bug2(), WallFollower()):
+    stuck = VFHSettings(patience=0.0, progress=10.0)  # follows the boundary at once
+    controllers = (
+        VFH(),
+        VFH(settings=stuck),
+        VFH(histogram=polar_histogram, direction=choose_direction),  # Lab 2's parts
+        PotentialField(),
+        Bug2(),
+        WallFollower(),
+    )
+    for c in controllers:
         run_episode(box, c, goal=(3.0, 1.5), start=(1.0, 1.5, 0.0), seed=0, max_time=1)
     smooth_histogram(polar_histogram([[1.0, 0.0]], [1.0], [0.0, 0.0, 0.0]))
+    _warm_ring_many()
 
 
 def _warm_mapping() -> None:
     from .mapping import record_drive, run_fastslam
+    from .sensing import expected_laser
+    from .world import load_world
 
     log = record_drive("loop", [(3.0, 1.5)], seed=0, every=2)
     run_fastslam(log, 4, "laser", rng=0)
     run_fastslam(log, 4, "sonar", rng=0)
+    world = load_world("loop")
+    expected_laser(world, np.tile(world.start, (8, 1)))  # the threaded caster (K >= 8)
+
+
+def _warm_ring_many() -> None:
+    """Run the sonar ring's threaded kernels (more than 64 poses at once)."""
+    from .sensing import SonarModel, expected_ranges, simulate_ranges
+    from .world import load_world
+
+    world = load_world("corridor")
+    poses = np.tile(np.asarray(world.start, dtype=float), (65, 1))
+    simulate_ranges(world, poses, SonarModel(), rng=0)
+    expected_ranges(world, poses)
+
+
+def _warm_large_map() -> None:
+    """Measure distances on a map of many walls (through the bucket index)."""
+    from .world import World
+    from .world.index import INDEX_MIN_SEGMENTS
+
+    x = np.arange(INDEX_MIN_SEGMENTS, dtype=float) * 0.1
+    walls = np.column_stack([x, np.zeros_like(x), x + 0.05, np.ones_like(x)])
+    world = World(segments=walls)
+    world.distance_to_walls(np.zeros((3, 2)))
+    world.distance_field(0.5)
+    world.free_space(0.5)
 
 
 def _warm_models() -> None:
@@ -141,6 +181,7 @@ def _warm_models() -> None:
     BeamSensorModel(world).log_likelihood(poses, z)
     fast = BeamSensorModel(world, fast=True, params=BeamParameters(exponent=0.2))
     fast.log_likelihood(np.tile(poses, (100, 1)), z)
+    _warm_ring_many()
 
 
 def _paper(world):
@@ -190,6 +231,7 @@ WARMUPS: dict[str, Callable[[], None] | list[tuple[str, Callable[[], None]]]] = 
         ("beam + KLD", _warm_filter(_beam_kld)),
         ("beam (fast)", _warm_filter(_beam_fast)),
         ("MCL.best (threads)", _warm_filter(_best)),
+        ("a large map", _warm_large_map),
     ],
     "mapping": _warm_mapping,
     "avoidance": _warm_avoidance,

@@ -23,6 +23,7 @@ from collections import deque
 
 import numpy as np
 
+from .._config import readonly
 from ..world import wrap_angle
 from . import _kernels
 from .base import LOCAL_MINIMUM, Controller, goal_in_robot_frame
@@ -159,7 +160,7 @@ class PotentialField(Controller):
             gx, gy = goal_in_robot_frame(self.goal, pose)
             _kernels.potential_force(
                 sonar,
-                self.sensors,
+                readonly(self.sensors),
                 self.max_range,
                 gx,
                 gy,

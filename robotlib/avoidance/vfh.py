@@ -34,6 +34,7 @@ import math
 
 import numpy as np
 
+from .._config import readonly
 from ..p3dx import ROBOT_RADIUS
 from . import _kernels
 from .base import Controller
@@ -299,7 +300,7 @@ class VFH(Controller):
             self.origin[1],
             self.resolution,
             pose,
-            self.sensors,
+            readonly(self.sensors),
             sonar,
             self.max_range,
             self.half_cone,
@@ -421,7 +422,8 @@ class VFH(Controller):
         hist = np.empty(self.n_sectors)
         steer = _kernels.vfh_step(
             self.grid, self.origin[0], self.origin[1], self.resolution, pose,
-            self.sensors, sonar, self.max_range, self.half_cone, self.clear_range,
+            readonly(self.sensors), sonar, self.max_range, self.half_cone,
+            self.clear_range,
             self.increment, self.decrement, self.cmax, self.fade, window,
             self.enlarge, 2, self._raw, hist, self.threshold_low,
             self.threshold_high, self._blocked, target, previous, self.wide,

@@ -24,6 +24,7 @@ from functools import lru_cache
 
 import numpy as np
 
+from .._config import readonly
 from ..sensing import SonarModel
 from ..sensing.laser import LaserModel, laser_poses
 from ..world import Grid, World
@@ -265,7 +266,7 @@ class OccupancyGrid:
         half = sonar.cone / 2
         sigma = model.sigma or 0.0
         _kernels._scan_update(
-            self.logodds, *self.origin, self.resolution, p, sonar.sensors, z,
+            self.logodds, *self.origin, self.resolution, p, readonly(sonar.sensors), z,
             half, sonar.max_range, model.thickness, model.l_occ, model.l_free,
             sigma, model.max_weight, model.l_min, model.l_max,
             *cone_weights(half, sigma),

@@ -101,7 +101,7 @@ def _search(cs, start, goal, connectivity, weight, use_cost, record) -> Plan:
     gcost = np.empty(n)
     parent = np.empty(n, dtype=np.int64)
     order = np.empty(n if record else 0, dtype=np.int64)
-    cost = cs.cost if use_cost else np.empty(0)  # size 0: no cost map
+    cost = cs.cost if use_cost else np.empty((0, 0))  # size 0: no cost map
     found, expanded = _kernels.astar(
         cs.blocked, cost, s, g, float(weight), c8, cs.resolution, gcost, parent, order
     )
@@ -196,7 +196,7 @@ def cost_field(cs: CSpace, goal, connectivity: int = 8, use_cost: bool = True):
     n = cs.blocked.size
     gcost = np.empty(n)
     parent = np.empty(n, dtype=np.int64)
-    cost = cs.cost if use_cost else np.empty(0)  # size 0: no cost map
+    cost = cs.cost if use_cost else np.empty((0, 0))  # size 0: no cost map
     _kernels.astar(
         cs.blocked, cost, g, -1, 0.0, c8, cs.resolution, gcost, parent,
         np.empty(0, np.int64),

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .._config import readonly
 from ..world import Grid, World
 from . import _kernels
 
@@ -27,7 +28,7 @@ def _segments(walls) -> np.ndarray:
     seg = np.ascontiguousarray(np.asarray(seg, dtype=np.float64))
     if seg.ndim != 2 or seg.shape[1] != 4:
         raise ValueError(f"segments must have shape (M, 4), got {seg.shape}")
-    return seg
+    return readonly(seg)
 
 
 def cast_rays(walls, poses, angles, max_range: float = 5.0) -> np.ndarray:

@@ -18,6 +18,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from .._config import readonly
 from .._random import as_rng
 from ..p3dx import SONAR_CONE, SONAR_MAX_RANGE, SONAR_MIN_RANGE, SONAR_POSES
 from . import _kernels
@@ -135,7 +136,7 @@ def _scan(walls, poses, model, uniforms, normals):
     kernel = _kernels.sonar_scan_parallel if len(p) > 64 else _kernels.sonar_scan
     kernel(
         p,
-        model.sensors,
+        readonly(model.sensors),
         seg,
         int(model.n_rays),
         float(model.cone),
@@ -178,7 +179,7 @@ def expected_ranges(walls, poses, model: SonarModel | None = None) -> np.ndarray
     kernel = _kernels.expected_scan_parallel if len(p) > 64 else _kernels.expected_scan
     kernel(
         p,
-        model.sensors,
+        readonly(model.sensors),
         _segments(walls),
         int(model.n_rays),
         float(model.cone),

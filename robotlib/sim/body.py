@@ -17,6 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .._config import readonly
 from ..p3dx import (
     AXLE_TRACK,
     CYCLE,
@@ -447,7 +448,7 @@ class SimBody:
         out = np.empty((1, n))
         _sensing_kernels.sonar_scan(
             self.true_pose[None, :],
-            model.sensors,
+            readonly(model.sensors),
             obstacles,
             model.n_rays,
             model.cone,

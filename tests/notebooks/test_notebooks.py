@@ -19,9 +19,21 @@ SOLUTIONS = sorted((ROOT / "solutions").glob("*.ipynb"))
 LIMIT = 60.0  # seconds per notebook on 2 cores (the issue's budget)
 
 
+@pytest.fixture(scope="module")
+def warm():
+    """``robotlib warmup`` once (quick when the cache is warm, as in CI)."""
+    subprocess.run(
+        [sys.executable, "-m", "robotlib.cli", "warmup"],
+        check=True, capture_output=True, timeout=1200,
+    )  # fmt: skip
+
+
 @pytest.mark.parametrize("notebook", SOLUTIONS, ids=[p.stem for p in SOLUTIONS])
-def test_solution_notebook_runs(notebook, tmp_path):
-    env = {**os.environ, "MPLBACKEND": "Agg", "PYTEST_DISABLE_PLUGIN_AUTOLOAD": "1"}
+def test_solution_notebook_runs(notebook, tmp_path, warm):
+    """It runs, and nothing compiles in it after ``robotlib warmup``."""
+    compiled = tmp_path / "compiled.txt"
+    env = {**os.environ, "MPLBACKEND": "Agg", "PYTEST_DISABLE_PLUGIN_AUTOLOAD": "1",
+           "ROBOTLIB_COMPILE_LOG": str(compiled)}  # fmt: skip
     (tmp_path / "pytest.ini").write_text("[pytest]\n")
     cmd = [
         sys.executable, "-m", "pytest", "-p", "nbval.plugin", "-p", "no:cacheprovider",
@@ -35,6 +47,8 @@ def test_solution_notebook_runs(notebook, tmp_path):
     )
     elapsed = time.monotonic() - t0
     assert proc.returncode == 0, proc.stdout[-4000:] + proc.stderr[-2000:]
+    late = compiled.read_text().split() if compiled.exists() else []
+    assert not late, f"compiled after robotlib warmup: {sorted(set(late))}"
     print(f"{notebook.name}: {elapsed:.1f} s")
 
 
