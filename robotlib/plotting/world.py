@@ -290,6 +290,71 @@ def animate(
         return anim
     from IPython.display import HTML
 
-    page = HTML(anim.to_jshtml(default_mode="once"))
+    page = HTML(offline_player(anim.to_jshtml(default_mode="once")))
     plt.close(fig)
     return page
+
+
+_GLYPHS = {
+    "fa-minus": "&minus;",
+    "fa-fast-backward": "&#x23EE;",
+    "fa-step-backward": "&#x23F4;|",
+    "fa-play fa-flip-horizontal": "&#x25C0;",
+    "fa-pause": "&#x23F8;",
+    "fa-play": "&#x25B6;",
+    "fa-step-forward": "|&#x23F5;",
+    "fa-fast-forward": "&#x23ED;",
+    "fa-plus": "+",
+}
+_START = (
+    "(function start(tries) {\n"
+    "        /* JupyterLab may insert the output after this script ran */\n"
+    "        if (!document.getElementById(img_id)) {\n"
+    "            if (tries < 2400) setTimeout(start, 250, tries + 1);\n"
+    "            return;\n"
+    "        }\n"
+    "        \\1\n"
+    "    })(0);"
+)
+
+
+def offline_player(page: str) -> str:
+    """Make matplotlib's jshtml player work offline and show before its script.
+
+    The player draws its first frame from a script that looks its image up
+    in the page, and its buttons' icons come from a stylesheet on a CDN.
+    JupyterLab can run an output's script before the output is in the page
+    (a cell out of view during Run All), which left the image blank until the
+    cell was clicked; offline, the icons were blank. Here the first frame is
+    the image's own source, the script waits until the image is in the page,
+    and the buttons show plain characters (no stylesheet is fetched).
+
+    Parameters
+    ----------
+    page : str
+        ``FuncAnimation.to_jshtml()``'s output.
+
+    Returns
+    -------
+    str
+        The same player, self-contained.
+    """
+    import re
+
+    page = re.sub(r"<link rel=\"stylesheet\"\s+href=\"https?://[^\"]*\">\s*", "", page)
+    page = re.sub(
+        r'<i class="fa ([^"]*)"></i>',
+        lambda m: _GLYPHS.get(m.group(1), m.group(1)),
+        page,
+    )
+    first = re.search(r'frames\[0\] = "([^"]*)"', page)
+    if first is not None:
+        src = first.group(1).replace("\\\n", "")
+        page = re.sub(r'(<img id="_anim_img\w+")', rf'\1 src="{src}"', page, count=1)
+    return re.sub(
+        r"setTimeout\(function\(\) \{\s*(.*?)\s*\}, 0\);",
+        _START,
+        page,
+        count=1,
+        flags=re.S,
+    )

@@ -81,3 +81,18 @@ def test_animation_is_html_with_a_bounded_frame_count():
     assert 0 in drawn and 999 in drawn
     assert len(set(drawn)) <= 12
     assert not plt.fignum_exists(fig.number)
+
+
+def test_animation_shows_its_first_frame_offline():
+    """No stylesheet from the web; the image holds frame 0 before any script runs."""
+    import base64
+    import re
+
+    fig, ax = plt.subplots()
+    page = rp.animate(fig, lambda i: ax.plot([0, i], [0, i]), 3).data
+    assert "http://" not in page and "https://" not in page
+    assert 'class="fa' not in page
+    src = re.search(r'<img id="_anim_img\w+" src="data:image/png;base64,([^"]+)"', page)
+    assert src is not None
+    assert base64.b64decode(src.group(1), validate=True)[:4] == b"\x89PNG"
+    assert "document.getElementById(img_id)" in page  # waits for the page
