@@ -23,6 +23,7 @@ from __future__ import annotations
 import json
 import os
 import re
+import sys
 from pathlib import Path
 
 __all__ = ["install", "unsolved_message", "exercise_of", "structured_traceback"]
@@ -38,7 +39,11 @@ def install(shell) -> bool:
 
 
 def _handler(shell, etype, value, tb, tb_offset=None):
-    stb = structured_traceback(shell, etype, value, tb, tb_offset)
+    lines = unsolved_message(shell, tb)
+    pyplot = sys.modules.get("matplotlib.pyplot")
+    if lines is not None and pyplot is not None:
+        pyplot.close("all")  # the cell's empty axes would show under the message
+    stb = _formatted(shell, etype, value, tb, tb_offset, lines)
     shell._showtraceback(etype, value, stb)
     return None
 
@@ -50,7 +55,10 @@ def structured_traceback(shell, etype, value, tb, tb_offset=None) -> list[str]:
     IPython's own traceback. A panel that runs a cell's function on a worker
     thread shows an error with these lines, as the kernel's thread would.
     """
-    lines = unsolved_message(shell, tb)
+    return _formatted(shell, etype, value, tb, tb_offset, unsolved_message(shell, tb))
+
+
+def _formatted(shell, etype, value, tb, tb_offset, lines) -> list[str]:
     if lines is None:
         return shell.InteractiveTB.structured_traceback(
             etype, value, tb, tb_offset=tb_offset

@@ -145,9 +145,11 @@ class InteractPanel:
 
     def _inline(self, request: dict) -> None:
         """Run ``function`` on this thread (the first figure, pyplot, no kernel)."""
+        import matplotlib.pyplot as plt
         from matplotlib.figure import Figure
 
         failed, figure = True, None
+        before = set(plt.get_fignums())
         with self.output:  # in a kernel an error shows here, as a traceback
             if not self.returns_figure:
                 self.output.clear_output(wait=True)
@@ -155,6 +157,9 @@ class InteractPanel:
             if not isinstance(figure, Figure):
                 _show_pyplot()
             failed = False
+        if failed:  # no half-drawn figure under the error
+            for number in set(plt.get_fignums()) - before:
+                plt.close(number)
         if not failed:
             self.returns_figure = isinstance(figure, Figure)
         shown = (figure_output(figure),) if self.returns_figure and not failed else None

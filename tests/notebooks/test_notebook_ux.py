@@ -58,6 +58,15 @@ def test_warmup_command_lists_and_warms(capsys):
 
 
 def _run(cells, tmp_path):
+    """Execute ``cells`` as a notebook in ``tmp_path``; return its error outputs."""
+    book = _execute(cells, tmp_path)
+    return [
+        out for cell in book.cells if cell.cell_type == "code" for out in cell.outputs
+        if out.output_type == "error"
+    ]  # fmt: skip
+
+
+def _execute(cells, tmp_path):
     (tmp_path / "lib.py").write_text("def later():\n    raise NotImplementedError\n")
     book = nbformat.v4.new_notebook()
     for kind, src in cells:
@@ -70,10 +79,7 @@ def _run(cells, tmp_path):
         resources={"metadata": {"path": str(tmp_path)}},
     )  # fmt: skip
     client.execute()
-    return [
-        out for cell in book.cells if cell.cell_type == "code" for out in cell.outputs
-        if out.output_type == "error"
-    ]  # fmt: skip
+    return book
 
 
 def test_an_unsolved_exercise_is_said_plainly_and_still_fails(tmp_path):
@@ -95,6 +101,23 @@ def test_an_unsolved_exercise_is_said_plainly_and_still_fails(tmp_path):
     assert len(text.splitlines()) <= 4
     # a NotImplementedError from the library keeps its traceback
     assert "is not done yet" not in "\n".join(library.traceback)
+
+
+def test_an_unsolved_exercise_shows_no_empty_figure(tmp_path):
+    book = _execute(
+        [
+            ("code", "%matplotlib inline\nimport matplotlib.pyplot as plt"),
+            ("code", "import robotlib.notebook\nrobotlib.notebook.explain_unsolved()"),
+            ("markdown", "### Exercise 2\nWrite `curve`."),
+            ("code", "def curve():\n    raise NotImplementedError()"),
+            ("code", "fig, ax = plt.subplots()\nax.plot(curve())"),
+            ("code", "fig, ax = plt.subplots()\nax.plot([0, 1])"),
+        ],
+        tmp_path,
+    )
+    unsolved, drawn = book.cells[-2].outputs, book.cells[-1].outputs
+    assert [o.output_type for o in unsolved] == ["error"]
+    assert any("image/png" in o.get("data", {}) for o in drawn)
 
 
 def test_live_runner_coalesces_and_cancels():
