@@ -11,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..avoidance.base import sonar_endpoints
+from .style import legend_outside
 from .world import animate, plot_robot, plot_world
 
 __all__ = [
@@ -90,7 +91,7 @@ def plot_polar_histogram(ax, hist, threshold=None, steer=None, target=None):
         ax.plot([steer, steer], [0, top], color="tab:blue", lw=2, label="steer")
     if hasattr(ax, "set_theta_zero_location"):
         ax.set_theta_zero_location("N")
-    ax.legend(loc="lower left", fontsize="small")
+    legend_outside(ax, "right", fontsize="small")  # clear of the angle labels
     return ax
 
 

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .style import legend_outside
 from .world import animate, plot_world
 
 __all__ = [
@@ -36,8 +37,8 @@ def plot_logodds(ax, grid, limit: float = 4.0, **kw):
         np.clip(grid.logodds, -limit, limit), origin="lower", extent=_extent(grid),
         cmap="gray_r", vmin=-limit, vmax=limit, interpolation="nearest", **kw,
     )  # fmt: skip
-    ax.set_xlabel("x (m)")
-    ax.set_ylabel("y (m)")
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
     ax.set_aspect("equal")
     return im
 
@@ -67,7 +68,8 @@ def plot_paths(ax, truth=None, odometry=None, estimate=None, particles=None):
         if poses is not None:
             ax.plot(poses[:, 0], poses[:, 1], style, lw=1.2, label=label)
     ax.set_aspect("equal")
-    ax.legend(loc="best")
+    ax.set(xlabel="x [m]", ylabel="y [m]")
+    legend_outside(ax)
     return ax
 
 
@@ -93,7 +95,8 @@ def plot_ekf(ax, mu, P, landmarks=None, world=None):
     est = mu[3:].reshape(-1, 2)
     ax.plot(est[:, 0], est[:, 1], ".", color="tab:red", label="estimates")
     ax.set_aspect("equal")
-    ax.legend(loc="best")
+    ax.set(xlabel="x [m]", ylabel="y [m]")
+    legend_outside(ax)
     return ax
 
 
