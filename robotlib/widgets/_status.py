@@ -65,8 +65,8 @@ export default { render };
 """
 
 _CSS = """
-.robotlib-status { font-size: var(--jp-widgets-font-size); line-height: 28px;
-  white-space: nowrap; overflow: hidden; text-overflow: ellipsis; }
+.robotlib-status { font-size: var(--jp-widgets-font-size); line-height: 20px;
+  padding: 4px 0; white-space: normal; overflow-wrap: anywhere; }
 .robotlib-pending .robotlib-figure, .robotlib-pending .robotlib-figure img,
 .robotlib-pending .robotlib-mcl-figure { opacity: .45; }
 """

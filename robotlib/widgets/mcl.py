@@ -380,18 +380,20 @@ class MCLPanel:
             result = f"not localized (final error {err[-1]:.2f} m)"
         kidnap = request.get("kidnap", 0)
         if kidnap and kidnap < len(err):
-            from ..experiments.reproduce import recovery_steps
+            from ..experiments.reproduce import HOLD, RECOVERED, recovery_steps
 
             r = recovery_steps(err, kidnap)
             self.recovered_after = r
+            back = f"error under {RECOVERED:g} m for {HOLD} steps"
             result += f"; kidnapped before step {kidnap}: " + (
-                f"recovered after {r} steps" if r is not None else "not recovered"
+                f"recovered after {r} steps ({back})"
+                if r is not None
+                else f"not recovered by the end (no {back})"
             )
         else:
             self.recovered_after = None
-        self.status.value = (
-            f"{request['world']}, {self.preset.value}: {result}; "
-            f"{step_ms:.0f} ms per step"
+        self.status.value = f"{request['world']}, {self.preset.value}: {result}; " + (
+            f"{step_ms:.0f} ms per step" if step_ms >= 1 else "under 1 ms per step"
         )
         self.status.answered(request["front"], busy=self.runner.newer_waiting)
 
