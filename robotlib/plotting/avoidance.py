@@ -33,11 +33,12 @@ def _world_echoes(sonar, pose) -> np.ndarray:
     )
 
 
-def plot_episode(ax, episode, world=None, echoes: bool = True, label=None):
+def plot_episode(ax, episode, world=None, echoes: bool = True, label=None, at=-1):
     """Draw an episode: the world, the path, the sonar echoes, start and goal.
 
     The true path is drawn where the episode has one (else the odometry);
-    echoes are placed on each sonar's axis from the same poses.
+    echoes are placed on each sonar's axis from the same poses. The robot
+    is drawn at cycle ``at`` (default: the last).
     """
     if world is not None:
         plot_world(ax, world)
@@ -51,7 +52,7 @@ def plot_episode(ax, episode, world=None, echoes: bool = True, label=None):
     ax.plot(*poses[0, :2], "o", color="tab:green", label="start")
     if episode.goal is not None:
         ax.plot(*episode.goal, "*", color="tab:red", ms=12, label="goal")
-    plot_robot(ax, poses[-1])
+    plot_robot(ax, poses[at])
     ax.set_title(f"{episode.controller}: {episode.outcome}, {episode.duration:.1f} s")
     ax.set_aspect("equal")
     return ax

@@ -341,9 +341,7 @@ class HistogramPanel:
         self.figure.clf()
         a = self.figure.add_subplot(1, 2, 1)
         b = self.figure.add_subplot(1, 2, 2, projection="polar")
-        plot_episode(a, ep, self.world, echoes=False)
-        poses = ep.truth if ep.truth is not None else ep.odometry
-        a.plot(*poses[k, :2], "o", color="k", ms=8)
+        plot_episode(a, ep, self.world, echoes=False, at=k)
         a.set_title(f"t = {ep.time[k]:.1f} s")
         plot_polar_histogram(b, r.histograms[k], r.threshold, r.steer[k], r.target[k])
         self.runner.check()

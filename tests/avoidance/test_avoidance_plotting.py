@@ -8,6 +8,7 @@ matplotlib.use("Agg")
 
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+from matplotlib.patches import Polygon  # noqa: E402
 
 from robotlib.avoidance import VFH, force_field, run_episode  # noqa: E402
 from robotlib.plotting.avoidance import (  # noqa: E402
@@ -37,6 +38,18 @@ def test_episode_drawings():
     page = animate_episode(ep, BOX, every=20, max_frames=2)
     assert "<img" in page.data or "frames" in page.data
     plt.close("all")
+
+
+def test_episode_draws_the_robot_at_the_cycle_asked():
+    ep = run_episode(BOX, VFH(), goal=(5.0, 2.0), seed=0, max_time=4)
+    k = len(ep.time) // 3
+    fig, ax = plt.subplots()
+    plot_episode(ax, ep, BOX, echoes=False, at=k)
+    (robot,) = [p for p in ax.patches if isinstance(p, Polygon)]
+    centre = robot.get_xy()[:-1].mean(axis=0)
+    assert np.hypot(*(centre - ep.truth[k, :2])) < 0.2
+    assert np.hypot(*(centre - ep.truth[-1, :2])) > 0.3
+    plt.close(fig)
 
 
 def test_polar_histogram_marks_blocked_sectors():
