@@ -90,13 +90,22 @@ def _warm_filter(make: Callable) -> Callable[[], None]:
 
 
 def _warm_plan() -> None:
-    from .planning import CSpace, astar, dijkstra, inflate, rrt, wavefront
+    from .planning import (
+        CSpace,
+        astar,
+        dijkstra,
+        inflate,
+        rrt,
+        wavefront,
+        wavefront_field,
+    )
     from .world import load_world
 
     cs = CSpace.from_array(np.zeros((4, 4), dtype=bool))
     inflate(cs.blocked, 1.0)
     for planner in (astar, dijkstra, wavefront):
         planner(cs, (0.5, 0.5), (3.5, 3.5))
+    wavefront_field(cs, (3.5, 3.5))
     world = load_world("corridor")
     x, y, _ = world.start
     rrt(world, (x, y), (x + 0.5, y), rng=0)

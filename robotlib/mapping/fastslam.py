@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .._config import readonly
 from .._random import as_rng
 from ..localization.resampling import effective_sample_size, systematic_resample
 from ..sensing import SonarModel
@@ -202,7 +203,7 @@ class GridFastSLAM:
         if s.sonar_likelihood == "beam":
             self._kernel("sonar_beam_loglik_many")(
                 self.maps, *self._geometry(), np.ascontiguousarray(poses, dtype=float),
-                self.sonar.sensors, np.ascontiguousarray(ranges, dtype=float),
+                readonly(self.sonar.sensors), np.ascontiguousarray(ranges, dtype=float),
                 self.sonar.cone / 2, self.sonar.max_range, 5, s.sonar_sigma,
                 s.p_rand, s.sonar_occ, s.sonar_unknown, out,
                 s.sonar_range_to == "centre",
@@ -210,7 +211,7 @@ class GridFastSLAM:
             return out
         self._kernel("sonar_loglik_many")(
             self.maps, *self._geometry(), np.ascontiguousarray(poses, dtype=float),
-            self.sonar.sensors, np.ascontiguousarray(ranges, dtype=float),
+            readonly(self.sonar.sensors), np.ascontiguousarray(ranges, dtype=float),
             self.sonar.cone / 2, self.sonar.max_range, 5, self.settings.p_rand, out,
         )  # fmt: skip
         return out
@@ -252,9 +253,9 @@ class GridFastSLAM:
         else:
             m = self.settings.sonar_model
             for k, marks in self._wall_groups:
+                sensors = self.sonar.sensors if k is None else self.sonar.sensors[k]
                 self._kernel("sonar_update_many")(
-                    maps, *self._geometry(), poses,
-                    self.sonar.sensors if k is None else self.sonar.sensors[k],
+                    maps, *self._geometry(), poses, readonly(sensors),
                     z if k is None else np.ascontiguousarray(z[k]),
                     self.sonar.cone / 2, self.sonar.max_range, m.thickness,
                     m.l_occ if marks else 0.0, m.l_free, m.sigma or 0.0,
@@ -321,7 +322,7 @@ class GridFastSLAM:
             return self.weigh_sonar(self.particles, scan)
         ll = np.empty(self.n)
         self._kernel("window_loglik_many", _kernels_window)(
-            self.maps, *self._geometry(), wins, self.sonar.sensors, scans,
+            self.maps, *self._geometry(), wins, readonly(self.sonar.sensors), scans,
             self.sonar.cone / 2,
             self.sonar.max_range, 5, s.sonar_sigma, s.p_rand, s.sonar_occ,
             s.sonar_unknown, ll, s.sonar_range_to == "centre",
