@@ -165,7 +165,19 @@ def _beam_kld(world):
 def _best(world):
     from .localization import MCL
 
-    return MCL.best(world, rng=0, n=10_000)  # threads, chunked noise
+    return MCL.best(world, rng=0, n=10_000)  # the threaded fused step, KLD
+
+
+def _beam_fast(world):
+    from .localization import MCL, BeamSensorModel
+
+    return MCL(world, BeamSensorModel(world, fast=True), n=20, rng=0)
+
+
+def _paper_fast_many(world):
+    from .localization import MCL
+
+    return MCL.paper(world, n=10_000, fast=True, rng=0)  # the threaded fused step
 
 
 WARMUPS: dict[str, Callable[[], None] | list[tuple[str, Callable[[], None]]]] = {
@@ -174,7 +186,9 @@ WARMUPS: dict[str, Callable[[], None] | list[tuple[str, Callable[[], None]]]] = 
         ("the paper's pieces", _warm_mcl_pieces),
         ("MCL.paper", _warm_filter(_paper)),
         ("MCL.paper (fast)", _warm_filter(_paper_fast)),
+        ("MCL.paper (fast, threads)", _warm_filter(_paper_fast_many)),
         ("beam + KLD", _warm_filter(_beam_kld)),
+        ("beam (fast)", _warm_filter(_beam_fast)),
         ("MCL.best (threads)", _warm_filter(_best)),
     ],
     "mapping": _warm_mapping,
