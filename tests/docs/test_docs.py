@@ -2,8 +2,8 @@
 
 The build runs in a temporary copy of the files it reads (``docs/``,
 ``course/``, ``CONTRIBUTING.md``, ``CHANGELOG.md``), so that the gallery's
-generated pages land there and not in the repository. The site must open from disk: no page loads
-a script or a style sheet from the network.
+generated pages land there and not in the repository. The site must open
+from disk: no page loads a script or a style sheet from the network.
 """
 
 from __future__ import annotations
