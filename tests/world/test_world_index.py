@@ -3,6 +3,7 @@
 import math
 
 import numpy as np
+import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -46,6 +47,7 @@ def test_index_distances_equal_the_every_segment_kernel(segs, pts, size):
     np.testing.assert_array_equal(index.distances(pts), ref)
 
 
+@pytest.mark.slow
 @settings(max_examples=40, deadline=None)
 @given(
     st.lists(st.tuples(coords, coords, coords, coords), min_size=1, max_size=60),
