@@ -56,6 +56,7 @@ def test_parse_in_threads_never_raises_system_error():
     assert _in_threads(lambda: astlock.parse(SOURCE)) == []
 
 
+@pytest.mark.slow
 def test_tracebacks_in_threads_never_raise_system_error():
     def fail_and_format():
         try:

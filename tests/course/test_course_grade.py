@@ -595,6 +595,7 @@ def test_a_submission_out_of_restarts_is_graded_not_a_grader_error(tmp_path):
     assert "hanging or crashing" in r.reasons["scale"], r.reasons
 
 
+@pytest.mark.slow
 def test_a_process_that_cannot_start_is_restarted(tmp_path, monkeypatch):
     """The system refusing a process (out of pids) is a restart, not a grader error."""
     import errno
