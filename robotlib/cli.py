@@ -29,7 +29,7 @@ COMMANDS = {
         "write the released labs and the syllabus into a folder of your own",
     ),
     "release": ("robotlib.course.release", "write labs/ from solutions/"),
-    "grade": ("robotlib.course.grade", "grade a folder of submissions in a sandbox"),
+    "grade": ("robotlib.course.command", "grade a folder of submissions in a sandbox"),
     "warmup": ("robotlib.notebook", "compile the numba kernels the labs use, once"),
 }
 """Subcommand name to (module, one-line help)."""

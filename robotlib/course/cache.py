@@ -17,7 +17,11 @@ numba_cache``), made here before the reference run:
 
 The reference run then writes what its checks compile into that folder, and
 each submission gets its own copy (`session`): no sandboxed student process
-ever writes a cache another process reads. Imports nothing of robotlib's but
+ever writes a cache another process reads. `save_reference` keeps the
+reference run's lines with that cache and the font list (in the records
+folder), and `load_reference` gives them back while `reference_key` (the
+solution, the library, the tools) is unchanged: adding a late student or
+folding in hand grades does not repeat the reference run. Imports nothing of robotlib's but
 numba's cache folder naming (`robotlib._kernel_cache`).
 """
 
@@ -31,7 +35,15 @@ from pathlib import Path
 
 from .._kernel_cache import cache_subpath
 
-__all__ = ["cache_subpath", "instructor_cache_dirs", "prewarm", "seed"]
+__all__ = [
+    "cache_subpath",
+    "instructor_cache_dirs",
+    "load_reference",
+    "prewarm",
+    "reference_key",
+    "save_reference",
+    "seed",
+]
 
 _SUFFIXES = (".nbi", ".nbc")
 
@@ -125,3 +137,68 @@ def prewarm(setup: str, mplconfig: Path | None = None, timeout: float = 1800.0) 
     if proc.returncode != 0:
         return f"the set-up cell failed: {proc.stderr.strip()[-300:]}"
     return ""
+
+
+def reference_key(solution_text: str, lab: str) -> str:
+    """Return a hash of what the reference run's results depend on.
+
+    The solution, the lab's name, the library's sources and worlds (names,
+    sizes, times), Python's, numpy's and numba's versions: a saved reference
+    run is reused only while none of them changed.
+    """
+    import hashlib
+
+    import numba
+    import numpy
+
+    h = hashlib.sha256(f"{lab}\0{sys.version}\0{numpy.__version__}\0".encode())
+    h.update(f"{numba.__version__}\0".encode())
+    h.update(solution_text.encode("utf-8", "surrogateescape"))
+    pkg = Path(__file__).resolve().parents[1]
+    for p in sorted(pkg.rglob("*.py")):
+        h.update(str(p.relative_to(pkg)).encode())
+        h.update(p.read_bytes())
+    worlds = pkg.parent / "worlds"
+    for p in sorted(worlds.rglob("*")) if worlds.is_dir() else ():
+        st = p.stat()
+        h.update(f"{p.relative_to(worlds)}\0{st.st_size}\0{st.st_mtime_ns}".encode())
+    return h.hexdigest()[:32]
+
+
+def load_reference(folder: Path, key: str, opts) -> dict | None:
+    """Return a saved reference run's ``CHECK`` lines, its caches copied; or None.
+
+    ``opts.numba_cache`` and ``opts.mpl_cache`` receive the warmed class
+    cache and font list saved with it.
+    """
+    import json
+
+    try:
+        data = json.loads((folder / "reference.json").read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None
+    if not isinstance(data, dict) or data.get("key") != key:
+        return None
+    for name, dst in (("numba", opts.numba_cache), ("matplotlib", opts.mpl_cache)):
+        if (folder / name).is_dir():
+            shutil.copytree(folder / name, dst, dirs_exist_ok=True)
+    return data.get("lines")
+
+
+def save_reference(folder: Path, key: str, lines: dict, opts) -> None:
+    """Save a reference run (lines, warmed class cache, font list) under ``folder``.
+
+    Written beside it and renamed into place: a run interrupted while saving
+    leaves the previous one or none, never half of one.
+    """
+    import json
+
+    tmp = folder.with_name(f"{folder.name}.{os.getpid()}.tmp")
+    shutil.rmtree(tmp, ignore_errors=True)
+    tmp.mkdir(parents=True)
+    for name, src in (("numba", opts.numba_cache), ("matplotlib", opts.mpl_cache)):
+        if src is not None and src.is_dir():
+            shutil.copytree(src, tmp / name, symlinks=False)
+    (tmp / "reference.json").write_text(json.dumps({"key": key, "lines": lines}))
+    shutil.rmtree(folder, ignore_errors=True)
+    tmp.rename(folder)

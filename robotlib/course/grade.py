@@ -31,11 +31,9 @@ submissions are kept, nothing keeps running.
 
 from __future__ import annotations
 
-import argparse
 import hashlib
 import os
 import signal
-import sys
 import threading
 import time
 from pathlib import Path
@@ -45,21 +43,13 @@ import nbformat
 from . import cache as numba_cache
 from . import sandbox as sb
 from .astlock import format_exc
-from .gradebook import (
-    HandGrades,
-    Records,
-    Result,
-    export_manual,
-    read_manual,
-    write_feedback,
-    write_gradebook,
-)
-from .notebooks import META_KEY, NotebookError, notebook_text, read_notebook
+from .gradebook import Again, Records, Result, write_gradebook
+from .notebooks import META_KEY, notebook_text, read_notebook
 from .parallel import Bar, dask_map, raise_interrupt, thread_map
 from .plan import LabPlan, lab_plan, normalized, scan_submission, student_cells
 from .release import project_dir
 from .session import JOB_ENV, Options, run_submission
-from .submissions import find_submissions
+from .submissions import check_lab, find_submissions, pick
 
 __all__ = [
     "GradeError",
@@ -70,9 +60,8 @@ __all__ = [
     "grade",
     "grade_notebook",
     "reference_run",
+    "solution_path",
     "write_gradebook",
-    "add_arguments",
-    "run",
 ]
 
 GradeOptions = Options
@@ -251,6 +240,16 @@ def reference_run(plan: LabPlan, solution: dict, opts: Options) -> dict:
     return res.check_lines
 
 
+def solution_path(lab: str) -> Path:
+    """Return ``solutions/<lab>.ipynb``; a clear error lists the labs if absent."""
+    folder = project_dir() / "solutions"
+    path = folder / f"{lab}.ipynb"
+    if not path.exists():
+        labs = ", ".join(sorted(p.stem for p in folder.glob("*.ipynb"))) or "none"
+        raise GradeError(f"no lab {lab!r} in {folder} (labs: {labs})")
+    return path
+
+
 def _fingerprint(path: Path | None, solution_text: str) -> str:
     h = hashlib.sha256(solution_text.encode())
     if path is not None:
@@ -308,6 +307,7 @@ def grade(
     records: str | Path | None = None,
     regrade: bool = False,
     scheduler: str | None = None,
+    students: list[str] | None = None,
 ) -> tuple[list[Result], list]:
     """Grade every submission of a folder.
 
@@ -333,6 +333,8 @@ def grade(
         Grade every submission again.
     scheduler : str, optional
         ``"local"`` or a ``dask.distributed`` scheduler address.
+    students : list of str, optional
+        Grade (again) only these students; the others are left as recorded.
 
     Returns
     -------
@@ -351,21 +353,28 @@ def grade(
     opts = opts or Options()
     if opts.sandbox and (why := sb.available()):
         raise GradeError(f"no sandbox: {why}; pass --no-sandbox to grade without")
-    solution = (
-        Path(solution) if solution else project_dir() / "solutions" / f"{lab}.ipynb"
-    )
-    sol_text = notebook_text(read_notebook(solution))
+    solution = Path(solution) if solution else solution_path(lab)
+    sol_nb = read_notebook(solution)
+    sol_text = notebook_text(sol_nb)
     plan = _plan(sol_text, lab)
     subs = find_submissions(submissions, lab)
+    if not subs:
+        raise GradeError(f"no submissions in {submissions}")
+    try:
+        check_lab(sol_nb, lab, [p for _, p, _ in subs if p is not None])
+        subs = pick(subs, students) if students else subs
+    except ValueError as exc:
+        raise GradeError(str(exc)) from None
     jobs = max(1, jobs or os.cpu_count() or 1)
     store = Records(records, lab) if records else None
+    again = Again(store, [s for s, _, _ in subs] if regrade or students else None)
     stop = threading.Event()
     opts.stop = stop
     results: dict[str, Result] = {}
     todo = []
     for student, path, status in subs:
         fp = _fingerprint(path, sol_text)
-        old = store.load(student) if store and not regrade else None
+        old = store.load(student) if store and student not in again else None
         if old is not None and old[1] == fp and old[0].status != OVERLOADED:
             results[student] = old[0]
             continue
@@ -383,10 +392,20 @@ def grade(
             opts.numba_cache.mkdir()
             opts.mpl_cache = Path(c) / "matplotlib"
             opts.mpl_cache.mkdir()
-            numba_cache.prewarm(plan.setup, opts.mpl_cache)
-            numba_cache.seed(opts.numba_cache)
-            reference = reference_run(plan, read_notebook(solution), opts)
-            bar.advance("(reference run)")
+            saved = store.folder / ".reference" if store else None
+            key = numba_cache.reference_key(sol_text, lab)
+            reference = None
+            if saved is not None and not regrade:
+                reference = numba_cache.load_reference(saved, key, opts)
+            if reference is None:
+                numba_cache.prewarm(plan.setup, opts.mpl_cache)
+                numba_cache.seed(opts.numba_cache)
+                reference = reference_run(plan, sol_nb, opts)
+                if saved is not None:
+                    numba_cache.save_reference(saved, key, reference, opts)
+                bar.advance("(reference run)")
+            else:
+                bar.advance("(reference run: saved)")
             fps = {t[0]: t[3] for t in todo}
 
             def done(data: dict) -> None:
@@ -394,6 +413,7 @@ def grade(
                 results[r.student] = r
                 if store is not None and not r.status.startswith("interrupted"):
                     store.save(r, fps[r.student])
+                    again.done(r.student)
                 bar.advance(f"{r.student}: {r.total:g}/{r.max_points:g}")
 
             tasks = []
@@ -427,167 +447,3 @@ def grade(
         if old_term is not None:
             signal.signal(signal.SIGTERM, old_term)
     return [results[k] for k in sorted(results)], items
-
-
-def fold_manual(results: list[Result], items, hand: HandGrades) -> int:
-    """Put the instructor's hand grades into ``results``; return how many are missing.
-
-    A written answer without a score has no points entry (the gradebook
-    shows it empty, not 0); a comment reaches the feedback.
-    """
-    missing = 0
-    for r in results:
-        for c in (c for c in items if c.manual):
-            got = hand.get(r.student, c.grade_id)
-            comment = f": {got['comment']}" if got.get("comment") else ""
-            if "score" in got:
-                r.points[c.grade_id] = float(got["score"])
-                r.reasons[c.grade_id] = f"graded by hand{comment}"
-            else:
-                r.points.pop(c.grade_id, None)  # a record of an older release: 0
-                if c.grade_id in r.answers:
-                    missing += 1
-                    r.reasons[c.grade_id] = UNGRADED + comment
-    return missing
-
-
-# -- command line ------------------------------------------------------------------
-
-
-def add_arguments(parser: argparse.ArgumentParser) -> None:
-    """Add the ``grade`` options to ``parser``."""
-    parser.add_argument("submissions", type=Path, help="folder of submissions")
-    parser.add_argument("--lab", required=True, help="lab name (solutions/<lab>.ipynb)")
-    parser.add_argument(
-        "--out", type=Path, default=Path("gradebook.csv"), help="gradebook CSV"
-    )
-    parser.add_argument(
-        "--feedback",
-        type=Path,
-        help="feedback folder (default: <out>-feedback/ next to --out)",
-    )
-    parser.add_argument("--solution", type=Path, help="the lab's source notebook")
-    parser.add_argument(
-        "--jobs", "-j", type=int, help="submissions at once (default: cores)"
-    )
-    parser.add_argument(
-        "--cell-timeout",
-        type=float,
-        default=60.0,
-        help="s per student cell, call or check: CPU time, or wall time not spent "
-        "waiting for a CPU (default: %(default)s)",
-    )
-    parser.add_argument(
-        "--timeout",
-        type=float,
-        default=600.0,
-        help="s of CPU time per submission in total (default: %(default)s)",
-    )
-    parser.add_argument(
-        "--backstop",
-        type=float,
-        default=10.0,
-        help="wall-time limit, in multiples of the limits above: a submission "
-        "that reaches it is reported 'machine overloaded: re-grade', never "
-        "scored (default: %(default)s)",
-    )
-    parser.add_argument(
-        "--restarts", type=int, default=3, help="restarts after a hang or crash"
-    )
-    parser.add_argument("--memory", type=float, default=6.0, help="GiB per process")
-    parser.add_argument("--regrade", action="store_true", help="grade all again")
-    parser.add_argument(
-        "--manual", type=Path, help="fold in the written answers' scores (CSV)"
-    )
-    parser.add_argument(
-        "--no-sandbox",
-        action="store_true",
-        help="grade without bubblewrap (recorded in the gradebook)",
-    )
-    parser.add_argument(
-        "--scheduler",
-        help="grade on Dask: 'local' or a scheduler address (extra grade-dask)",
-    )
-    parser.add_argument("--keep", action="store_true", help="keep the working folders")
-    parser.add_argument("--quiet", "-q", action="store_true", help="no progress bar")
-
-
-def run(args: argparse.Namespace) -> int:
-    """Run ``robotlib grade``; return the exit status."""
-    limits = sb.Limits(memory=int(args.memory * (1 << 30)))
-    opts = Options(
-        cell_timeout=args.cell_timeout,
-        timeout=args.timeout,
-        backstop=args.backstop,
-        restarts=args.restarts,
-        keep=args.keep,
-        sandbox=not args.no_sandbox,
-        limits=limits,
-    )
-    t0 = time.monotonic()
-    records = args.out.with_name(f"{args.out.stem}-records")
-    status = 0
-    try:
-        results, items = grade(
-            args.submissions,
-            args.lab,
-            args.solution,
-            args.jobs,
-            opts,
-            not args.quiet,
-            records,
-            args.regrade,
-            args.scheduler,
-        )
-    except (GradeError, NotebookError, FileNotFoundError, ImportError) as exc:
-        sys.stderr.write(f"robotlib grade: {exc}\n")
-        return 2
-    except KeyboardInterrupt:
-        sys.stderr.write(
-            "robotlib grade: interrupted; finished submissions are kept in "
-            f"{records}/, run again to resume\n"
-        )
-        results = Records(records, args.lab).all()
-        items = _plan(
-            notebook_text(
-                read_notebook(
-                    args.solution or project_dir() / "solutions" / f"{args.lab}.ipynb"
-                )
-            ),
-            args.lab,
-        )
-        items = items.checks + items.manual
-        status = 130
-    manual = [c for c in items if c.manual]
-    sheet = args.out.with_name(f"{args.out.stem}-manual.csv")
-    try:  # what the instructor typed into the sheet is kept before it is rewritten
-        hand = HandGrades(args.out.with_name(f"{args.out.stem}-hand.json"))
-        for src in (sheet if sheet.exists() else None, args.manual):
-            if src is not None and manual:
-                hand.merge(read_manual(src, manual))
-        if hand.grades:
-            hand.save()
-    except (OSError, ValueError) as exc:
-        sys.stderr.write(f"robotlib grade: {exc}\n")
-        return 2
-    ungraded = fold_manual(results, items, hand)
-    write_gradebook(args.out, results, items)
-    if manual:
-        export_manual(sheet, results, manual, hand)
-    feedback = args.feedback or args.out.with_name(f"{args.out.stem}-feedback")
-    write_feedback(feedback, results, items, args.lab)
-    auto = [c for c in items if not c.manual]
-    full = sum(all(r.points.get(c.grade_id) == c.points for c in auto) for r in results)
-    if busy := sum(r.status == OVERLOADED for r in results):
-        sys.stderr.write(
-            f"robotlib grade: the machine was too busy to grade {busy} submissions "
-            "within the wall-time backstop; run the same command again to grade them\n"
-        )
-    sys.stderr.write(
-        f"graded {len(results)} submissions of {args.lab} "
-        f"in {time.monotonic() - t0:.1f} s "
-        f"({full} full marks on the automatic checks"
-        + (f", {ungraded} written answers to grade in {sheet}" if ungraded else "")
-        + f"); gradebook {args.out}, feedback in {feedback}/\n"
-    )
-    return status

@@ -35,6 +35,7 @@ from .notebooks import CheckCell
 
 __all__ = [
     "Result",
+    "Again",
     "Records",
     "write_gradebook",
     "gradebook_rows",
@@ -129,13 +130,59 @@ class Records:
         """Every stored result."""
         out = []
         for p in sorted(self.folder.glob("*.json")):
+            if p.name.startswith("."):
+                continue  # the grader's own lists
             try:
                 data = json.loads(p.read_text(encoding="utf-8"))
             except (OSError, ValueError):
                 continue
-            if data.get("lab") == self.lab:
+            if isinstance(data, dict) and data.get("lab") == self.lab:
                 out.append(Result.from_json(data))
         return out
+
+
+class Again:
+    """Students to grade again, kept on disk until each is graded (``--regrade``).
+
+    An interrupted ``--regrade`` (or ``--student``) is finished by the next
+    plain run: without this, the students it had not reached yet would keep
+    their earlier grades silently.
+
+    Parameters
+    ----------
+    store : Records or None
+        Where the list is kept (``.again.json`` in the records folder).
+    students : list of str, optional
+        Start grading these again (None: take up the list left on disk).
+    """
+
+    def __init__(self, store: Records | None, students: list[str] | None):
+        self.path = store.folder / ".again.json" if store is not None else None
+        self.left: set[str] = set(students or ())
+        if students is None and self.path is not None and self.path.exists():
+            try:
+                self.left = set(json.loads(self.path.read_text(encoding="utf-8")))
+            except (OSError, ValueError):
+                self.left = set()
+        self.resumed = students is None and bool(self.left)
+        self._write()
+
+    def __contains__(self, student: str) -> bool:
+        return student in self.left
+
+    def done(self, student: str) -> None:
+        """Strike ``student`` off the list."""
+        if student in self.left:
+            self.left.discard(student)
+            self._write()
+
+    def _write(self) -> None:
+        if self.path is None:
+            return
+        if self.left:
+            _atomic(self.path, json.dumps(sorted(self.left)))
+        elif self.path.exists():
+            self.path.unlink()
 
 
 def gradebook_rows(results: list[Result], checks: list[CheckCell]) -> list[dict]:

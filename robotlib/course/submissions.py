@@ -11,10 +11,11 @@ need not be UTF-8 or ASCII. Imports nothing of robotlib's.
 
 from __future__ import annotations
 
+import json
 import os
 from pathlib import Path
 
-__all__ = ["find_submissions"]
+__all__ = ["check_lab", "find_submissions", "pick"]
 
 
 def _name(p: Path) -> str:
@@ -79,3 +80,50 @@ def find_submissions(
         name = student if seen[student] == 1 else f"{student}#{seen[student]}"
         unique.append((name, path, status))
     return unique
+
+
+def pick(subs: list[tuple], students: list[str]) -> list[tuple]:
+    """Keep the submissions of ``students`` (exact names); ValueError if absent."""
+    names = {s[0] for s in subs}
+    missing = [n for n in students if n not in names]
+    if missing:
+        import difflib
+
+        near = {n: difflib.get_close_matches(n, names, 3, 0.5) for n in missing}
+        hint = "; ".join(
+            f"{n!r} (close: {', '.join(c) or 'none'})" for n, c in near.items()
+        )
+        raise ValueError(f"no submission of {hint}")
+    return [s for s in subs if s[0] in students]
+
+
+def _lab_of(path: Path) -> str | None:
+    try:
+        meta = json.loads(path.read_bytes()).get("metadata", {}).get("robotlib", {})
+    except (OSError, ValueError, AttributeError):
+        return None
+    return meta.get("lab") if isinstance(meta, dict) else None
+
+
+def check_lab(solution: dict, lab: str, notebooks: list[Path]) -> None:
+    """Refuse to grade notebooks of another lab (``metadata.robotlib.lab``).
+
+    Raises
+    ------
+    ValueError
+        When most submissions that name their lab name one other than the
+        solution's: grading them would give everyone zero.
+    """
+    meta = (solution.get("metadata") or {}).get("robotlib") or {}
+    want = meta.get("lab") if isinstance(meta, dict) else None
+    if want is None:
+        return
+    named = [x for x in map(_lab_of, notebooks) if x is not None]
+    other = [x for x in named if x != want]
+    if named and len(other) * 2 > len(named):
+        common = max(set(other), key=other.count)
+        raise ValueError(
+            f"{len(other)} of {len(named)} notebooks are lab {common!r} "
+            f"(their metadata), the solution of --lab {lab} is lab {want!r}: "
+            "pick the lab they were handed out as"
+        )

@@ -15,7 +15,8 @@ import sys
 
 import pytest
 
-from robotlib.course.grade import UNGRADED, fold_manual
+from robotlib.course.command import fold_manual
+from robotlib.course.grade import UNGRADED
 from robotlib.course.gradebook import (
     HandGrades,
     Result,

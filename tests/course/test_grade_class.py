@@ -1,0 +1,112 @@
+"""The instructor's everyday runs: one student again, a late student, a wrong lab.
+
+``--student`` grades one student again with the options given and the
+gradebook keeps everyone else; a folder holding only a late student merges
+into the class's gradebook; the reference run is saved with its caches and
+not repeated; an interrupted re-grade is finished by the next run; a wrong
+``--lab``, an empty folder or an unknown student is a clear error.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import subprocess
+import sys
+
+import nbformat
+import pytest
+
+from robotlib.course import grade as g
+from robotlib.course.gradebook import Again, Records
+from robotlib.course.notebooks import read_notebook, release_notebook, write_notebook
+from robotlib.course.submissions import check_lab, pick
+from tests.course.test_course_grade import MEAN, TINY, with_cell
+from tests.sandboxing import need_sandbox
+
+
+def _cli(subs, out, *extra):
+    cmd = [sys.executable, "-m", "robotlib.cli", "grade", str(subs), "--lab", "tiny",
+           "--solution", str(TINY), "--out", str(out), "--cell-timeout", "20",
+           "--jobs", "2", "--quiet", *extra]  # fmt: skip
+    return subprocess.run(cmd, capture_output=True, text=True, timeout=600)
+
+
+def _rows(out):
+    with open(out, newline="", encoding="utf-8") as f:
+        return {r["student"]: r for r in csv.DictReader(f)}
+
+
+@pytest.mark.slow
+def test_one_student_again_and_a_late_one_merge_into_the_class(tmp_path):
+    need_sandbox()
+    sol = read_notebook(TINY)
+    subs, late = tmp_path / "subs", tmp_path / "late"
+    nap = "import time\ndef mean(xs):\n    time.sleep(3)\n    return sum(xs) / len(xs)"
+    slow = with_cell(sol, MEAN, nap)
+    released = release_notebook(sol, "tiny")
+    for name, nb in (("ann", sol), ("bob", released), ("cy", slow)):
+        (subs / name).mkdir(parents=True)
+        write_notebook(nb, subs / name / "tiny.ipynb")
+    out = tmp_path / "gb.csv"
+    proc = _cli(subs, out, "--cell-timeout", "2")
+    assert proc.returncode == 0, proc.stderr
+    first = _rows(out)
+    assert first["cy"]["mean"] == "0" and first["ann"]["total"] == "4"
+    saved = out.with_name("gb-records") / ".reference" / "reference.json"
+    stamp = saved.stat().st_mtime_ns
+
+    # cy again with a longer cell limit: only cy is graded, everyone is kept
+    proc = _cli(subs, out, "--student", "cy")
+    assert proc.returncode == 0, proc.stderr
+    assert "graded 1 submissions" in proc.stderr, proc.stderr
+    again = _rows(out)
+    assert again["cy"]["mean"] == "2", again["cy"]["notes"]
+    assert again["ann"] == first["ann"] and again["bob"] == first["bob"]
+    assert saved.stat().st_mtime_ns == stamp  # the reference run was not repeated
+
+    # a late student in a folder of their own, same --out: a row added
+    (late / "dee").mkdir(parents=True)
+    write_notebook(sol, late / "dee" / "tiny.ipynb")
+    proc = _cli(late, out)
+    assert proc.returncode == 0, proc.stderr
+    assert set(_rows(out)) == {"ann", "bob", "cy", "dee"}
+
+    bad = _cli(subs, out, "--student", "cyy")
+    assert bad.returncode == 2 and "'cyy' (close: cy)" in bad.stderr
+    (tmp_path / "empty").mkdir()
+    empty = _cli(tmp_path / "empty", tmp_path / "e.csv")
+    assert empty.returncode == 2 and "no submissions" in empty.stderr
+
+
+def test_an_interrupted_regrade_is_finished_by_the_next_run(tmp_path):
+    store = Records(tmp_path / "records", "tiny")
+    again = Again(store, ["ann", "bob", "cy"])
+    again.done("ann")  # interrupted here
+    later = Again(store, None)
+    assert "bob" in later and "cy" in later and "ann" not in later
+    assert later.resumed
+    later.done("bob")
+    later.done("cy")
+    assert not (tmp_path / "records" / ".again.json").exists()
+    assert "bob" not in Again(store, None)
+    assert Records(tmp_path / "records", "tiny").all() == []  # its list is no record
+
+
+def test_wrong_lab_unknown_student_and_missing_lab_say_what_to_do(tmp_path):
+    sol = nbformat.v4.new_notebook(metadata={"robotlib": {"lab": "lab4"}})
+    paths = []
+    for i in range(3):
+        nb = nbformat.v4.new_notebook(metadata={"robotlib": {"lab": "lab2"}})
+        paths.append(tmp_path / f"s{i}.ipynb")
+        paths[-1].write_text(nbformat.writes(nb))
+    with pytest.raises(ValueError, match="3 of 3 notebooks are lab 'lab2'"):
+        check_lab(sol, "lab4_navigation", paths)
+    check_lab(sol, "lab4_navigation", paths[:0])  # nothing to go by: grade
+    subs = [("Ada", None, ""), ("Bob", None, "")]
+    assert pick(subs, ["Bob"]) == [("Bob", None, "")]
+    with pytest.raises(ValueError, match="'ada' \\(close: Ada\\)"):
+        pick(subs, ["ada"])
+    with pytest.raises(g.GradeError, match="labs: .*lab4_navigation"):
+        g.solution_path("lab4")
+    assert json.loads(paths[0].read_text())["metadata"]["robotlib"]["lab"] == "lab2"
