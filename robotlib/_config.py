@@ -73,12 +73,7 @@ JIT_PARALLEL = {**JIT, "parallel": True}
 """Options for ``numba.njit`` on kernels that loop with ``prange``."""
 
 
-def jit_inner(fn):
-    """``numba.njit(**JIT)(fn)``: transitional, for the old localization kernels."""
-    return nb.njit(**JIT)(fn)
-
-
-def serial_and_parallel(body, inner: bool = False):
+def serial_and_parallel(body):
     """Compile one kernel body twice: serially, and over threads.
 
     ``body`` loops over its particles (or poses) with ``numba.prange``, which
@@ -90,8 +85,6 @@ def serial_and_parallel(body, inner: bool = False):
     ----------
     body : function
         The plain Python function (not yet compiled).
-    inner : bool
-        Ignored (transitional, for the old localization kernels).
 
     Returns
     -------
