@@ -25,7 +25,7 @@ from .base import Controller, goal_in_robot_frame, sonar_endpoints
 from .bug2 import Bug2
 from .dwa import DWA, choose_velocity, dynamic_window, evaluate_window
 from .dwa_settings import DWASettings
-from .episode import OUTCOMES, Episode, run_episode, run_episodes
+from .episode import OUTCOMES, TRUE_TOLERANCE, Episode, run_episode, run_episodes
 from .potential import PotentialField, force_field, potential_force
 from .reactive import BRAITENBERG, Braitenberg, WallFollower, sonar_activation
 from .vfh import VFH, choose_direction, polar_histogram, smooth_histogram
@@ -59,6 +59,7 @@ __all__ = [
     "run_episode",
     "run_episodes",
     "OUTCOMES",
+    "TRUE_TOLERANCE",
     "AVOID_WORLDS",
     "StartGoal",
     "start_goal_pairs",

@@ -18,12 +18,14 @@ BENCHES = {
     "avoid": "robotlib.experiments.bench_avoid",
     "map": "robotlib.experiments.bench_map",
     "slam": "robotlib.experiments.bench_map",
+    "graphslam": "robotlib.experiments.bench_graphslam",
     "logs": "robotlib.experiments.bench_logs",
     "histogram": "robotlib.experiments.bench_histogram",
     "plan": "robotlib.experiments.bench_plan",
     "nav": "robotlib.experiments.bench_nav",
     "large-map": "robotlib.experiments.bench_large_map",
     "buildings": "robotlib.experiments.bench_buildings",
+    "worlds": "robotlib.experiments.bench_worlds",
 }
 """Topic name to the module that measures it."""
 

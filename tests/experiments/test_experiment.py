@@ -51,6 +51,7 @@ def test_localized_step():
     assert localized_step([0.1, 0.9]) is None
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("fast", [False, True])
 def test_paper_filter_is_reproducible_bit_for_bit(route, fast):
     config = experiment.FilterConfig("p", "paper", {"n": 200, "fast": fast})
@@ -173,6 +174,7 @@ def test_bench_mcl_cli_writes_json(tmp_path):
     assert all(0 < r["ms_min"] <= r["ms_per_step"] for r in results)
 
 
+@pytest.mark.slow
 def test_bench_buildings_times_the_set_up_and_the_step_in_a_fresh_process():
     """A small building: the fast path, its parts, its peak and a timed step."""
     from robotlib.experiments.bench_buildings import bench_building, verdict

@@ -7,6 +7,8 @@ import subprocess
 import sys
 import textwrap
 
+import pytest
+
 from robotlib._kernel_cache import DIGEST_NAME, cache_subpath, check, kernel_sources
 
 BASE = "import numba as nb\n\n@nb.njit(cache=True)\ndef base():\n    return {}\n"
@@ -51,6 +53,7 @@ def _run_twice(tmp, pkg, cache_root: str) -> int:
     return int(out.stdout.split()[-1])
 
 
+@pytest.mark.slow
 def test_a_changed_callee_in_another_file_is_compiled_afresh(tmp_path):
     """numba alone keeps the caller's old compiled callee; the check deletes it."""
     pkg = _package(tmp_path, 1)
