@@ -53,7 +53,8 @@ def plot_episode(ax, episode, world=None, echoes: bool = True, label=None, at=-1
     if episode.goal is not None:
         ax.plot(*episode.goal, "*", color="tab:red", ms=12, label="goal")
     plot_robot(ax, poses[at])
-    ax.set_title(f"{episode.controller}: {episode.outcome}, {episode.duration:.1f} s")
+    outcome = episode.outcome.replace("_", " ")  # "local minimum"
+    ax.set_title(f"{episode.controller}: {outcome}, {episode.duration:.1f} s")
     ax.set_aspect("equal")
     return ax
 

@@ -237,8 +237,9 @@ class EpisodePanel:
         self.episode = ep = result[0]
         self.output.outputs = (result[1],)
         self.output.remove_class("robotlib-stale")
+        outcome = ep.outcome.replace("_", " ")  # "local minimum", not the code's name
         self.status.value = (
-            f"{ep.controller}: {ep.outcome} after {ep.duration:.1f} s, "
+            f"{ep.controller}: {outcome} after {ep.duration:.1f} s, "
             f"min clearance {ep.min_clearance:.2f} m, {ep.collisions} collision(s)"
         )
         self.status.answered(request["front"], busy=self.runner.newer_waiting)

@@ -50,7 +50,7 @@ def test_episode_panel_says_it_runs_first_and_what_failed():
 
     panel = panels.EpisodePanel("utrap", kind="potential field")
     assert "robotlib-stale" not in panel.output._dom_classes
-    assert panel.status.value.startswith("potential field: local_minimum")
+    assert panel.status.value.startswith("potential field: local minimum")
     panel.parts["histogram"] = histogram
     with pytest.raises(RuntimeError, match="not written yet"):
         panel.kind.value = "VFH"
