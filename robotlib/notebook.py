@@ -142,7 +142,8 @@ def _warm_models() -> None:
     z = np.full(8, 2.0)
     BeamSensorModel(world).log_likelihood(poses, z)
     fast = BeamSensorModel(world, fast=True, params=BeamParameters(exponent=0.2))
-    fast.log_likelihood(np.tile(poses, (100, 1)), z)
+    fast.log_likelihood(np.tile(poses, (100, 1)), z)  # the table, looked up
+    fast.table.lookup(np.tile(poses, (2000, 1)))  # over threads (4,096 poses and up)
 
 
 def _paper(world):
