@@ -156,7 +156,12 @@ def _information(cov, floor) -> np.ndarray:
 
 
 def graph_slam(
-    odometry, scans, angles, max_range: float, settings: GraphSLAMSettings | None = None
+    odometry,
+    scans,
+    angles,
+    max_range: float,
+    settings: GraphSLAMSettings | None = None,
+    mount=(0.0, 0.0, 0.0),
 ) -> GraphSLAMResult:
     """Build and optimise a pose graph from a laser log.
 
@@ -165,13 +170,16 @@ def graph_slam(
     odometry : array_like, shape (T, 3)
         Odometry pose of each scan, m and rad.
     scans : array_like, shape (T, B)
-        Laser ranges, m (the laser at the robot's centre, facing ahead).
+        Laser ranges, m.
     angles : array_like, shape (B,)
         Beam angles in the robot frame, rad.
     max_range : float
         The sensor's "no echo" range, m (the settings' ``max_range`` also
         applies).
     settings : GraphSLAMSettings, optional
+    mount : array_like, shape (3,)
+        The laser's pose in the robot frame, m and rad (a P3-DX's LMS-200:
+        18 mm ahead of the centre).
 
     Returns
     -------
@@ -190,7 +198,8 @@ def graph_slam(
         raise ValueError("odometry must be finite")
     rmax = min(float(max_range), s.max_range)
     kf = _keyframes(odo, s.keyframe_distance, s.keyframe_angle)
-    points = [scan_to_points(z[t], ang, rmax) for t in kf]
+    mount = np.asarray(mount, dtype=float).reshape(3)
+    points = [transform_points(mount, scan_to_points(z[t], ang, rmax)) for t in kf]
     sig = np.array(s.odometry_sigma)
     odo_info = np.diag(1.0 / sig**2)
     graph = PoseGraph()
