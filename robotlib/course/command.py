@@ -155,6 +155,10 @@ def run(args: argparse.Namespace) -> int:
     )
     t0, wall0 = time.monotonic(), time.time()
     records = args.out.with_name(f"{args.out.stem}-records")
+    feedback = args.feedback or args.out.with_name(f"{args.out.stem}-feedback")
+    sheet = args.out.with_name(f"{args.out.stem}-manual.csv")
+    hand_path = args.out.with_name(f"{args.out.stem}-hand.json")
+    outputs = (args.out, records, feedback, sheet, hand_path)  # never students
     status = 0
     try:
         results, items = grade(
@@ -168,6 +172,7 @@ def run(args: argparse.Namespace) -> int:
             args.regrade,
             args.scheduler,
             args.student,
+            outputs,
         )
     except (GradeError, NotebookError, FileNotFoundError, ImportError) as exc:
         sys.stderr.write(f"robotlib grade: {exc}\n")
@@ -188,9 +193,8 @@ def run(args: argparse.Namespace) -> int:
     earlier = [r for r in Records(records, args.lab).all() if r.student not in here]
     results = sorted(results + earlier, key=lambda r: r.student)
     manual = [c for c in items if c.manual]
-    sheet = args.out.with_name(f"{args.out.stem}-manual.csv")
     try:  # what the instructor typed into the sheet is kept before it is rewritten
-        hand = HandGrades(args.out.with_name(f"{args.out.stem}-hand.json"))
+        hand = HandGrades(hand_path)
         for src in (sheet if sheet.exists() else None, args.manual):
             if src is not None and manual:
                 hand.merge(read_manual(src, manual))
@@ -203,7 +207,6 @@ def run(args: argparse.Namespace) -> int:
     write_gradebook(args.out, results, items)
     if manual:
         export_manual(sheet, results, manual, hand)
-    feedback = args.feedback or args.out.with_name(f"{args.out.stem}-feedback")
     write_feedback(feedback, results, items, args.lab)
     auto = [c for c in items if not c.manual]
     full = sum(all(r.points.get(c.grade_id) == c.points for c in auto) for r in results)

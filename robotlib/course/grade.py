@@ -49,7 +49,7 @@ from .parallel import Bar, dask_map, raise_interrupt, thread_map
 from .plan import LabPlan, lab_plan, normalized, scan_submission, student_cells
 from .release import project_dir
 from .session import JOB_ENV, Options, run_submission
-from .submissions import check_lab, find_submissions, pick
+from .submissions import check_lab, copies, find_submissions, pick
 
 __all__ = [
     "GradeError",
@@ -308,6 +308,7 @@ def grade(
     regrade: bool = False,
     scheduler: str | None = None,
     students: list[str] | None = None,
+    exclude: tuple[Path, ...] = (),
 ) -> tuple[list[Result], list]:
     """Grade every submission of a folder.
 
@@ -335,6 +336,9 @@ def grade(
         ``"local"`` or a ``dask.distributed`` scheduler address.
     students : list of str, optional
         Grade (again) only these students; the others are left as recorded.
+    exclude : tuple of pathlib.Path
+        Paths inside the submissions folder that are not submissions (the
+        grader's own outputs).
 
     Returns
     -------
@@ -357,7 +361,7 @@ def grade(
     sol_nb = read_notebook(solution)
     sol_text = notebook_text(sol_nb)
     plan = _plan(sol_text, lab)
-    subs = find_submissions(submissions, lab)
+    subs = find_submissions(submissions, lab, exclude)
     if not subs:
         raise GradeError(f"no submissions in {submissions}")
     try:
@@ -407,9 +411,16 @@ def grade(
             else:
                 bar.advance("(reference run: saved)")
             fps = {t[0]: t[3] for t in todo}
+            notes = {
+                s: [f"several copies of the lab: graded the newest, {p.name} "
+                    f"(not {', '.join(c.name for c in others)})"]
+                for s, p, _, _ in todo
+                if p is not None and (others := copies(p, lab))
+            }  # fmt: skip
 
             def done(data: dict) -> None:
                 r = Result.from_json(data)
+                r.flags += notes.get(r.student, [])
                 results[r.student] = r
                 if store is not None and not r.status.startswith("interrupted"):
                     store.save(r, fps[r.student])
