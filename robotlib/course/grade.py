@@ -173,6 +173,7 @@ def grade_notebook(
         return result
     result.answers = _answers(plan, nb)
     cells = student_cells(plan, nb)
+    result.code = {c["exercise"]: c["source"] for c in cells if c["exercise"]}
     zero, flags = scan_submission(plan, cells)
     result.flags += flags
     out = run_submission(plan, cells, opts, slot)
@@ -411,6 +412,7 @@ def grade(
             else:
                 bar.advance("(reference run: saved)")
             fps = {t[0]: t[3] for t in todo}
+            times = {s: p.stat().st_mtime for s, p, _, _ in todo if p is not None}
             notes = {
                 s: [f"several copies of the lab: graded the newest, {p.name} "
                     f"(not {', '.join(c.name for c in others)})"]
@@ -421,6 +423,7 @@ def grade(
             def done(data: dict) -> None:
                 r = Result.from_json(data)
                 r.flags += notes.get(r.student, [])
+                r.submitted = times.get(r.student, 0.0)
                 results[r.student] = r
                 if store is not None and not r.status.startswith("interrupted"):
                     store.save(r, fps[r.student])

@@ -30,6 +30,7 @@ from nbformat import NotebookNode
 from . import answers
 from .astlock import parse
 from .notebooks import (
+    ANSWER_STUB,
     HIDDEN,
     META_KEY,
     SOLUTION,
@@ -220,7 +221,8 @@ def lab_plan(solution: NotebookNode, name: str) -> LabPlan:
     plan.solution_ids = {c.get("id") for c in solution.cells}
     plan.lab_sources = _lab_sources(solution, exs)
     for c in manual:  # the question, above the solution region
-        question = solution.cells[c.index].source.split(SOLUTION[0])[0]
+        source = solution.cells[c.index].source  # a released lab: the stub
+        question = source.split(SOLUTION[0])[0].split(ANSWER_STUB[0])[0]
         plan.prompts[c.grade_id] = normalized(question)
     return plan
 
