@@ -183,7 +183,9 @@ def _plots(results: list[Result], checks: list[CheckCell]) -> tuple[str, str]:
     top = _max(results)
     fig = Figure(figsize=(6, 3))
     ax = fig.subplots()
-    ax.hist(totals, bins=max(1, min(20, int(top) + 1)), range=(0, top + 1e-9))
+    step = max(0.5, math.ceil(top / 20 * 2) / 2)  # at most about 20 bars
+    edges = [step * (k - 0.5) for k in range(int(top / step) + 2)]
+    ax.hist(totals, bins=edges, edgecolor="white")
     ax.set_xlabel("total (points)")
     ax.set_ylabel("students")
     hist = _png(fig)
@@ -204,6 +206,8 @@ def _rate(results: list[Result], c: CheckCell) -> float:
 
 
 def _table(head: list[str], rows: list[list]) -> str:
+    if not rows:
+        return "<p>None.</p>"
     cells = "".join(f"<th>{html.escape(h)}</th>" for h in head)
     body = "".join(
         "<tr>" + "".join(f"<td>{html.escape(str(v))}</td>" for v in row) + "</tr>"

@@ -110,6 +110,7 @@ def run_submission(
             "defs": plan.defs,
             "checks": plan.check_specs,
             "names": plan.names,
+            "answers": plan.answers,
             "start": index,
         }
         scratch = root / f"check{gen['check']}"
