@@ -13,9 +13,8 @@ compiles them afresh on first use.
 A cache with no digest yet (a fresh one, or a copy the grader seeded) only
 gets one written: nothing is deleted.
 
-`quick_loads` lets robotlib's cached kernels load without numba's full
-context refresh (a quarter of a second of imports a process with a warm
-cache otherwise pays on its first kernel). Imports nothing of robotlib's.
+Public means only: files on disk, ``NUMBA_CACHE_DIR`` and the sources'
+hashes; numba itself is not touched. Imports nothing of robotlib's.
 """
 
 from __future__ import annotations
@@ -24,7 +23,7 @@ import hashlib
 import os
 from pathlib import Path
 
-__all__ = ["cache_subpath", "check", "kernel_sources", "quick_loads"]
+__all__ = ["cache_subpath", "check", "kernel_sources"]
 
 PACKAGE = Path(__file__).resolve().parent
 DIGEST_NAME = "robotlib-kernels.sha256"
@@ -116,55 +115,3 @@ def check(package: Path = PACKAGE, cache_root: str | None = None) -> int:
     except OSError:
         pass
     return deleted
-
-
-def _ours(cache) -> bool:
-    func = getattr(cache, "_py_func", None)
-    return getattr(func, "__module__", "").startswith(__package__ + ".")
-
-
-def quick_loads() -> bool:
-    """Load robotlib's cached kernels without numba's full context refresh.
-
-    Before it loads a cached function, numba (``Cache.load_overload``)
-    refreshes its target context: it imports and registers every
-    implementation it has (typed containers, jitclass, cffi, linear
-    algebra, ...), about 0.25 s, needed to compile but not to load compiled
-    code. For robotlib's own kernels this loads them after only the part of
-    the refresh a loaded kernel needs, numba's runtime (NRT, its memory
-    allocation); the first compile in the process still refreshes in full
-    (numba's compiler does), and every other function loads as numba has it.
-    Installed once, by `robotlib._config`.
-
-    Returns
-    -------
-    bool
-        Whether the quick path is installed (False on a numba without the
-        internals it relies on: then loads are numba's own).
-    """
-    try:
-        from numba.core import caching
-        from numba.core.runtime import rtsys
-    except ImportError:  # pragma: no cover - numba's layout changed
-        return False
-    cls = caching.Cache
-    numba_load = cls.load_overload
-    if getattr(numba_load, "_robotlib_quick", False):
-        return True
-    if not all(
-        hasattr(cls, a) for a in ("_load_overload", "_guard_against_spurious_io_errors")
-    ):  # pragma: no cover - numba's layout changed
-        return False
-
-    def load_overload(self, sig, target_context):
-        if not _ours(self):
-            return numba_load(self, sig, target_context)
-        rtsys.initialize(target_context)
-        with self._guard_against_spurious_io_errors():
-            return self._load_overload(sig, target_context)
-        return None  # the guard swallowed an I/O error: compile instead
-
-    load_overload._robotlib_quick = True
-    load_overload.__doc__ = numba_load.__doc__
-    cls.load_overload = load_overload
-    return True

@@ -138,3 +138,35 @@ def potential_force(ranges, sensors, max_range, gx, gy, k_att, k_rep, d0):
     mag = np.where(push, k_rep * (1 / rho - 1 / d0) / rho**2, 0.0)
     f -= (mag[:, None] * e / rho[:, None]).sum(axis=0)
     return f
+
+
+def dwa_evaluate(points, vs, ws, steps, dt, radius, goal):
+    """The dynamic window's roll-out, vectorised over samples, steps and points.
+
+    Returns ``free, heading, togo`` of shape (V, W) as the kernel defines them.
+    """
+    pts = np.asarray(points, dtype=float).reshape(-1, 2)
+    v = np.asarray(vs, dtype=float)[:, None, None]
+    w = np.asarray(ws, dtype=float)[None, :, None]
+    t = np.arange(0, steps + 1)[None, None, :] * dt
+    turning = np.abs(w) > 1e-9
+    safe_w = np.where(turning, w, 1.0)
+    th = w * t
+    x = np.where(turning, v / safe_w * np.sin(th), v * t)
+    y = np.where(turning, v / safe_w * (1 - np.cos(th)), 0.0)
+    d = np.hypot(pts[:, 0] - x[..., None], pts[:, 1] - y[..., None]) - radius
+    d0 = np.hypot(pts[:, 0], pts[:, 1]) - radius
+    hit = ((d <= 0) & (d < d0 - 0.01)).any(axis=-1)  # (V, W, K+1)
+    hit[..., 0] = False
+    first = np.where(hit.any(axis=-1), hit.argmax(axis=-1), steps + 1)
+    last = first - 1  # the last pose driven
+    free = np.where(first <= steps, np.broadcast_to(v[..., 0], first.shape) * last * dt,
+                    np.inf)  # fmt: skip
+    xs = np.take_along_axis(np.broadcast_to(x, hit.shape), last[..., None], -1)[..., 0]
+    ys = np.take_along_axis(np.broadcast_to(y, hit.shape), last[..., None], -1)[..., 0]
+    ths = np.take_along_axis(np.broadcast_to(th, hit.shape), last[..., None], -1)[
+        ..., 0
+    ]
+    heading = np.abs(wrap(np.arctan2(goal[1] - ys, goal[0] - xs) - ths))
+    togo = np.hypot(goal[0] - xs, goal[1] - ys)
+    return free, heading, togo

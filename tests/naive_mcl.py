@@ -100,9 +100,14 @@ def kld_bound(k, epsilon, z):
     return (k - 1) / (2 * epsilon) * (1 - a + math.sqrt(a) * z) ** 3
 
 
-def paper_weights_unnormalised(z, zhat):
-    d = np.mean(np.abs((z - zhat) / z), axis=1)
-    return np.exp(-d) + 1.0 / len(zhat)
+def kld_count(bins, epsilon, z, n_min):
+    """Draws KLD-sampling keeps: the first ``n >= max(n_min, bound(k))``."""
+    seen = set()
+    for n, b in enumerate(bins, start=1):
+        seen.add(int(b))
+        if n >= n_min and n >= kld_bound(len(seen), epsilon, z):
+            return n
+    return len(bins)
 
 
 def fused_step(particles, weights, motion, normals, loglik):
@@ -111,10 +116,6 @@ def fused_step(particles, weights, motion, normals, loglik):
     moved = sample_odometry(particles, rot1, trans, rot2, sd, normals)
     w, log_mean, ess = update_weights(weights, loglik(moved))
     return moved, w, log_mean, ess, pose_mean(moved, w)
-
-
-def systematic_gather(particles, weights, u, n):
-    return particles[resample_positions(weights, (np.arange(n) + u) / n)]
 
 
 def ray_hit(ox, oy, a, seg):
@@ -126,3 +127,57 @@ def ray_hit(ox, oy, a, seg):
         return math.inf
     t, s = np.linalg.solve(m, p - [ox, oy])
     return t if t >= 0 and 0 <= s <= 1 else math.inf
+
+
+def cone_table_cell(walls, cx, cy, n_bins, offsets, max_range, min_range, specular):
+    """A cone table's entries (n_bins,) uint16 mm for a sonar at ``(cx, cy)``.
+
+    Every direction bin ``b`` casts one ray along ``b * 2 pi / n_bins``
+    against every wall (M, 4): its nearest hit (the lowest index among equal
+    hits; walls parallel to the ray within 1e-12 are not hit) echoes if it
+    lies within ``max_range`` and the ray meets the wall within the specular
+    cosine ``specular`` of its normal. The cone along ``b`` reads the nearest
+    echo of its rays ``b + offsets`` (``max_range`` for none), clipped to
+    ``[min_range, max_range]``, in mm. The arithmetic is the simulator's, step
+    for step, so the numbers are the same bits.
+    """
+    w = np.asarray(walls, dtype=np.float64).reshape(-1, 4)
+    ex, ey = w[:, 2] - w[:, 0], w[:, 3] - w[:, 1]
+    wx, wy = w[:, 0] - cx, w[:, 1] - cy
+    a = [b * (2.0 * math.pi) / n_bins for b in range(n_bins)]
+    dx = np.array([math.cos(v) for v in a])[:, None]  # (n_bins, 1): one ray a row
+    dy = np.array([math.sin(v) for v in a])[:, None]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        length = np.sqrt(ex * ex + ey * ey)
+        nx, ny = -ey / length, ex / length
+        denom = dx * ey - dy * ex
+        t = (wx * ey - wy * ex) / denom
+        s = (wx * dy - wy * dx) / denom
+    hit = (np.abs(denom) >= 1e-12) & (t >= 0) & (s >= 0) & (s <= 1)
+    t = np.where(hit, t, np.inf)
+    m = np.argmin(t, axis=1)  # the nearest hit, the lowest index among equals
+    rows = np.arange(n_bins)
+    first = t[rows, m]
+    cos_inc = np.abs(dx[:, 0] * nx[m] + dy[:, 0] * ny[m])
+    echo = np.where((first < max_range) & (cos_inc >= specular), first, np.inf)
+    out = np.empty(n_bins, dtype=np.uint16)
+    for b in range(n_bins):
+        z = min(echo[(b + o) % n_bins] for o in offsets)
+        z = min(max(min(z, max_range), min_range), max_range)
+        out[b] = round(z * 1000.0)
+    return out
+
+
+def table_lookup(table, x0, y0, resolution, particles, sensors):
+    """Expected readings (N, S), m: each sensor's cell (clamped) and nearest bin."""
+    ny, nx, n_bins = table.shape
+    out = np.empty((len(particles), len(sensors)))
+    for n, (x, y, th) in enumerate(particles):
+        for i, (sx, sy, sth) in enumerate(sensors):
+            px = x + math.cos(th) * sx - math.sin(th) * sy
+            py = y + math.sin(th) * sx + math.cos(th) * sy
+            col = min(max(math.floor((px - x0) / resolution), 0), nx - 1)
+            row = min(max(math.floor((py - y0) / resolution), 0), ny - 1)
+            b = math.floor((th + sth) / (2 * math.pi) * n_bins + 0.5) % n_bins
+            out[n, i] = table[row, col, b] * 0.001
+    return out

@@ -10,6 +10,9 @@ only what a real robot sees (eight sonar ranges, the odometry pose, a goal):
   detects and reports its local minima;
 - `Braitenberg` (the vehicles of `BRAITENBERG` as weight matrices) and
   `WallFollower`: reactive, no memory;
+- `DWA`: the dynamic window approach (velocity samples within the
+  accelerations, rolled out against remembered echoes, an objective of
+  heading, clearance and speed);
 - `Bug2`: the m-line and boundary following, on sonar and odometry.
 
 `run_episode` drives any `robotlib.robot.Robot` with one until it reaches
@@ -20,7 +23,9 @@ runs seeded start/goal pairs (`start_goal_pairs`) of the avoidance worlds
 
 from .base import Controller, goal_in_robot_frame, sonar_endpoints
 from .bug2 import Bug2
-from .episode import OUTCOMES, Episode, run_episode, run_episodes
+from .dwa import DWA, choose_velocity, dynamic_window, evaluate_window
+from .dwa_settings import DWASettings
+from .episode import OUTCOMES, TRUE_TOLERANCE, Episode, run_episode, run_episodes
 from .potential import PotentialField, force_field, potential_force
 from .reactive import BRAITENBERG, Braitenberg, WallFollower, sonar_activation
 from .vfh import VFH, choose_direction, polar_histogram, smooth_histogram
@@ -31,6 +36,11 @@ __all__ = [
     "Controller",
     "VFH",
     "VFHSettings",
+    "DWA",
+    "DWASettings",
+    "dynamic_window",
+    "evaluate_window",
+    "choose_velocity",
     "polar_histogram",
     "choose_direction",
     "smooth_histogram",
@@ -49,6 +59,7 @@ __all__ = [
     "run_episode",
     "run_episodes",
     "OUTCOMES",
+    "TRUE_TOLERANCE",
     "AVOID_WORLDS",
     "StartGoal",
     "start_goal_pairs",
@@ -57,6 +68,7 @@ __all__ = [
 
 CONTROLLERS = {
     "VFH": VFH,
+    "DWA": DWA,
     "potential field": PotentialField,
     "Bug2": Bug2,
     "Braitenberg": Braitenberg,

@@ -16,11 +16,14 @@ references live in ``tests/naive_avoidance.py``.
   and VFH+'s choice of direction; boundary following on it.
 - `vfh_step`: one whole cycle (grid, histogram, choice) in one call.
 - `potential_force`: the potential field's force from sonar and a goal.
+- `dwa_evaluate`: the dynamic window's roll-out of every velocity sample
+  (free distance, goal alignment, distance left to the goal).
 """
 
 import math
 
 import numba as nb
+import numpy as np
 
 from .._config import JIT
 
@@ -365,3 +368,62 @@ def vfh_step(
     return plus_direction(
         blocked, target, previous, wide, mu_goal, mu_heading, mu_previous
     )
+
+
+@nb.njit(**JIT)
+def dwa_evaluate(points, vs, ws, steps, dt, radius, goal, free, heading, togo):
+    """Roll out every velocity sample of the dynamic window against points.
+
+    ``points`` (P, 2): obstacle points in the robot frame, m. ``vs`` (V,),
+    ``ws`` (W,): the sampled translational (m/s) and rotational (rad/s)
+    velocities; sample ``(i, j)`` drives the arc of ``(vs[i], ws[j])`` for
+    ``steps`` steps of ``dt`` s from the origin, heading along x. A point
+    stops the arc at the first step where it lies within ``radius`` m of
+    the arc's pose and more than 1 cm nearer than at the start (a point already inside
+    ``radius`` does not forbid moving away from it). Writes, per sample:
+    ``free[i, j]``, the distance driven before that step, m (inf when
+    nothing stops the arc, which is always so at ``v == 0``: turning on the
+    spot moves no point nearer); ``heading[i, j]``, the absolute angle between
+    the heading at the last pose driven and the direction from there to
+    ``goal`` (2,), rad; ``togo[i, j]``, the distance from that pose to the
+    goal, m.
+    """
+    n_pts = points.shape[0]
+    d0 = np.empty(n_pts)
+    for p in range(n_pts):
+        d0[p] = math.hypot(points[p, 0], points[p, 1]) - radius
+    for i in range(vs.shape[0]):
+        v = vs[i]
+        reach = v * steps * dt
+        for j in range(ws.shape[0]):
+            w = ws[j]
+            f = math.inf
+            x = 0.0
+            y = 0.0
+            th = 0.0
+            for k in range(1, steps + 1):
+                t = k * dt
+                th_k = w * t
+                if abs(w) > 1e-9:
+                    xk = v / w * math.sin(th_k)
+                    yk = v / w * (1.0 - math.cos(th_k))
+                else:
+                    xk = v * t
+                    yk = 0.0
+                hit = False
+                for p in range(n_pts):
+                    if d0[p] > reach:
+                        continue
+                    d = math.hypot(points[p, 0] - xk, points[p, 1] - yk) - radius
+                    if d <= 0.0 and d < d0[p] - 0.01:
+                        hit = True
+                        break
+                if hit:
+                    f = v * (t - dt)
+                    break
+                x = xk
+                y = yk
+                th = th_k
+            free[i, j] = f
+            heading[i, j] = abs(_wrap(math.atan2(goal[1] - y, goal[0] - x) - th))
+            togo[i, j] = math.hypot(goal[0] - x, goal[1] - y)

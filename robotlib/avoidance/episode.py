@@ -5,8 +5,12 @@ per cycle) with the controller's ``(v, w)`` until the goal is reached (the
 odometry pose within ``tolerance`` of it: all a robot knows), the time runs
 out, the robot stalls against an obstacle (a collision), or the controller
 reports that it is trapped (``status == "local_minimum"``). It returns an
-`Episode` of plain arrays. `run_episodes` runs many seeded start/goal pairs
-in a world, in parallel processes if asked (spawn-safe).
+`Episode` of plain arrays. Its verdict, `Episode.success`, is judged on the
+true pose where the backend has one (the simulator): the controller's own
+"reached" counts only if the robot truly ends within `TRUE_TOLERANCE` of the
+goal; the odometry's verdict stands beside it (`Episode.odometry_success`).
+`run_episodes` runs many seeded start/goal pairs in a world, in parallel
+processes if asked (spawn-safe).
 
 Imports: the robot interface, the simulator and the world; never plotting.
 """
@@ -29,7 +33,10 @@ from ..sim import SimRobot, Simulator
 from ..world import World, load_world
 from .base import LOCAL_MINIMUM, Controller
 
-__all__ = ["Episode", "run_episode", "run_episodes", "OUTCOMES"]
+__all__ = ["Episode", "run_episode", "run_episodes", "OUTCOMES", "TRUE_TOLERANCE"]
+
+TRUE_TOLERANCE = 0.5
+"""An episode succeeds when the true position ends this close to the goal, m."""
 
 OUTCOMES = ("reached", "timeout", "collision", "local_minimum")
 """How an episode can end."""
@@ -87,9 +94,28 @@ class Episode:
     extra: dict = field(default_factory=dict)
 
     @property
-    def success(self) -> bool:
-        """Reached the goal without touching anything."""
+    def odometry_success(self) -> bool:
+        """Reached the goal by the odometry (the controller's word), no collision."""
         return self.outcome == "reached" and self.collisions == 0
+
+    @property
+    def true_error(self) -> float:
+        """Distance from the final true position to the goal, m (nan when unknown)."""
+        if self.truth is None or self.goal is None:
+            return math.nan
+        return float(np.hypot(*(self.truth[-1, :2] - self.goal)))
+
+    @property
+    def success(self) -> bool:
+        """Reached the goal without touching anything, judged by the truth.
+
+        The controller stopped at the goal, nothing was hit and, where the
+        true pose is known, it ends within `TRUE_TOLERANCE` of the goal
+        (without truth: `odometry_success`).
+        """
+        if not self.odometry_success:
+            return False
+        return self.truth is None or self.true_error <= TRUE_TOLERANCE
 
     @property
     def duration(self) -> float:
@@ -119,11 +145,11 @@ class Episode:
         return float(np.hypot(*np.diff(p[:, :2], axis=0).T).sum())
 
 
-def _as_robot(robot, seed, start) -> Robot:
+def _as_robot(robot, seed, start, sim_options=None) -> Robot:
     if isinstance(robot, Robot):
         return robot
     world = robot if isinstance(robot, World) else load_world(robot)
-    sim = Simulator(world, seed=seed)
+    sim = Simulator(world, seed=seed, **(sim_options or {}))
     return SimRobot(sim, sim.add_robot(start))
 
 
@@ -136,6 +162,7 @@ def run_episode(
     start=None,
     tolerance: float | None = None,
     stop_on_collision: bool = True,
+    sim_options: dict | None = None,
 ) -> Episode:
     """Drive ``robot`` with ``controller`` until it reaches the goal or gives up.
 
@@ -159,13 +186,16 @@ def run_episode(
         Goal radius, m (default: the controller's, 0.3 m).
     stop_on_collision : bool
         End the episode at the first stall (outcome ``"collision"``).
+    sim_options : dict, optional
+        Keyword arguments of the `Simulator` built when ``robot`` is a world
+        (e.g. ``{"end_faces": False}``).
 
     Returns
     -------
     Episode
     """
     wall0 = time.perf_counter()
-    r = _as_robot(robot, seed, start)
+    r = _as_robot(robot, seed, start, sim_options)
     if goal is not None:
         controller.goal = np.asarray(goal, dtype=float)[:2]
     if tolerance is not None:
@@ -241,7 +271,7 @@ def run_episode(
 
 
 def _one(job) -> Episode:
-    world, controller, pair, seed, max_time = job
+    world, controller, pair, seed, max_time, sim_options = job
     return run_episode(
         world,
         copy.deepcopy(controller),
@@ -249,6 +279,7 @@ def _one(job) -> Episode:
         start=pair.start,
         seed=seed,
         max_time=max_time,
+        sim_options=sim_options,
     )
 
 
@@ -260,6 +291,7 @@ def run_episodes(
     seed: int = 0,
     jobs: int = 1,
     progress: bool = False,
+    sim_options: dict | None = None,
 ) -> list[Episode]:
     """Run one episode per start/goal pair, each in its own seeded simulator.
 
@@ -279,6 +311,8 @@ def run_episodes(
         Worker processes (``spawn``); 1 runs here, in order.
     progress : bool
         Print a progress line to stderr.
+    sim_options : dict, optional
+        Keyword arguments of each episode's `Simulator`.
 
     Returns
     -------
@@ -293,6 +327,7 @@ def run_episodes(
             p,
             int(np.random.SeedSequence([seed, k]).generate_state(1)[0]),
             max_time,
+            sim_options,
         )
         for k, p in enumerate(pairs)
     ]

@@ -5,16 +5,16 @@
 every wall (`robotlib.experiments.bench_mcl.square_world`), and for each
 side, in a fresh process, times what `MCL.best` needs before its first step:
 the admissible free space (`World.free_space`), the cone table (`ConeTable`)
-and the filter itself (its 50,000 particles drawn), then the exact path's
-wall blocks; it reports each part's seconds, the process's peak resident
-memory (MiB, ``ru_maxrss / 1024``: the unit issue 16's figures were taken
-in) when the filter is ready and at the end, and any error (a table too
-large for `MAX_TABLE_BYTES` says so; then the exact path,
-``MCL.best(fast=False)``, which the error suggests, is set up and timed
-instead). A size that takes longer than ``--timeout`` seconds is reported as
-such. Then, in the same process, it times one step of the path it set up
-with ``--steps`` particles (`MCL.best`'s beam model, systematic resampling),
-and prints a verdict against the side's target (`TARGETS`).
+and the filter itself (its 50,000 particles drawn); it reports each part's
+seconds, the process's peak resident memory (MiB, ``ru_maxrss / 1024``: the
+unit issue 16's figures were taken in) when the filter is ready and at the
+end, and any error (a table too large for `MAX_TABLE_BYTES` says so; then
+the exact path, ``MCL.best(fast=False)``, which the error suggests, is set
+up and timed instead). A size that takes longer than ``--timeout`` seconds
+is reported as such. Then, in the same process, it times one step of the
+path it set up with ``--steps`` particles (`MCL.best`'s beam model,
+systematic resampling), and prints a verdict against the side's target
+(`TARGETS`).
 
 Targets (issue 16, measured and reported, not asserted): 50 m x 50 m at 5 cm
 ready in at most 3 s and 300 MB, 200 m x 200 m in at most 30 s and 1.5 GB,
@@ -38,8 +38,6 @@ t0 = time.perf_counter()
 import numpy as np
 from robotlib.experiments.bench_mcl import square_world
 from robotlib.localization import MCL, cone_table
-from robotlib.localization.cones import _wall_blocks
-from robotlib.sensing import SonarModel
 side = float(sys.argv[1])
 out = {"side_m": side}
 cpu = [time.process_time()]
@@ -68,19 +66,16 @@ try:
 except MemoryError as e:
     out["error"] = str(e)
     mark("cone_table", t)
-t = time.perf_counter()  # the exact path's walls per block and heading sector
-_wall_blocks(world, 5.0, SonarModel().cone)
-mark("wall_blocks", t)
 if "error" in out:  # what the error says to do: the exact path
     t = time.perf_counter()
     MCL.best(world, fast=False, rng=0)
     mark("mcl_best_exact", t)
 out["ready_peak_mb"] = out.get("fast_peak_mb", out["peak_mb"])
 import gc
-from numba.core.dispatcher import Dispatcher
+from numba.extending import is_jitted
 out["compiled"] = sorted(  # not loaded from numba's cache: their compiling counted
     d.py_func.__qualname__ for d in gc.get_objects()
-    if isinstance(d, Dispatcher) and d.stats.cache_misses
+    if is_jitted(d) and d.stats.cache_misses
 )
 print(json.dumps(out), flush=True)
 counts = json.loads(sys.argv[2])
@@ -129,8 +124,8 @@ def bench_building(side: float, timeout: float = 120.0, steps=STEP_COUNTS) -> di
     Returns
     -------
     dict
-        ``side_m``, ``walls``, seconds per part (``wall_blocks_s``,
-        ``free_space_s``, ``cone_table_s``, ``mcl_best_s``), ``table_mb``
+        ``side_m``, ``walls``, seconds per part (``free_space_s``,
+        ``cone_table_s``, ``mcl_best_s``, or ``mcl_best_exact_s``), ``table_mb``
         (1e6 bytes), ``peak_mb`` and ``ready_peak_mb`` (MiB: the peak at the
         end and when the filter was ready), ``steps`` (``path``, ``n``,
         ``ms_per_step`` median and ``ms_min`` fastest), ``compiled`` (the
@@ -164,7 +159,7 @@ def _ready_seconds(r: dict) -> float:
     """Seconds until the filter could step: the fast path's parts, or the exact's."""
     parts = ("free_space_s", "cone_table_s", "mcl_best_s")
     if _exact(r):
-        parts = ("free_space_s", "wall_blocks_s", "mcl_best_exact_s")
+        parts = ("free_space_s", "mcl_best_exact_s")
     return sum(r.get(k, 0.0) for k in parts)
 
 
@@ -192,8 +187,8 @@ def verdict(r: dict) -> str | None:
 def _print(r: dict) -> None:
     parts = [
         f"{k[:-2]} {r[k]:.2f} s" for k in
-        ("free_space_s", "cone_table_s", "mcl_best_s", "wall_blocks_s",
-         "mcl_best_exact_s") if k in r
+        ("free_space_s", "cone_table_s", "mcl_best_s", "mcl_best_exact_s")
+        if k in r
     ]  # fmt: skip
     tail = ""
     if "timeout" in r:
@@ -202,8 +197,7 @@ def _print(r: dict) -> None:
         tail += f"; {r['error']}"
     cpu = [
         f"{k[:-4]} {r[k]:.2f} s" for k in
-        ("free_space_cpu", "cone_table_cpu", "mcl_best_cpu", "wall_blocks_cpu",
-         "mcl_best_exact_cpu")
+        ("free_space_cpu", "cone_table_cpu", "mcl_best_cpu", "mcl_best_exact_cpu")
         if k in r
     ]  # fmt: skip
     steps = [

@@ -8,7 +8,7 @@ then the whole distance field (only the likelihood-field sensor model
 needs it); and the same work by the plain kernels that
 measure against every wall (on a sample of cells, scaled up), with the
 ratio; the table's entries on those cells must equal the every-wall
-kernel's (`cone_table_cells`, at the very cell centres the builders use).
+cast's (`every_wall_entries`, at the very cell centres the builder uses).
 The default map is `large_map` of ``worlds/make_worlds.py`` (24 m x 52 m,
 about 60,000 DATA points, MobileSim's ``columbia.map`` in size), generated
 into a temporary file when the repository's ``worlds/`` is at hand. The
@@ -67,15 +67,12 @@ def _timed(f):
 def bench_maps(path: Path, resolution: float = 0.05, sample: int = 40) -> dict:
     """Time the preparation of ``path`` for MCL; return the figures (s)."""
     from ..localization import ConeTable
-    from ..localization import _kernels as lk
-    from ..localization.cones import wait_for_disk_stores
     from ..world import _kernels as wk
     from ..world import load_world
 
     warm = load_world(path)  # compile (or load) every kernel once, untimed
     warm_small = type(warm)(warm.obstacles[:300], bounds=warm.bounds)
-    ConeTable(warm_small, resolution=1.0)  # the sweep
-    ConeTable(warm, resolution=2.0)  # the dense-map builder (strips)
+    ConeTable(warm, resolution=2.0)
     warm_small.free_space(1.0)  # the field's kernel (it has 300 segments: indexed)
     world, t_load, _ = _timed(lambda: load_world(path))
     _, t_free, c_free = _timed(lambda: world.free_space(resolution))  # no field
@@ -86,7 +83,6 @@ def bench_maps(path: Path, resolution: float = 0.05, sample: int = 40) -> dict:
             table, t_table, c_table = _timed(
                 lambda: ConeTable(world, resolution=resolution)
             )
-            wait_for_disk_stores()  # written meanwhile; a later run finds it there
             again, t_disk, _ = _timed(lambda: ConeTable(world, resolution=resolution))
         finally:
             if saved is None:
@@ -107,21 +103,10 @@ def bench_maps(path: Path, resolution: float = 0.05, sample: int = 40) -> dict:
     t_ref_field *= len(cells) / len(pick)
     # the table on sampled cells by the plain every-wall kernel, at the very
     # centres the builders use (origin + (index + 0.5) * resolution)
-    sonar = table.sonar
-    ny, nx, n_bins = table.table.shape
+    ny, nx, _ = table.table.shape
     rows = rng.integers(0, ny, sample)
     cols = rng.integers(0, nx, sample)
-    ref = np.empty((sample, n_bins), dtype=np.uint16)
-    ray_step = 1 if sonar.n_rays == 1 else round(
-        sonar.cone / (sonar.n_rays - 1) / (2 * math.pi / n_bins)
-    )  # fmt: skip
-    _, t_ref_cells, _ = _timed(
-        lambda: lk.cone_table_cells(
-            np.ascontiguousarray(world.obstacles), *table.origin, resolution, rows,
-            cols, n_bins, ray_step, sonar.n_rays, sonar.cone, sonar.max_range,
-            sonar.min_range, sonar.cos_specular, ref,
-        )
-    )  # fmt: skip
+    ref, t_ref_cells, _ = _timed(lambda: every_wall_entries(world, table, rows, cols))
     diff = np.abs(ref.astype(np.int64) - table.table[rows, cols].astype(np.int64))
     t_ref_table = t_ref_cells * field.data.size / sample
     return {
@@ -144,6 +129,44 @@ def bench_maps(path: Path, resolution: float = 0.05, sample: int = 40) -> dict:
         "reference_differing": int(np.count_nonzero(diff)),
         "reference_max_diff_mm": int(diff.max()) if diff.size else 0,
     }
+
+
+def every_wall_entries(world, table, rows, cols) -> np.ndarray:
+    """Return a cone table's entries for cells ``(rows, cols)``, cast anew.
+
+    Each direction bin's ray from the cell's centre (the table's own
+    arithmetic: ``origin + (index + 0.5) * resolution``) is cast by the
+    simulator's sonar kernel against every wall, as a one-ray sonar pointing
+    along the bin, and each cone takes the nearest of its rays
+    (`robotlib.localization.cones.ray_offsets`). No strips, no sharing.
+
+    Returns
+    -------
+    numpy.ndarray, shape (K, n_bins), uint16
+        Ranges, mm.
+    """
+    from ..localization.cones import ray_offsets
+    from ..sensing import SonarModel, expected_ranges
+
+    s, n_bins = table.sonar, table.n_bins
+    headings = np.arange(n_bins) * (2 * math.pi) / n_bins  # as the builder's rays
+    one_ray = SonarModel(
+        sensors=np.column_stack([np.zeros((n_bins, 2)), headings]),
+        n_rays=1,
+        cone=0.0,
+        max_range=s.max_range,
+        min_range=s.min_range,
+        specular_angle=s.specular_angle,
+    )
+    poses = np.column_stack([
+        table.origin[0] + (np.asarray(cols) + 0.5) * table.resolution,
+        table.origin[1] + (np.asarray(rows) + 0.5) * table.resolution,
+        np.zeros(len(rows)),
+    ])  # fmt: skip
+    rays = expected_ranges(world, poses, one_ray)  # (K, n_bins), clipped
+    offsets = ray_offsets(s, n_bins)
+    cone = np.min([np.roll(rays, -o, axis=1) for o in offsets], axis=0)
+    return np.round(cone * 1000.0).astype(np.uint16)
 
 
 def run(args: argparse.Namespace) -> int:

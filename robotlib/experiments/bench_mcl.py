@@ -1,37 +1,34 @@
-"""``robotlib bench mcl``: timings of the MCL step, the cone table and a cold start.
+"""``robotlib bench mcl``: the MCL step beside a plain pipeline and a peer.
 
-``robotlib bench mcl [--json FILE]`` times one MCL step (predict, weight,
-estimate, systematic resampling) per particle count for the fast path (cone
-table lookup), the exact path (cone casting) and a plain NumPy implementation
-of the same model (the paper's or the tempered beam) on the same table, in
-the same run, and prints milliseconds and ratios; ``--json`` writes
-``{"results": [{"path", "model", "n", "ms_per_step"}, ...]}`` (and the
-peer's rows under ``"peers"``). It also
-measures the cone table's build time and memory for worlds
-(``--table-world``, default the office and a 20 m x 20 m square of rooms).
+``robotlib bench mcl [--json FILE]`` times, in one run and on the same
+particles, scan and cone table, one MCL step (predict, weigh, estimate,
+systematic resampling every step) per particle count:
 
-Beside them, in the same run, Robotics Toolbox for Python's particle filter
-(a landmark model; the optional ``bench`` extra, skipped with a message
-when missing).
+- ``robotlib``: `MCL` with the tempered beam model on the cone table (its
+  fused kernel);
+- ``exact``: the same filter casting every particle's cones instead
+  (up to 10,000 particles);
+- ``plain``: a plain numba pipeline of the same model written in
+  ``bench/plain_mcl.py`` (one kernel per stage; found beside the package in
+  a checkout, skipped with a message otherwise);
+- ``rtb``: Robotics Toolbox for Python's ``ParticleFilter`` (its own
+  landmark model; the optional ``bench`` extra, skipped when missing).
 
-It also times the first step of filters in a fresh process (numba's cache
-warm: run it twice), import and construction apart (``--first-step``).
-Results carry the median (``ms_per_step``) and the fastest (``ms_min``) of
-the repetitions: on a machine shared with other work the fastest is the
-steadier figure.
+It prints milliseconds per step (median and fastest of the repetitions) and
+the ratios robotlib / plain and rtb / robotlib; ``--json`` writes the rows.
+It also measures the cone table's build for worlds (``--table-world``) and
+the first step of filters in a fresh process (``--first-step``).
 
-Targets (issue 16; measured and reported, not asserted): fast path N=300 at
-most 0.035 ms, N=100k at most 8 ms and N=1M at most 90 ms on 2 cores; exact
-path N=300 in the office at most 0.5 ms; the first step of `MCL.best` in a
-fresh process at most 3 s with an empty numba cache and 0.7 s with a warm
-one. ``robotlib bench buildings`` measures large buildings,
-``bench/bench_threads.py`` the step under a second busy process,
-``bench/bench_cold.py`` the cold and warm start of two source trees.
+Limits (issue 25; measured, never asserted by a test): robotlib at most 2x
+the plain pipeline at N=300 and at most 1.3x at N=100k and 1M; at least 3x
+faster than the Robotics Toolbox at N=300; the first step of `MCL.best` in
+a fresh process within 1 s with warm kernels.
 """
 
 from __future__ import annotations
 
 import argparse
+import importlib.util
 import json
 import math
 import os
@@ -43,80 +40,6 @@ from pathlib import Path
 import numpy as np
 
 __all__ = ["add_arguments", "run", "bench_mcl", "bench_table", "bench_first_step"]
-
-
-def _beam_norms(params, max_range: float, n: int):
-    """Return the beam model's hit and short factors for ranges 0..n-1 mm."""
-    from ..localization._kernels import beam_norms
-
-    p = params
-    return beam_norms(max_range, p.z_hit, p.z_short, p.sigma_hit, p.lambda_short, n)
-
-
-def _numpy_weights(mm, z, beam) -> np.ndarray:
-    """Normalised weights (N,) from expected ranges ``mm`` (N, S) in millimetres.
-
-    ``beam`` None: the paper's innovation weights; else ``(params, max_range,
-    hit, short)`` with the per-millimetre factors of `_kernels.beam_norms`
-    (computed once, outside the timed step): the tempered beam model.
-    """
-    zhat = mm * 0.001
-    if beam is None:
-        d = np.mean(np.abs((z - zhat) / z), axis=1)
-        w = np.exp(-d) + 1.0 / len(mm)
-    else:
-        params, max_range, hit, short = beam
-        u = (z - zhat) / params.sigma_hit
-        prob = hit[mm] * np.exp(-0.5 * u * u) + params.z_rand / max_range
-        prob += np.where(z <= zhat, short[mm] * np.exp(-params.lambda_short * z), 0.0)
-        prob = np.where(z >= max_range - 0.001, params.z_max, prob)
-        loglik = params.exponent * np.log(prob).sum(axis=1)
-        w = np.exp(loglik - loglik.max())
-    return w / w.sum()
-
-
-def _numpy_step(state, odo_prev, odo_now, z, rng):
-    """One MCL step in plain NumPy on the same cone table, to compare.
-
-    ``state`` is ``(particles, table, sensors, origin, inv_res, beam)`` with
-    ``beam`` None for the paper's innovation weights, else ``(params,
-    max_range, hit, short)`` for the (tempered) beam model.
-    """
-    from ..localization.motion import _noise_std, odometry_increment
-
-    p, table, sensors, origin, inv_res, beam = state
-    rot1, trans, rot2 = odometry_increment(odo_prev, odo_now)
-    sd = _noise_std((0.002, 0.005, 0.01, 0.0005), rot1, trans, rot2)
-    nrm = rng.standard_normal((len(p), 3))
-    r1 = rot1 + sd[0] * nrm[:, 0]
-    t = trans + sd[1] * nrm[:, 1]
-    th = p[:, 2]
-    p = np.column_stack(
-        [
-            p[:, 0] + t * np.cos(th + r1),
-            p[:, 1] + t * np.sin(th + r1),
-            (th + r1 + rot2 + sd[2] * nrm[:, 2] + np.pi) % (2 * np.pi) - np.pi,
-        ]
-    )
-    c, s = np.cos(p[:, 2:3]), np.sin(p[:, 2:3])
-    sx = p[:, 0:1] + c * sensors[:, 0] - s * sensors[:, 1]
-    sy = p[:, 1:2] + s * sensors[:, 0] + c * sensors[:, 1]
-    ny, nx, nb = table.shape
-    col = np.clip(np.floor((sx - origin[0]) * inv_res).astype(np.int64), 0, nx - 1)
-    row = np.clip(np.floor((sy - origin[1]) * inv_res).astype(np.int64), 0, ny - 1)
-    b = np.floor((p[:, 2:3] + sensors[:, 2]) * nb / (2 * np.pi) + 0.5).astype(np.int64)
-    w = _numpy_weights(table[row, col, b % nb].astype(np.int64), z, beam)
-    est = np.array(
-        [
-            w @ p[:, 0],
-            w @ p[:, 1],
-            math.atan2(w @ np.sin(p[:, 2]), w @ np.cos(p[:, 2])),
-        ]
-    )
-    cum = np.cumsum(w)
-    cum[-1] = 1.0
-    idx = np.searchsorted(cum, (np.arange(len(p)) + rng.random()) / len(p), "right")
-    return p[idx], est
 
 
 def _time(fn, reps: int, min_seconds: float = 0.2) -> tuple[float, float]:
@@ -138,104 +61,89 @@ def _time(fn, reps: int, min_seconds: float = 0.2) -> tuple[float, float]:
     return 1000.0 * float(np.median(times)), 1000.0 * float(np.min(times))
 
 
+def _plain_pipeline():
+    """Import ``bench/plain_mcl.py`` from the checkout, or return None (no checkout)."""
+    path = Path(__file__).resolve().parents[2] / "bench" / "plain_mcl.py"
+    if not path.is_file():
+        return None
+    if "plain_mcl" in sys.modules:
+        return sys.modules["plain_mcl"]
+    spec = importlib.util.spec_from_file_location("plain_mcl", path)
+    module = importlib.util.module_from_spec(spec)
+    sys.modules["plain_mcl"] = module  # numba's cache finds the module again
+    spec.loader.exec_module(module)
+    return module
+
+
 def bench_mcl(
     world_name: str = "corridor",
-    counts=(300, 1000, 10_000, 100_000),
-    models=("paper", "beam"),
-    paths=("fast", "exact", "numpy"),
+    counts=(300, 1000, 10_000, 100_000, 1_000_000),
     reps: int = 20,
 ) -> list[dict]:
-    """Time one MCL step per path, model and particle count.
+    """Time one MCL step per path and particle count.
 
     Each timed step starts from the same particles spread uniformly over the
-    world's free space (the global-localization case, the slowest for the
+    world's free space (global localization: the slowest case for the
     table's cache), with one sonar scan from the start pose.
 
     Returns
     -------
     list of dict
-        ``{"path", "model", "n", "ms_per_step", "ms_min"}`` (median and
-        fastest step).
+        ``{"path", "n", "ms_per_step", "ms_min"}`` (median and fastest step).
     """
     from ..localization import (
         MCL,
         BeamParameters,
         BeamSensorModel,
-        PaperSensorModel,
         ThresholdResampling,
-        cone_table,
         expected_readings,
     )
+    from ..localization.motion import DEFAULT_ALPHAS, noise_std, odometry_increment
     from ..world import load_world
 
     world = load_world(world_name)
     z = expected_readings(world, np.array([world.start]))[0]
     odo0 = np.array(world.start)
     odo1 = odo0 + [0.5, 0.0, 0.05]
-    table = cone_table(world)
-    beam_params = BeamParameters(exponent=0.2)
-    results = []
+    params = BeamParameters(exponent=0.2)
+    plain = _plain_pipeline()
+    rows = []
     for n in counts:
         start = world.sample_free_poses(n, 0)
-        for model in models:
-            for path in paths:
-                r = reps if (path != "exact" or n <= 10_000) else max(2, reps // 10)
-                if path == "numpy":
-                    max_range = table.sonar.max_range
-                    beam = None
-                    if model == "beam":
-                        beam = (
-                            beam_params,
-                            max_range,
-                            *_beam_norms(
-                                beam_params, max_range, int(table.table.max()) + 1
-                            ),
-                        )
-                    state = (
-                        start,
-                        np.asarray(table.table),
-                        table.sonar.sensors,
-                        table.origin,
-                        1.0 / table.resolution,
-                        beam,
-                    )
-                    rng = np.random.default_rng(0)
-                    _numpy_step(state, odo0, odo1, z, rng)
-                    ms, ms_min = _time(
-                        lambda s=state, g=rng: _numpy_step(s, odo0, odo1, z, g), r
-                    )
-                else:
-                    fast = path == "fast"
-                    sensor = (
-                        PaperSensorModel(world, fast=fast)
-                        if model == "paper"
-                        else BeamSensorModel(world, fast=fast, params=beam_params)
-                    )
-                    mcl = MCL(
-                        world,
-                        sensor,
-                        resampling=ThresholdResampling("systematic", 1.0),
-                        n=n,
-                        rng=0,
-                        check=False,
-                    )
+        for path in ("robotlib", "exact", "plain"):
+            if (path == "exact" and n > 10_000) or (path == "plain" and plain is None):
+                continue
+            sensor = BeamSensorModel(world, fast=path != "exact", params=params)
+            if path == "plain":
+                t = sensor.table
+                q = params
+                increment = odometry_increment(odo0, odo1)
+                std = noise_std(DEFAULT_ALPHAS, *increment)
+                consts = (q.sigma_hit, q.lambda_short, q.z_max,
+                          q.z_rand / 5.0, 5.0, q.exponent)  # fmt: skip
+                pipe = plain.PlainMCL(
+                    start, t.table, t.sonar.sensors, t.origin, 1 / t.resolution,
+                    sensor._hit_norm, sensor._short_norm, consts,
+                    np.random.default_rng(0),
+                )  # fmt: skip
 
-                    def step(mcl=mcl, start=start):
-                        mcl.set_particles(start)
-                        mcl.step(odo0, odo1, z)
+                def step(pipe=pipe, start=start, increment=increment, std=std):
+                    pipe.p[:] = start
+                    pipe.step(increment, std, z)
 
-                    step()
-                    ms, ms_min = _time(step, r)
-                results.append(
-                    {
-                        "path": path,
-                        "model": model,
-                        "n": n,
-                        "ms_per_step": ms,
-                        "ms_min": ms_min,
-                    }
-                )
-    return results
+            else:
+                every = ThresholdResampling("systematic", 1.0)
+                mcl = MCL(world, sensor, resampling=every, n=n, rng=0, check=False)
+
+                def step(mcl=mcl, start=start):
+                    mcl.set_particles(start)
+                    mcl.step(odo0, odo1, z)
+
+            step()
+            r = reps if n <= 100_000 else max(3, reps // 4)
+            ms, ms_min = _time(step, r)
+            rows.append({"path": path, "n": n, "ms_per_step": ms, "ms_min": ms_min})
+    return rows
 
 
 def bench_rtb(counts, reps: int = 10) -> list[dict] | str:
@@ -384,45 +292,34 @@ def bench_first_step(world_name: str = "corridor", filters=("paper", "best")) ->
     return out
 
 
-def _print_mcl(results: list[dict]) -> None:
-    by = {(r["path"], r["model"], r["n"]): r["ms_per_step"] for r in results}
-    head = f"{'model':8s}{'n':>8s}{'fast ms':>10s}{'exact ms':>10s}{'numpy ms':>10s}"
-    print(head + f"{'numpy/fast':>12s}{'exact/fast':>12s}")  # noqa: T201
-    for model, n in sorted({(r["model"], r["n"]) for r in results}):
-        f, e, p = (
-            by.get((k, model, n), float("nan")) for k in ("fast", "exact", "numpy")
-        )
-        print(f"{model:8s}{n:8d}{f:10.3f}{e:10.3f}{p:10.3f}{p / f:12.1f}{e / f:12.1f}")  # noqa: T201
-    fastest = {(r["path"], r["model"], r["n"]): r["ms_min"] for r in results}
-    print("fastest of the repetitions, ms:")  # noqa: T201
-    for model, n in sorted({(r["model"], r["n"]) for r in results}):
-        f, e, p = (
-            fastest.get((k, model, n), float("nan")) for k in ("fast", "exact", "numpy")
-        )
-        print(f"{model:8s}{n:8d}{f:10.3f}{e:10.3f}{p:10.3f}")  # noqa: T201
+def _print_mcl(results: list[dict], peers: list[dict]) -> None:
+    by = {(r["path"], r["n"]): r for r in results + peers}
+    paths = ("robotlib", "exact", "plain", "rtb")
+    print(f"{'n':>9s}" + "".join(f"{p + ' ms':>13s}" for p in paths)  # noqa: T201
+          + f"{'robotlib/plain':>16s}{'rtb/robotlib':>14s}")  # fmt: skip
+    for n in sorted({r["n"] for r in results}):
+        ms = [by[(p, n)]["ms_per_step"] if (p, n) in by else math.nan for p in paths]
+        cells = "".join(f"{m:13.3f}" for m in ms)
+        print(f"{n:9d}{cells}{ms[0] / ms[2]:16.2f}{ms[3] / ms[0]:14.1f}")  # noqa: T201
+    print("median ms per step; ratios of the medians")  # noqa: T201
 
 
 def run(args: argparse.Namespace) -> int:
     """Run ``robotlib bench mcl``; return the exit status."""
-    results = bench_mcl(args.world, tuple(args.n), tuple(args.model), reps=args.reps)
-    _print_mcl(results)
-    out = {"results": results}
+    load = os.getloadavg()
+    print(f"load average {load[0]:.2f} {load[1]:.2f} {load[2]:.2f}")  # noqa: T201
+    results = bench_mcl(args.world, tuple(args.n), reps=args.reps)
+    out = {"load": load, "results": results, "peers": []}
+    if _plain_pipeline() is None:
+        print("bench/plain_mcl.py not found (not a checkout): plain skipped")  # noqa: T201
     if args.peers:
-        rtb = bench_rtb(tuple(args.n), max(3, args.reps // 2))
+        counts = tuple(n for n in args.n if n <= 100_000)
+        rtb = bench_rtb(counts, max(3, args.reps // 2))
         if isinstance(rtb, str):
             print(rtb)  # noqa: T201
         else:
             out["peers"] = rtb
-            fast = {(r["model"], r["n"]): r for r in results if r["path"] == "fast"}
-            for r in rtb:
-                ours = fast.get(("beam", r["n"]))
-                ratio = r["ms_per_step"] / ours["ms_per_step"] if ours else math.nan
-                print(  # noqa: T201
-                    f"Robotics Toolbox PF (landmarks) n={r['n']}: "
-                    f"{r['ms_per_step']:.3f}"
-                    f" ms (fastest {r['ms_min']:.3f}); rtb / robotlib fast beam: "
-                    f"{ratio:.1f}"
-                )
+    _print_mcl(results, out["peers"])
     if args.table_world:
         out["table"] = [bench_table(name) for name in args.table_world.split(",")]
         for t in out["table"]:
@@ -449,9 +346,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--json", type=Path, default=None, help="write results here")
     parser.add_argument("--world", default="corridor", help="world for the MCL step")
     parser.add_argument(
-        "--n", type=int, nargs="+", default=[300, 1000, 10_000, 100_000]
+        "--n", type=int, nargs="+", default=[300, 10_000, 100_000, 1_000_000]
     )
-    parser.add_argument("--model", nargs="+", default=["paper", "beam"])
     parser.add_argument("--reps", type=int, default=20)
     parser.add_argument(
         "--peers",

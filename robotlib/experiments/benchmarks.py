@@ -24,6 +24,7 @@ BENCHES = {
     "nav": "robotlib.experiments.bench_nav",
     "large-map": "robotlib.experiments.bench_large_map",
     "buildings": "robotlib.experiments.bench_buildings",
+    "worlds": "robotlib.experiments.bench_worlds",
 }
 """Topic name to the module that measures it."""
 

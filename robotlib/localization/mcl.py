@@ -1,21 +1,21 @@
 """The `MCL` object: a particle filter composed of models and a resampler.
 
 A motion model, a sensor model and a resampling policy make the filter.
+One `MCL.step` is the textbook's loop:
 
-One `MCL.step` is: predict with the odometry increment, weight by the scan
-(``w <- w * p(z | x)``, normalised), estimate (weighted mean, circular mean
-of the heading), resample when the policy says so (optionally injecting
-random particles, augmented MCL), and replace particles that left the
-admissible area (the paper's step 3). `MCL.paper` builds the paper's filter
-exactly; `MCL.best` the strongest configuration this project offers.
+1. predict: move every particle by the odometry increment plus noise;
+2. update: weight each particle by the scan's likelihood (``w <- w p(z|x)``,
+   normalised);
+3. estimate: the weighted mean pose (circular mean of the heading);
+4. resample when the policy says so (optionally injecting random
+   particles: augmented MCL), and replace particles that left the
+   admissible area (the paper's step 3).
 
-With the odometry motion model and a sensor model on a cone table (``fast``),
-`MCL.step` moves, weighs and estimates in one call (a serial kernel for a
-few particles, chunks on Python threads for many: see
-`robotlib.localization.stepping`), resampling included when the policy
-resamples every step by low variance: the same numbers as `MCL.predict`,
-`MCL.update`, `MCL.estimate` and `MCL.resample` in turn, with the same draws.
-
+When the sensor model offers a fused kernel (a model on a cone table) and
+the motion model is the odometry model, steps 1-3 run in that one kernel,
+chosen when the filter is built; it computes what `predict`, `update` and
+`estimate` compute, from the same draws. `MCL.paper` builds the paper's
+filter exactly; `MCL.best` the strongest configuration this project offers.
 The resampling policies are in `robotlib.localization.policies`.
 """
 
@@ -26,38 +26,24 @@ import math
 import numpy as np
 
 from ..world import World
-from . import _kernels
-from .cones import free_space
 from .history import StepInfo
 from .motion import (
-    NORMALS_CHUNK,
     PARALLEL_MIN,
     OdometryMotionModel,
-    Scratch,
-    _noise_std,
     _particles,
+    noise_std,
     odometry_increment,
-    pcg64_words,
 )
-from .paper import (
-    ADMISSIBLE_RADIUS,
-    REGEN_WEIGHT,
-    RESIZE_FLOOR,
-)
+from .paper import ADMISSIBLE_RADIUS, REGEN_WEIGHT, RESIZE_FLOOR, estimate, on_grid
 from .policies import (
     AugmentedInjection,
     KLDResampling,
     PaperResampling,
     ThresholdResampling,
-    _gather,
-    _plain,
-    _step_plan,
 )
+from .sensors import BeamParameters, BeamSensorModel, PaperSensorModel
 
-__all__ = [
-    "MCL",
-    "StepInfo",
-]
+__all__ = ["BEST", "MCL", "StepInfo"]
 
 
 class MCL:
@@ -96,15 +82,6 @@ class MCL:
         Standard deviations ``(x, y, theta)`` around ``init``, m and rad.
     """
 
-    _prebuild = None
-    """`robotlib.localization._prebuild.Prebuild` compiling the first step, or None."""
-
-    _pcg = (None, None)
-    """``(bit generator, (words, lock) or None)``: `_pcg_words`' view, kept."""
-
-    _plan = (None,) * 7
-    """`step`'s view of the models (`_step_plan`), kept while they are the same."""
-
     def __init__(
         self,
         world: World,
@@ -134,16 +111,38 @@ class MCL:
         self.resolution = float(resolution)
         self.rng = np.random.default_rng(rng)
         self.map_diagonal = math.hypot(*world.size)
-        grid = free_space(world, self.resolution, self.admissible_radius)  # disk too
-        self._admissible = np.ascontiguousarray(grid.data)
-        self._adm_origin = grid.origin
+        self.admissible = world.free_space(self.resolution, self.admissible_radius)
         self.n_initial = int(n)
         self.init_std = tuple(float(s) for s in init_std)
-        self._scratch = Scratch()
-        self._mine = (None, None)  # known plain: the last step's set, `set_particles`'s
         self.reset(init)
 
     # -- set up ---------------------------------------------------------------
+    @property
+    def sensor(self):
+        """The sensor model; setting it chooses the step's path again."""
+        return self._sensor
+
+    @sensor.setter
+    def sensor(self, model) -> None:
+        self._sensor = model
+        self._choose_path()
+
+    @property
+    def motion(self):
+        """The motion model; setting it chooses the step's path again."""
+        return self._motion
+
+    @motion.setter
+    def motion(self, model) -> None:
+        self._motion = model
+        self._choose_path()
+
+    def _choose_path(self) -> None:
+        """Use the sensor's fused kernel when the models allow (see the module)."""
+        fused = getattr(getattr(self, "_sensor", None), "fused", None)
+        odometry = type(getattr(self, "_motion", None)) is OdometryMotionModel
+        self._fused = fused if odometry else None
+
     @classmethod
     def paper(
         cls,
@@ -176,8 +175,6 @@ class MCL:
         **kwargs
             Passed to `MCL` (e.g. ``init``, ``motion``, ``regen_weight``).
         """
-        from .sensors import PaperSensorModel
-
         return cls(
             world,
             PaperSensorModel(world, fast=fast),
@@ -200,22 +197,12 @@ class MCL:
         Beam model (tempered), KLD-sampling from 50,000 particles down to no
         fewer than 300, optional augmented MCL, the admissibility check.
         """
-        from ._prebuild import start
-        from .sensors import BeamParameters, BeamSensorModel
-
-        helper = start(fast, kwargs, world)  # the step's kernels compile meanwhile
         options = {**BEST, **kwargs}
         n = options.pop("n")
         beam = BeamParameters(**options.pop("beam"))
         kld = options.pop("kld")
         aug = options.pop("augmented")
-        if helper is not None and not helper.forked:  # the area first: skipped there
-            free_space(
-                world,
-                options.get("resolution", 0.05),
-                options.get("admissible_radius", ADMISSIBLE_RADIUS),
-            )
-        mcl = cls(
+        return cls(
             world,
             BeamSensorModel(world, fast=fast, params=beam),
             resampling=KLDResampling(**kld),
@@ -224,8 +211,6 @@ class MCL:
             rng=rng,
             **options,
         )
-        mcl._prebuild = helper
-        return mcl
 
     def reset(self, init=None) -> None:
         """Start again: uniform particles, or around ``init`` (3,) if given."""
@@ -241,214 +226,15 @@ class MCL:
             p = pose + self.rng.standard_normal((n, 3)) * np.array(self.init_std)
             p[:, 2] = (p[:, 2] + np.pi) % (2 * np.pi) - np.pi
             self.particles = p
-        self.weights = _uniform(n)
+        self.weights = np.full(n, 1.0 / n)
         self.ess = float(n)
-        self._log_mean = float("nan")
-        # the set's estimate, computed when first asked for (a step sets its own):
-        # a fresh filter does not compile `weighted_pose_mean` before its first step
-        self._estimate_of = (self.particles.copy(), self.weights.copy())
-        self._last_estimate = None
-        self.info = None
+        self.log_mean_likelihood = float("nan")
+        self.last_estimate = self.estimate()
+        self.info: StepInfo | None = None
         if self.injection is not None:
             self.injection.reset()
 
-    # -- the three parts of a step -------------------------------------------
-    def predict(self, odo_prev, odo_now) -> None:
-        """Move the particles by the odometry increment plus noise."""
-        self.particles = self.motion.sample(self.particles, odo_prev, odo_now, self.rng)
-
-    def update(self, z) -> float:
-        """Weight the particles by readings ``z`` (S,), m; return the log mean lik."""
-        ll = self.sensor.log_likelihood(self.particles, z)
-        out = np.empty_like(self.weights)
-        kernel = (
-            _kernels.update_weights_parallel
-            if len(out) >= PARALLEL_MIN
-            else _kernels.update_weights
-        )
-        log_mean, ess = kernel(self.weights, ll, out)
-        self._weighed(out, log_mean, ess)
-        return self._log_mean
-
-    def _weighed(self, weights, log_mean, ess) -> None:
-        self.weights = weights
-        self.ess = float(ess)
-        self._log_mean = float(log_mean)
-        if self.injection is not None:
-            self.injection.update(self._log_mean)
-
-    def _fused_step(self, odo_prev, odo_now, z, checked, plan):
-        """Predict, update, estimate (and resample) in one call when the models allow.
-
-        The same numbers as `predict`, `update`, `estimate` in turn (the same
-        draws from the rng), and, when the policy resamples every step by
-        low variance, `resample`'s gathering too (its draw taken after the
-        noise, as `resample` would). Returns False (nothing done) for other
-        models, None when the set is still to be resampled, else the
-        resampled ``(particles, weights)``. ``checked``: ``z`` is the
-        sensor's `checked_scan` already; ``plan``: `_step_plan` of the models.
-        """
-        sensor = self.sensor
-        if not plan[3] or not (plan[4] or len(self.particles) <= NORMALS_CHUNK):
-            return False
-        rot1, trans, rot2 = odometry_increment(odo_prev, odo_now)
-        motion = (rot1, trans, rot2, *_noise_std(self.motion.alphas, rot1, trans, rot2))
-        p, w = self.particles, self.weights
-        if p is not self._mine[0]:  # set from outside: checked
-            if not _plain(p, 2) or p.shape[1] != 3:
-                p = _particles(p)
-        if w is not self._mine[1] and not _plain(w, 1):
-            w = np.ascontiguousarray(w, dtype=np.float64)
-        if w.shape != (len(p),) or p.shape[1:] != (3,):
-            raise ValueError("weights must have shape (N,) like the particles")
-        n = len(p)
-        scratch = self._scratch
-        noise = scratch.take("normals", (n, 3))
-        every = plan[5]
-        words = self._pcg_words() if n < PARALLEL_MIN else None
-        if words is not None:  # the call draws the noise, then u, from the PCG64
-            with words[1]:
-                moved, weights, log_mean, ess, est, new_p, new_w = sensor._run(
-                    p, w, motion, noise, None, z, scratch, 0.0 if every else -1.0,
-                    checked, words[0],
-                )  # fmt: skip
-        else:
-            key = None
-            if n <= NORMALS_CHUNK:  # as `standard_normals`
-                self.rng.standard_normal(out=noise)
-            else:  # drawn chunk by chunk in the step
-                key = int(self.rng.integers(np.iinfo(np.int64).max))
-            u = self.rng.random() if every else -1.0
-            moved, weights, log_mean, ess, est, new_p, new_w = sensor._run(
-                p, w, motion, noise, key, z, scratch, u, checked
-            )
-        self._last_estimate, self._estimate_of = est, None  # `last_estimate`'s setter
-        self.particles = moved
-        self._weighed(weights, log_mean, ess)
-        return None if new_p is None else (new_p, new_w)
-
-    def _small_step(self, odo_prev, odo_now, z, every, words):
-        """`_fused_step` in one call that checks the readings' values itself.
-
-        `step`'s case: a known plain set (`_mine`) below `PARALLEL_MIN`
-        particles, a cone table, the filter's PCG64 ``words`` (`_pcg_words`);
-        ``every`` from `_step_plan`. The same numbers and draws; a refused
-        scan changes nothing, its error coming before the odometry's.
-        """
-        sensor = self.sensor
-        z = sensor._shaped_scan(z)
-        try:
-            rot1, trans, rot2 = odometry_increment(odo_prev, odo_now)
-            sd = _noise_std(self.motion.alphas, rot1, trans, rot2)
-        except Exception:
-            sensor.checked_scan(z)  # raises when the scan is refused
-            raise
-        p, scratch = self.particles, self._scratch
-        noise = scratch.take("normals", (len(p), 3))
-        with words[1]:
-            moved, weights, log_mean, ess, est, new_p, new_w = sensor._small(
-                p, self.weights, (rot1, trans, rot2, *sd), noise, z,
-                0.0 if every else -1.0, scratch, words[0],
-            )  # fmt: skip
-        self._last_estimate, self._estimate_of = est, None  # `last_estimate`'s setter
-        self.particles = moved
-        self._weighed(weights, log_mean, ess)
-        return None if new_p is None else (new_p, new_w)
-
-    def __getstate__(self) -> dict:
-        """Pickled and copied without `_pcg_words`' view of this generator's memory."""
-        state = self.__dict__.copy()
-        state.pop("_pcg", None)
-        return state
-
-    def _pcg_words(self):
-        """``(words, lock)`` of the filter's PCG64 (`motion.pcg64_words`), or None.
-
-        Kept while ``self.rng``'s bit generator is the same object.
-        """
-        bg = self.rng.bit_generator
-        kept = self._pcg
-        if kept[0] is not bg:
-            words = pcg64_words(self.rng)
-            kept = self._pcg = (bg, None if words is None else (words, bg.lock))
-        return kept[1]
-
-    def estimate(self) -> np.ndarray:
-        """Weighted mean pose (circular mean of the heading), shape (3,)."""
-        kernel = (
-            _kernels.weighted_pose_mean_parallel
-            if len(self.weights) >= PARALLEL_MIN
-            else _kernels.weighted_pose_mean
-        )
-        return kernel(self.particles, self.weights)
-
-    def resample(self) -> tuple[bool, int, int]:
-        """Resample per the policy, inject, check admissibility.
-
-        Returns
-        -------
-        tuple
-            ``(resampled, injected, regenerated)``.
-        """
-        policy = self.resampling
-        if hasattr(policy, "_resample"):
-            new = policy._resample(self)
-        else:
-            idx = policy.indexes(self)
-            new = None if idx is None else _gather(self.particles, idx)
-        return self._adopt(new)
-
-    def _adopt(self, new, weights=None) -> tuple[bool, int, int]:
-        """`resample` from the resampled set ``new`` on (None: not resampled)."""
-        injected = 0
-        if new is not None:
-            n = len(new)
-            self.particles = new
-            self.weights = _uniform(n) if weights is None else weights
-            inj = self.injection
-            if inj is not None and inj.probability > 0 and inj.grow is not None:
-                prob = inj.probability
-                injected = int(prob * inj.grow)
-                if inj.share is not None:
-                    prob = min(prob, inj.share)
-                if injected:  # the random ones carry the probability's share
-                    extra = self.world.sample_free_poses(
-                        injected, self.rng, self.resolution, self.admissible_radius
-                    )
-                    self.particles = np.concatenate([new, extra])
-                    self.weights = np.concatenate(
-                        [
-                            np.full(n, (1.0 - prob) / n),
-                            np.full(injected, prob / injected),
-                        ]
-                    )
-            elif inj is not None and inj.probability > 0:
-                mask = self.rng.random(n) < inj.probability
-                injected = int(mask.sum())
-                if injected:
-                    self.particles[mask] = self.world.sample_free_poses(
-                        injected, self.rng, self.resolution, self.admissible_radius
-                    )
-        regenerated = 0
-        if self.check:
-            bad = np.empty(len(self.particles), dtype=np.bool_)
-            regenerated = _kernels.outside(
-                self.particles,
-                self._admissible,
-                self._adm_origin[0],
-                self._adm_origin[1],
-                1.0 / self.resolution,
-                bad,
-            )
-            if regenerated:
-                self.particles[bad] = self.world.sample_free_poses(
-                    regenerated, self.rng, self.resolution, self.admissible_radius
-                )
-                w = self.weights.copy()
-                w[bad] = self.regen_weight * w.mean()
-                self.weights = w / w.sum()
-        return new is not None, injected, regenerated
-
+    # -- the parts of a step --------------------------------------------------
     def step(self, odo_prev, odo_now, z) -> np.ndarray:
         """One filter step: predict, update, estimate, resample.
 
@@ -464,79 +250,130 @@ class MCL:
         numpy.ndarray, shape (3,)
             The estimate after the update (before resampling).
         """
-        sensor, motion, policy = self.sensor, self.motion, self.resampling
-        plan, p = self._plan, self.particles
-        if plan[0] is not sensor or plan[1] is not motion or plan[2] is not policy:
-            plan = self._plan = _step_plan(sensor, motion, policy)
-        small = (  # one call that checks the readings' values itself: `_small_step`
-            plan[3] and plan[4] and p is self._mine[0] and self.weights is self._mine[1]
-            and len(p) < PARALLEL_MIN and self._prebuild is None
-        )  # fmt: skip
-        words = self._pcg_words() if small else None
-        if words is not None:
-            n = len(p)
-            done = self._small_step(odo_prev, odo_now, z, plan[5], words)
-        else:
-            check = getattr(sensor, "checked_scan", None)
-            if check is not None:  # before any draw or move: a refusal changes nothing
-                z = check(z)
-            if self._prebuild is not None:  # its kernels, from numba's cache
-                if not self._prebuild.poll():  # meanwhile the last ones here
-                    from ._prebuild import compile_tail
-
-                    compile_tail(self, self._prebuild)
-                self._prebuild.wait()
-                self._prebuild = None
-            n = len(self.particles)
-            done = self._fused_step(odo_prev, odo_now, z, check is not None, plan)
-        fused = done is not False
-        if fused:
-            est = self._last_estimate
+        if hasattr(self.sensor, "checked_scan"):  # a bad scan changes nothing
+            z = self.sensor.checked_scan(z)
+        n = self.n
+        if self._fused is not None:
+            self.last_estimate = self._fused_step(odo_prev, odo_now, z)
         else:
             self.predict(odo_prev, odo_now)
             self.update(z)
-            est = self.last_estimate = self.estimate()
-        log_mean = self._log_mean
-        lent = (self.particles, self.weights)
-        if done:  # resampled in the same call
-            resampled, injected, regenerated = self._adopt(*done)
-        else:
-            resampled, injected, regenerated = self.resample()
-        if fused:  # arrays lent by the scratch and still in use are not lent again
-            own = plan[6]
-            for a in lent:
-                if not own or a is self.particles or a is self.weights:
-                    self._scratch.drop(a)
-        self._mine = (self.particles, self.weights)
-        self._info = (  # made a `StepInfo` when read (`info`)
-            n, self.ess, resampled, len(self.particles), injected, regenerated, log_mean
+            self.last_estimate = self.estimate()
+        ess, log_mean = self.ess, self.log_mean_likelihood
+        resampled, injected, regenerated = self.resample()
+        self.info = StepInfo(n, ess, resampled, self.n, injected, regenerated, log_mean)
+        return self.last_estimate
+
+    def predict(self, odo_prev, odo_now) -> None:
+        """Move the particles by the odometry increment plus noise."""
+        self.particles = self.motion.sample(self.particles, odo_prev, odo_now, self.rng)
+
+    def update(self, z) -> float:
+        """Weight the particles by readings ``z`` (S,), m; return the log mean lik.
+
+        ``w_j <- w_j p(z | x_j)``, normalised; the log of the mean likelihood
+        ``sum_j w_j p(z | x_j)`` (prior weights) feeds augmented MCL.
+        """
+        ll = np.asarray(self.sensor.log_likelihood(self.particles, z), dtype=float)
+        if ll.shape != self.weights.shape:
+            raise ValueError(f"log_likelihood gave shape {ll.shape}, not (N,)")
+        if np.isnan(ll).any() or np.isposinf(ll).any():
+            raise ValueError("the sensor model's log_likelihood gave NaN or +inf")
+        top = ll.max()
+        if top == -np.inf:  # no particle fits the scan: the weights stay
+            self._weighed(self.weights, top)
+            return top
+        w = self.weights * np.exp(ll - top)
+        total = w.sum()
+        self._weighed(w / total, top + math.log(total / self.weights.sum()))
+        return self.log_mean_likelihood
+
+    def _fused_step(self, odo_prev, odo_now, z) -> np.ndarray:
+        """`predict`, `update` and `estimate` in the sensor's fused kernel."""
+        increment = odometry_increment(odo_prev, odo_now)
+        std = noise_std(self.motion.alphas, *increment)
+        normals = self.rng.standard_normal((self.n, 3))  # as `predict` draws
+        serial, threaded = self._fused
+        kernel = threaded if self.n >= PARALLEL_MIN else serial
+        moved, weights, est = (
+            np.empty_like(self.particles),
+            np.empty(self.n),
+            np.empty(3),
+        )
+        log_mean, ess = kernel(
+            self.particles, self.weights, normals, *increment, *std,
+            *self.sensor.fused_arguments(z), moved, weights, est,
         )  # fmt: skip
+        self.particles = moved
+        self._weighed(weights, log_mean, ess)
         return est
 
-    @property
-    def info(self) -> StepInfo | None:
-        """What the last `step` did (None before the first)."""
-        i = self._info
-        if type(i) is tuple:
-            i = self._info = StepInfo(*i)
-        return i
+    def _weighed(self, weights, log_mean: float, ess: float | None = None) -> None:
+        """Take the updated weights and what the update measured."""
+        self.weights = weights
+        self.ess = float(1.0 / np.dot(weights, weights) if ess is None else ess)
+        self.log_mean_likelihood = float(log_mean)
+        if self.injection is not None:
+            self.injection.update(self.log_mean_likelihood)
 
-    @info.setter
-    def info(self, value: StepInfo | None) -> None:
-        self._info = value
+    def estimate(self) -> np.ndarray:
+        """Weighted mean pose (circular mean of the heading), shape (3,)."""
+        return estimate(self.particles, self.weights)
 
-    @property
-    def last_estimate(self) -> np.ndarray:
-        """The estimate (3,) of the last step, or of the set `reset` drew."""
-        if self._last_estimate is None:
-            self._last_estimate = _kernels.weighted_pose_mean(*self._estimate_of)
-            self._estimate_of = None
-        return self._last_estimate
+    def resample(self) -> tuple[bool, int, int]:
+        """Resample per the policy, inject, check admissibility.
 
-    @last_estimate.setter
-    def last_estimate(self, value) -> None:
-        self._last_estimate = value
-        self._estimate_of = None
+        Returns
+        -------
+        tuple
+            ``(resampled, injected, regenerated)``.
+        """
+        idx = self.resampling.indexes(self)
+        injected = 0
+        if idx is not None:
+            self.particles = self.particles[idx]
+            self.weights = np.full(len(idx), 1.0 / len(idx))
+            if self.injection is not None:
+                injected = self._inject()
+        regenerated = self._regenerate() if self.check else 0
+        return idx is not None, injected, regenerated
+
+    def _inject(self) -> int:
+        """Augmented MCL: random particles in proportion to the likelihood's drop."""
+        inj, n = self.injection, self.n
+        prob = inj.probability
+        if prob <= 0:
+            return 0
+        if inj.grow is None:  # replace (Thrun, table 8.3)
+            mask = self.rng.random(n) < prob
+            k = int(mask.sum())
+            if k:
+                self.particles[mask] = self._random_poses(k)
+            return k
+        k = int(prob * inj.grow)  # add, carrying the probability's share
+        if k:
+            share = prob if inj.share is None else min(prob, inj.share)
+            self.particles = np.concatenate([self.particles, self._random_poses(k)])
+            self.weights = np.concatenate(
+                [np.full(n, (1.0 - share) / n), np.full(k, share / k)]
+            )
+        return k
+
+    def _regenerate(self) -> int:
+        """Draw afresh the particles off the admissible area (the paper's step 3)."""
+        bad = ~on_grid(self.admissible, self.particles)
+        k = int(bad.sum())
+        if k:
+            self.particles[bad] = self._random_poses(k)
+            w = self.weights.copy()
+            w[bad] = self.regen_weight * w.mean()
+            self.weights = w / w.sum()
+        return k
+
+    def _random_poses(self, k: int) -> np.ndarray:
+        return self.world.sample_free_poses(
+            k, self.rng, self.resolution, self.admissible_radius
+        )
 
     @property
     def n(self) -> int:
@@ -545,25 +382,14 @@ class MCL:
 
     def set_particles(self, particles, weights=None) -> None:
         """Replace the particle set (weights default to uniform)."""
-        p = np.array(particles, dtype=np.float64, order="C")  # a copy
-        if p.ndim != 2 or p.shape[1] != 3:
-            _particles(p)  # raises
-        w = (
-            _uniform(len(p))
-            if weights is None
-            else np.asarray(weights, dtype=float) / np.sum(weights)
-        )
+        p = _particles(particles).copy()
+        if weights is None:
+            w = np.full(len(p), 1.0 / len(p))
+        else:
+            w = np.asarray(weights, dtype=float) / np.sum(weights)
         if w.shape != (len(p),):
             raise ValueError("weights must have shape (N,)")
         self.particles, self.weights = p, w
-        self._mine = (p, w if weights is None else None)  # plain: not checked again
-
-
-def _uniform(n: int) -> np.ndarray:
-    """``np.full(n, 1.0 / n)``, the same numbers (a fill is quicker to call)."""
-    w = np.empty(n)
-    w.fill(1.0 / n)
-    return w
 
 
 BEST = {

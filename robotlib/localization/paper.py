@@ -25,7 +25,6 @@ import numpy as np
 from .._random import as_rng
 from ..sensing import SonarModel
 from ..world import World
-from . import _kernels
 from .cones import ConeTable, expected_readings
 from .motion import _particles, sample_motion_odometry
 from .resampling import _weights, multinomial_resample
@@ -44,6 +43,7 @@ __all__ = [
     "resize",
     "admissible",
     "check_particles",
+    "on_grid",
     "estimate",
 ]
 
@@ -160,7 +160,7 @@ def dispersion_index(particles, map_size) -> float:
         Dimensionless, 0 for coincident particles.
     """
     p = _particles(particles)
-    spread = _kernels.position_spread(p, np.arange(len(p)))
+    spread = math.sqrt(p[:, 0].var() + p[:, 1].var())
     return spread / math.hypot(*map_size)
 
 
@@ -198,17 +198,22 @@ def admissible(
     numpy.ndarray of bool, shape (N,)
     """
     p = _particles(particles)
-    grid = world.free_space(resolution, radius)
-    bad = np.empty(len(p), dtype=np.bool_)
-    _kernels.outside(
-        p,
-        np.ascontiguousarray(grid.data),
-        grid.origin[0],
-        grid.origin[1],
-        1.0 / grid.resolution,
-        bad,
-    )
-    return ~bad
+    return on_grid(world.free_space(resolution, radius), p)
+
+
+def on_grid(grid, particles: np.ndarray) -> np.ndarray:
+    """Whether each particle (N, 3) lies on a true cell of a boolean grid, (N,).
+
+    ``grid`` is a `robotlib.world.grid.Grid` (``data`` (ny, nx) bool, its
+    ``origin`` and ``resolution``); particles off the grid are not on it.
+    """
+    ny, nx = grid.data.shape
+    col = np.floor((particles[:, 0] - grid.origin[0]) / grid.resolution)
+    row = np.floor((particles[:, 1] - grid.origin[1]) / grid.resolution)
+    inside = (col >= 0) & (col < nx) & (row >= 0) & (row < ny)
+    ok = np.zeros(len(particles), dtype=bool)
+    ok[inside] = grid.data[row[inside].astype(np.intp), col[inside].astype(np.intp)]
+    return ok
 
 
 def check_particles(
@@ -277,4 +282,6 @@ def estimate(particles, weights) -> np.ndarray:
     w = _weights(weights)
     if len(w) != len(p):
         raise ValueError("particles and weights differ in length")
-    return _kernels.weighted_pose_mean(p, w)
+    w = w / w.sum()
+    heading = math.atan2(w @ np.sin(p[:, 2]), w @ np.cos(p[:, 2]))
+    return np.array([w @ p[:, 0], w @ p[:, 1], heading])

@@ -9,28 +9,23 @@ indexes of the particles to keep (or ``None``: no resampling this step):
   run only when the effective sample size falls below a share of ``N``;
 - `KLDResampling`: KLD-sampling, every step (or below an ESS threshold).
 
-`AugmentedInjection` adds augmented MCL's random particles (Thrun, table 8.3);
-`_step_plan` says how `MCL.step` may run with a policy and its models.
-Imports the localization's own pieces; never `robotlib.localization.mcl`
-(which imports this module) except for type hints.
+`AugmentedInjection` adds augmented MCL's random particles (Thrun, table 8.3).
+A policy of your own needs only ``indexes(mcl)``, reading the filter's
+``particles``, ``weights``, ``ess``, ``world`` and ``rng``. Imports the
+localization's own pieces, never `robotlib.localization.mcl` (which
+imports this module).
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 import numpy as np
 
-from . import _kernels
 from .kld import kld_resample
-from .motion import OdometryMotionModel, _particles
-from .paper import RESIZE_FLOOR, resize
+from .paper import RESIZE_FLOOR, dispersion_index, resize
 from .resampling import RESAMPLERS, multinomial_resample
-
-if TYPE_CHECKING:
-    from .mcl import MCL
 
 __all__ = [
     "PaperResampling",
@@ -38,25 +33,6 @@ __all__ = [
     "KLDResampling",
     "AugmentedInjection",
 ]
-
-
-def _plain(a, ndim: int) -> bool:
-    """Whether ``a`` is a C-contiguous float64 array of ``ndim`` dimensions."""
-    return (
-        type(a) is np.ndarray
-        and a.ndim == ndim
-        and (a.dtype is _F64 or a.dtype == _F64)  # the canonical one: no ``==``
-        and a.flags.c_contiguous
-    )
-
-
-_F64 = np.dtype(np.float64)
-
-
-def _gather(particles: np.ndarray, idx) -> np.ndarray:
-    new = np.empty((len(idx), 3))
-    _kernels.gather(particles, np.ascontiguousarray(idx), new)
-    return new
 
 
 @dataclass(frozen=True)
@@ -74,13 +50,11 @@ class PaperResampling:
     lam: float = 0.5
     floor: int = RESIZE_FLOOR
 
-    def indexes(self, mcl: MCL) -> np.ndarray:
+    def indexes(self, mcl) -> np.ndarray:
         """Indexes of the new particle set (the resize truncates i.i.d. draws)."""
-        p, w = mcl.particles, mcl.weights
-        idx = multinomial_resample(w, mcl.rng)
-        ip = _kernels.position_spread(p, idx) / mcl.map_diagonal
-        n = resize(len(idx), ip, self.lam, self.floor)
-        return idx[:n]
+        idx = multinomial_resample(mcl.weights, mcl.rng)
+        ip = dispersion_index(mcl.particles[idx], mcl.world.size)
+        return idx[: resize(len(idx), ip, self.lam, self.floor)]
 
 
 @dataclass(frozen=True)
@@ -104,28 +78,12 @@ class ThresholdResampling:
         if self.method not in RESAMPLERS:
             raise ValueError(f"unknown resampler {self.method!r}")
 
-    def indexes(self, mcl: MCL) -> np.ndarray | None:
+    def indexes(self, mcl) -> np.ndarray | None:
         """Indexes of the new set, or None to keep the weighted set."""
         n = len(mcl.weights)
         if mcl.ess >= self.threshold * n and self.threshold < 1.0:
             return None
         return RESAMPLERS[self.method](mcl.weights, mcl.rng)
-
-    def _resample(self, mcl: MCL) -> np.ndarray | None:
-        """Return the new particles (`indexes`, gathered), or None to keep them."""
-        if self.method not in ("systematic", "low_variance"):
-            idx = self.indexes(mcl)
-            return None if idx is None else _gather(mcl.particles, idx)
-        n = len(mcl.weights)
-        if mcl.ess >= self.threshold * n and self.threshold < 1.0:
-            return None
-        p, w = mcl.particles, mcl.weights
-        if not (_plain(p, 2) and _plain(w, 1) and p.shape == (n, 3)):
-            idx = self.indexes(mcl)  # set from outside: the checked path
-            return None if idx is None else _gather(_particles(p), idx)
-        out = np.empty((n, 3))  # the same draw as `systematic_resample`
-        _kernels.systematic_gather(p, w, mcl.rng.random(), out)
-        return out
 
 
 @dataclass(frozen=True)
@@ -152,7 +110,7 @@ class KLDResampling:
     bin_theta: float = math.radians(15.0)
     threshold: float = 1.0
 
-    def indexes(self, mcl: MCL) -> np.ndarray | None:
+    def indexes(self, mcl) -> np.ndarray | None:
         """Indexes of the new set, or None to keep the weighted set."""
         n = len(mcl.weights)
         if self.threshold < 1.0 and mcl.ess >= self.threshold * n:
@@ -243,31 +201,3 @@ class AugmentedInjection:
     def reset(self) -> None:
         """Forget the averages."""
         self.w_slow = self.w_fast = float("nan")
-
-
-def _step_plan(sensor, motion, policy) -> tuple:
-    """``(sensor, motion, policy, fused, fast, every, own)``: how `MCL.step` may run.
-
-    ``fused``: the models allow the fused step (a sensor model with its
-    ``_run``, the odometry motion model); ``fast``: on the sensor's cone
-    table (else, the exact path, up to `NORMALS_CHUNK` particles);
-    ``every``: the policy resamples every step by low variance, in the call
-    (`ThresholdResampling._resample`'s draw); ``own``: the policy keeps no
-    reference to the sets it resamples (`_OWN_POLICIES`). The models'
-    attributes read here are fixed (frozen dataclasses, a sensor's ``fast``).
-    """
-    fused = (
-        hasattr(sensor, "_run")  # the exact path with its noise drawn here
-        and type(motion).sample is OdometryMotionModel.sample
-    )
-    every = (
-        type(policy) is ThresholdResampling
-        and policy.threshold >= 1.0
-        and policy.method in ("systematic", "low_variance")
-    )
-    fast = bool(getattr(sensor, "fast", False))
-    return sensor, motion, policy, fused, fast, every, type(policy) in _OWN_POLICIES
-
-
-_OWN_POLICIES = (ThresholdResampling, KLDResampling, PaperResampling)
-"""Policies known to keep no reference to the particles or weights they resample."""

@@ -18,7 +18,6 @@ from __future__ import annotations
 import numpy as np
 
 from .._random import as_rng
-from . import _kernels
 
 __all__ = [
     "effective_sample_size",
@@ -37,6 +36,17 @@ def _weights(weights) -> np.ndarray:
     if not (np.all(w >= 0) and w.sum() > 0):
         raise ValueError("weights must be non-negative with a positive sum")
     return w
+
+
+def _search(weights: np.ndarray, positions: np.ndarray) -> np.ndarray:
+    """Index of the particle under each position in [0, 1) of the cumulative weights.
+
+    Particle ``j`` covers ``[c_{j-1}, c_j)`` of the normalised cumulative sum
+    ``c``: the first ``j`` with ``c_j > u``.
+    """
+    cumulative = np.cumsum(weights)
+    idx = np.searchsorted(cumulative, positions * cumulative[-1], side="right")
+    return np.minimum(idx, len(weights) - 1)
 
 
 def effective_sample_size(weights) -> float:
@@ -67,9 +77,7 @@ def multinomial_resample(
     """
     w = _weights(weights)
     n = len(w) if n is None else int(n)
-    out = np.empty(n, dtype=np.int64)
-    _kernels.search_indexes(_kernels.cumulative(w), as_rng(rng).random(n), out)
-    return out
+    return _search(w, as_rng(rng).random(n))
 
 
 def stratified_resample(
@@ -81,10 +89,7 @@ def stratified_resample(
     """
     w = _weights(weights)
     n = len(w) if n is None else int(n)
-    positions = (np.arange(n) + as_rng(rng).random(n)) / n
-    out = np.empty(n, dtype=np.int64)
-    _kernels.sorted_indexes(_kernels.cumulative(w), positions, out)
-    return out
+    return _search(w, (np.arange(n) + as_rng(rng).random(n)) / n)
 
 
 def systematic_resample(
@@ -97,10 +102,7 @@ def systematic_resample(
     """
     w = _weights(weights)
     n = len(w) if n is None else int(n)
-    positions = (np.arange(n) + as_rng(rng).random()) / n
-    out = np.empty(n, dtype=np.int64)
-    _kernels.sorted_indexes(_kernels.cumulative(w), positions, out)
-    return out
+    return _search(w, (np.arange(n) + as_rng(rng).random()) / n)
 
 
 def residual_resample(

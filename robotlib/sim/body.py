@@ -347,7 +347,7 @@ class SimBody:
         if self._laser_rng is None:
             self._laser_rng = self._rng.spawn(1)[0]
         sim = self._sim
-        obstacles = scene_obstacles(sim.world.obstacles, sim.bodies, self)
+        obstacles = scene_obstacles(sim.sensed_obstacles, sim.bodies, self)
         return simulate_laser(
             obstacles, self.true_pose, self._sim.laser, self._laser_rng
         )[0]

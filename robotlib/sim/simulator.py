@@ -40,6 +40,10 @@ class Simulator:
     laser : LaserModel, optional
         The laser each robot carries (default: a SICK LMS-200), read with
         `SimBody.scan_laser` or `SimRobot.readlaser`.
+    end_faces : bool
+        Whether the sonar and laser see the walls' free ends as end faces
+        (`robotlib.world.World.sensed_obstacles`, the default) or see bare
+        segments (a wall met end-on is invisible; for comparison only).
     """
 
     def __init__(
@@ -49,8 +53,10 @@ class Simulator:
         sonar: SonarModel | None = None,
         odometry: OdometryNoise | None = None,
         laser: LaserModel | None = None,
+        end_faces: bool = True,
     ):
         self.world = world
+        self.sensed_obstacles = world.sensed_obstacles if end_faces else world.obstacles
         self.sonar = SonarModel() if sonar is None else sonar
         self.laser = LaserModel() if laser is None else laser
         self.odometry = OdometryNoise() if odometry is None else odometry
@@ -83,7 +89,7 @@ class Simulator:
             others = [b.true_pose for b in self.bodies if b is not body]
             body._advance(self.world.obstacles, others)
         for body in self.bodies:
-            body._sense(scene_obstacles(self.world.obstacles, self.bodies, body))
+            body._sense(scene_obstacles(self.sensed_obstacles, self.bodies, body))
         self.time += CYCLE
 
     def reset(self) -> None:

@@ -9,10 +9,10 @@ import math
 import numba as nb
 import numpy as np
 
-from .._config import JIT, JIT_PARALLEL, jit_inner, serial_and_parallel
+from .._config import JIT, JIT_PARALLEL, serial_and_parallel
 
 
-@jit_inner
+@nb.njit(**JIT)
 def point_segment_distance(px, py, x1, y1, x2, y2):
     """Euclidean distance from point ``(px, py)`` to segment ``(x1, y1)-(x2, y2)``."""
     dx = x2 - x1

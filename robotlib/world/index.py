@@ -2,11 +2,10 @@
 
 A MobileSim map of a building holds tens of thousands of DATA points (each a
 small cross of two segments, see `robotlib.world.World.obstacles`);
-measuring every distance and casting every ray against all of them makes a
-distance field or a cone table take minutes. The index lets the kernels
-look only at the buckets near a point or along a ray, and gives the very
-same numbers (`robotlib.world._kernels.indexed_nearest`,
-`robotlib.sensing._kernels.indexed_ray`). Imports only the world's kernels.
+measuring every distance against all of them makes a distance field take
+minutes. The index lets the kernels look only at the buckets near a point,
+and gives the very same numbers (`robotlib.world._kernels.indexed_nearest`).
+Imports only the world's kernels.
 """
 
 from __future__ import annotations

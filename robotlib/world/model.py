@@ -20,11 +20,20 @@ from . import _kernels
 from .grid import Grid
 from .index import INDEX_MIN_SEGMENTS, SegmentIndex
 
-__all__ = ["World", "POINT_SIZE"]
+__all__ = ["World", "POINT_SIZE", "END_FACE"]
 
 
 POINT_SIZE = 0.02
 """Side of the small cross that stands for one map DATA point, m."""
+
+END_FACE = 0.12
+"""Width of the face a wall's free end shows to the simulated sensors, m.
+
+A wall is a segment in the files, but a real partition is about this thick:
+met end-on (a door frame, a partition's end), it echoes from its end face.
+`World.sensed_obstacles` adds that face."""
+
+_JOINED = 1e-3  # an end this close to another wall is joined to it, m
 
 _MAX_REDRAWS = 20
 _FIELD_BLOCK = 4  # cells a side of the distance field's blocks on large maps
@@ -147,6 +156,24 @@ class World:
             obs.setflags(write=False)
             self._cache["obstacles"] = obs
         return self._cache["obstacles"]
+
+    @property
+    def sensed_obstacles(self) -> np.ndarray:
+        """The obstacles as the simulated sonar and laser see them, shape (M'', 4), m.
+
+        `obstacles` plus, at each free end of a wall (an end that touches no
+        other wall), its end face: a segment `END_FACE` wide across the wall
+        through that end. Without it a wall met end-on, a segment of no
+        thickness, returns no echo. Collisions and distances use `obstacles`
+        (the face changes them by at most ``END_FACE / 2``).
+        """
+        if "sensed" not in self._cache:
+            sensed = np.ascontiguousarray(
+                np.concatenate([self.obstacles, _end_faces(self.segments)])
+            )
+            sensed.setflags(write=False)
+            self._cache["sensed"] = sensed
+        return self._cache["sensed"]
 
     def distance_to_walls(self, xy) -> np.ndarray:
         """Distance from points to the nearest obstacle.
@@ -383,6 +410,29 @@ class World:
         centres = grid.centres().reshape(-1, 2)
         out[todo, :2] = centres[pick]
         return out
+
+
+def _end_faces(seg: np.ndarray) -> np.ndarray:
+    """End faces (`END_FACE` wide, across the wall) at the walls' free ends.
+
+    ``seg`` (M, 4) m; returns (F, 4) m. An end is free when no other wall
+    passes within `_JOINED` of it; zero-length walls get none.
+    """
+    faces = []
+    d = seg[:, 2:] - seg[:, :2]
+    length = np.hypot(d[:, 0], d[:, 1])
+    a, b = seg[:, :2], seg[:, 2:]
+    for i in np.flatnonzero(length > _JOINED):
+        normal = np.array([-d[i, 1], d[i, 0]]) / length[i] * (END_FACE / 2)
+        for p in (a[i], b[i]):
+            # distance from p to every wall, its own left out
+            along = np.einsum("ij,ij->i", p - a, d)
+            t = np.clip(along / np.maximum(length**2, 1e-300), 0.0, 1.0)
+            dist = np.hypot(*(a + t[:, None] * d - p).T)
+            dist[i] = np.inf
+            if dist.min() > _JOINED:
+                faces.append((*(p - normal), *(p + normal)))
+    return np.array(faces, dtype=float).reshape(-1, 4)
 
 
 def _free_cells(mask: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

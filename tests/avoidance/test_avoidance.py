@@ -269,6 +269,7 @@ def test_start_goal_pairs_are_seeded_free_and_reachable():
                 assert free.data[i, j]
 
 
+@pytest.mark.slow
 def test_vfh_reaches_a_goal_in_the_clutter_and_the_field_gets_trapped():
     pairs = start_goal_pairs("clutter", 2, seed=0)
     eps = run_episodes("clutter", VFH(), pairs, seed=0)

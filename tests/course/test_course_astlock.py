@@ -6,6 +6,8 @@ import threading
 import time
 from pathlib import Path
 
+import pytest
+
 from robotlib.course import astlock
 
 COURSE = Path(__file__).parents[2] / "robotlib" / "course"
@@ -48,11 +50,13 @@ def _in_threads(work, n_threads=4, repeats=50):
     return errors
 
 
+@pytest.mark.slow
 def test_parse_in_threads_never_raises_system_error():
     # plain ast.parse fails here on CPython 3.11 within a few calls
     assert _in_threads(lambda: astlock.parse(SOURCE)) == []
 
 
+@pytest.mark.slow
 def test_tracebacks_in_threads_never_raise_system_error():
     def fail_and_format():
         try:

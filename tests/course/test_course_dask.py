@@ -21,6 +21,8 @@ from robotlib.course.notebooks import read_notebook, release_notebook, write_not
 
 from tests.sandboxing import adopt_orphans, need_sandbox, procs_with
 
+pytestmark = pytest.mark.slow  # a class graded on a Dask cluster
+
 TINY = Path(__file__).parents[1] / "data" / "course" / "tiny.ipynb"
 
 

@@ -250,6 +250,7 @@ def graded(tmp_path_factory):
     return rows, expected, out, elapsed, root, folder
 
 
+@pytest.mark.slow
 def test_gradebook_columns(graded):
     rows, expected, out, *_ = graded
     header = out.read_text().splitlines()[0].split(",")
@@ -261,6 +262,7 @@ def test_gradebook_columns(graded):
     assert all(r["max"] == "5" for r in rows.values())
 
 
+@pytest.mark.slow
 def test_points(graded):
     rows, expected, *_ = graded
     wrong = {}
@@ -271,6 +273,7 @@ def test_points(graded):
     assert wrong == {}
 
 
+@pytest.mark.slow
 def test_cheats_are_zeroed_with_a_note_and_flagged(graded):
     rows = graded[0]
     for student in ("alias", "getattr_string", "runtime_lookup", "exec_string"):
@@ -283,6 +286,7 @@ def test_cheats_are_zeroed_with_a_note_and_flagged(graded):
     assert rows["solution"]["flags"] == "" and rows["partial"]["flags"] == ""
 
 
+@pytest.mark.slow
 def test_statuses_and_reasons(graded):
     rows = graded[0]
     assert "NotImplementedError" in rows["released"]["notes"]
@@ -296,6 +300,7 @@ def test_statuses_and_reasons(graded):
     assert "reads notebooks" in rows["escape"]["flags"]
 
 
+@pytest.mark.slow
 def test_nobody_was_harmed(graded):
     root, folder = graded[4], graded[5]
     for p in (root / "outside" / "pwned", Path(sys.prefix, "pwned"),
@@ -309,6 +314,7 @@ def test_nobody_was_harmed(graded):
         assert procs_with(needle) == [], needle
 
 
+@pytest.mark.slow
 def test_secrets_and_hooks_stay_out(graded):
     rows = graded[0]
     # the attack ran to its end and found nothing: `mean` returned 0.0 (had it
@@ -323,6 +329,7 @@ def test_secrets_and_hooks_stay_out(graded):
     assert rows["hooked"]["add"] == "1" and rows["hooked"]["mean"] == "2"
 
 
+@pytest.mark.slow
 def test_feedback_teaches_and_never_collides(graded):
     out = graded[2]
     fb = out.with_name("gradebook-feedback")
@@ -335,6 +342,7 @@ def test_feedback_teaches_and_never_collides(graded):
     assert "expected 'CHECK mean 2.333333', got 'CHECK mean 2.5'" in const
 
 
+@pytest.mark.slow
 def test_records_resume_and_manual_scores(graded):
     rows, expected, out, _, root, folder = graded
     manual = out.with_name("gradebook-manual.csv")
@@ -364,6 +372,7 @@ def test_records_resume_and_manual_scores(graded):
     assert time.monotonic() - t0 < graded[3]
 
 
+@pytest.mark.slow
 def test_gradebook_reports_each_submissions_time(graded):
     rows, _, _, elapsed, *_ = graded
     seconds = {student: float(r["seconds"]) for student, r in rows.items()}
@@ -377,6 +386,7 @@ def test_gradebook_reports_each_submissions_time(graded):
     assert sum(seconds.values()) <= 2 * elapsed + 0.05 * len(seconds)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("sig", ["SIGINT", "SIGTERM"])
 def test_interrupt_leaves_no_process(tmp_path, sig):
     """Ctrl-C (SIGINT) or SIGTERM in the middle of a class: no process is left."""
@@ -533,6 +543,7 @@ def test_notes_name_the_function_the_exercise_lists_and_the_alias():
     assert {plan.listed_as(f, "sonar_map") for f, _ in hits} == {pkg}
 
 
+@pytest.mark.slow
 def test_slow_setup_on_a_cold_cache_does_not_zero_correct_work(tmp_path):
     """A set-up cell slower than the cell limit, compiling numba cold, costs no points.
 
@@ -562,6 +573,7 @@ def test_slow_setup_on_a_cold_cache_does_not_zero_correct_work(tmp_path):
     assert all(v == 0 for v in rows["rel"].points.values()), rows["rel"].points
 
 
+@pytest.mark.slow
 def test_a_submission_out_of_restarts_is_graded_not_a_grader_error(tmp_path):
     """Hanging more often than ``--restarts`` allows ends in zeros with reasons.
 
@@ -583,6 +595,7 @@ def test_a_submission_out_of_restarts_is_graded_not_a_grader_error(tmp_path):
     assert "hanging or crashing" in r.reasons["scale"], r.reasons
 
 
+@pytest.mark.slow
 def test_a_process_that_cannot_start_is_restarted(tmp_path, monkeypatch):
     """The system refusing a process (out of pids) is a restart, not a grader error."""
     import errno

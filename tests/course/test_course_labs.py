@@ -30,6 +30,8 @@ from robotlib.course.notebooks import (
 
 from tests.sandboxing import need_sandbox
 
+pytestmark = pytest.mark.slow  # every lab graded whole in the sandbox
+
 ROOT = Path(__file__).resolve().parents[2]
 LABS = sorted(p.stem for p in (ROOT / "solutions").glob("*.ipynb"))
 

@@ -7,8 +7,12 @@ from __future__ import annotations
 import copy
 from pathlib import Path
 
+import pytest
+
 from robotlib.course import grade as g
 from robotlib.course.notebooks import read_notebook, write_notebook
+
+pytestmark = pytest.mark.slow  # a lab graded whole
 
 ROOT = Path(__file__).resolve().parents[2]
 LAB = "lab2_avoidance"

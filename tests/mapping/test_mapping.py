@@ -51,6 +51,7 @@ def test_laser_matches_the_exact_caster_at_its_mount():
     assert laser.angles[0] == -math.pi / 2 and laser.angles[-1] == math.pi / 2
 
 
+@pytest.mark.slow
 def test_laser_on_a_grid_is_near_the_exact_caster():
     laser = LaserModel(max_range=4.0)
     poses = [[1.0, 2.0, 0.3], [4.5, 3.0, -2.0]]
@@ -228,6 +229,7 @@ def test_laser_kernel_matches_the_reference():
     np.testing.assert_allclose(L, ref, atol=1e-5)
 
 
+@pytest.mark.slow
 def test_many_particle_kernels_match_single_map_kernels_and_references():
     rng = np.random.default_rng(4)
     shape, origin, res = (40, 60), (-0.5, -0.5), 0.1

@@ -52,7 +52,10 @@ SHRUNK = 0.7  # a figure shown below 70 % of its own width is too wide for the p
 _have = importlib.util.find_spec("playwright") is not None and Path(CHROMIUM).exists()
 if not _have and os.environ.get("ROBOTLIB_BROWSER_TEST") == "1":
     raise RuntimeError(f"the browser test needs playwright and {CHROMIUM}")
-pytestmark = pytest.mark.skipif(not _have, reason=f"needs playwright and {CHROMIUM}")
+pytestmark = [
+    pytest.mark.skipif(not _have, reason=f"needs playwright and {CHROMIUM}"),
+    pytest.mark.slow,  # a real browser
+]
 
 
 @pytest.fixture(scope="module")

@@ -126,6 +126,7 @@ def route():
     return drive_route(load_world("corridor"), seed=0, n_steps=8)
 
 
+@pytest.mark.slow
 def test_mcl_panel_controls(route):
     panel = widgets.MCLPanel(route, n_steps=4, n=300, lam=0.5)
     values = [v for _, v in panel.n.options]

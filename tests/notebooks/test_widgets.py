@@ -81,6 +81,7 @@ def test_mcl_panel_callbacks(route):
     assert "localized" in panel.status.value
 
 
+@pytest.mark.slow
 def test_mcl_panel_presets_and_worlds(route):
     panel = widgets.MCLPanel(route, n_steps=6, n=300, lam=0.5)
     assert panel.preset.value == "paper"  # the choices make the paper's filter

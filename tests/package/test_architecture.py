@@ -196,23 +196,10 @@ def _loop_in(group: list[str], graph: dict[str, set[str]]) -> list[str]:
         seen.add(step)
 
 
-TEMPORARY_CIRCLES = ("robotlib.localization",)
-"""Packages whose inner circles are tolerated for now. TEMPORARY: the lead is
-rebuilding robotlib.localization (mcl -> _prebuild -> policies -> paper ->
-sensors -> cones -> _prebuild, through function-level imports); remove this
-allowance when that lands."""
-
-
-def _tolerated(group: list[str]) -> bool:
-    return all(
-        any(m == p or m.startswith(p + ".") for p in TEMPORARY_CIRCLES) for m in group
-    )
-
-
 def test_no_import_circles():
     """No circle, counting imports inside functions and TYPE_CHECKING blocks."""
     graph = {m: _imports(m, p, top_only=False) for m, p in MODULES.items()}
-    bad = [g for g in _circles(graph) if not _tolerated(g)]
+    bad = _circles(graph)
     assert not bad, "import circles:\n" + "\n".join(
         " -> ".join(_loop_in(g, graph)) for g in bad
     )

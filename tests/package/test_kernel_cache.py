@@ -7,6 +7,8 @@ import subprocess
 import sys
 import textwrap
 
+import pytest
+
 from robotlib._kernel_cache import DIGEST_NAME, cache_subpath, check, kernel_sources
 
 BASE = "import numba as nb\n\n@nb.njit(cache=True)\ndef base():\n    return {}\n"
@@ -51,6 +53,7 @@ def _run_twice(tmp, pkg, cache_root: str) -> int:
     return int(out.stdout.split()[-1])
 
 
+@pytest.mark.slow
 def test_a_changed_callee_in_another_file_is_compiled_afresh(tmp_path):
     """numba alone keeps the caller's old compiled callee; the check deletes it."""
     pkg = _package(tmp_path, 1)
@@ -95,45 +98,3 @@ def test_only_a_changed_digest_deletes_and_only_kernel_caches(tmp_path):
     assert other.exists()  # not a kernel folder
     assert (pkg / "low" / "__pycache__" / "_kernels.f-1.py311.pyc").exists()
     assert check(pkg, "") == 0
-
-
-QUICK = """
-import sys
-import numpy as np
-from robotlib.localization import _kernels
-w = np.array([0.25, 0.25, 0.5])
-print(_kernels.cumulative(w).tolist())
-print("refreshed" if "numba.typed.typeddict" in sys.modules else "quick")
-import numba as nb
-from numba.typed import List
-
-@nb.njit
-def after(w, n):  # compiled after the quick load, calling the loaded kernel
-    items = List()
-    for k in range(n):
-        items.append(k)
-    return _kernels.cumulative(w)[1] + len(items)
-
-print(after(w, 3))
-"""
-
-
-def test_cached_kernels_load_quickly_and_compiling_still_works(tmp_path):
-    """A warm process loads robotlib's kernels without numba's full refresh."""
-    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path)}
-    runs = [
-        subprocess.run(
-            [sys.executable, "-c", QUICK],
-            env=env,
-            capture_output=True,
-            text=True,
-            timeout=300,
-            check=True,
-        ).stdout.split("\n")  # fmt: skip
-        for _ in range(2)
-    ]
-    for out in runs:
-        assert out[0] == "[0.25, 0.5, 1.0]"
-        assert out[2] == "3.5"
-    assert runs[0][1] == "refreshed"  # compiled: numba refreshed to compile
-    assert runs[1][1] == "quick"  # loaded: no refresh before the load

@@ -124,6 +124,7 @@ def run(world_map, world_sim, goal, seed):
     return navigate(r, world_map, goal, rng=seed)
 
 
+@pytest.mark.slow
 def test_navigate_past_an_unmapped_box_from_global_localization(office):
     sim_world = office_with_boxes()
     a = run(office, sim_world, (7.5, 5.2), 2)

@@ -184,6 +184,7 @@ def test_inflate_matches_reference(seed, r):
     )
 
 
+@pytest.mark.slow
 @settings(max_examples=200, deadline=None)
 @given(st.lists(st.floats(-2, 2, allow_nan=False), min_size=8, max_size=8))
 def test_segment_distance_matches_reference(v):

@@ -68,6 +68,7 @@ def test_segment_caster_matches_reference_on_random_geometry(segs, pose):
     assert np.all((fast >= 0) & (fast <= 6.0))
 
 
+@pytest.mark.slow
 def test_grid_caster_matches_marching_reference():
     world = load_world("office")
     grid = world.occupancy_grid(0.05)

@@ -12,6 +12,7 @@ from tests import naive
 ROOM = World([[0, 0, 6, 0], [6, 0, 6, 4], [6, 4, 0, 4], [0, 4, 0, 0]], start=(2, 2, 0))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["corridor", "office"])
 def test_noisy_scan_matches_numpy_reference(name):
     world = load_world(name)

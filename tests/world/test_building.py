@@ -116,6 +116,7 @@ def test_every_room_is_reachable(building):
     assert reach > 300.0
 
 
+@pytest.mark.slow
 def test_lab3_panel_kidnaps_in_the_building(building):
     """Lab 3's last panel: `MCL.best` on a building tour, kidnapped by the button."""
     from robotlib.experiments import drive_tour

@@ -37,6 +37,7 @@ def real_worlds_dir() -> Path | None:
 REAL = real_worlds_dir()
 
 
+@pytest.mark.slow
 def test_every_real_world_file_loads():
     if REAL is None:
         pytest.skip(f"no shared/real-worlds folder beside {ROOT} (CI has one)")

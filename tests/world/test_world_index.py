@@ -1,15 +1,9 @@
 """The bucket index of large maps gives the very numbers of the every-wall kernels."""
 
-import math
-
 import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from robotlib.localization import ConeTable
-from robotlib.localization import _kernels as lk
-from robotlib.sensing import SonarModel
-from robotlib.sensing import _kernels as sk
 from robotlib.world import World
 from robotlib.world import _kernels as wk
 from robotlib.world.index import INDEX_MIN_SEGMENTS, SegmentIndex
@@ -46,33 +40,7 @@ def test_index_distances_equal_the_every_segment_kernel(segs, pts, size):
     np.testing.assert_array_equal(index.distances(pts), ref)
 
 
-@settings(max_examples=40, deadline=None)
-@given(
-    st.lists(st.tuples(coords, coords, coords, coords), min_size=1, max_size=60),
-    st.floats(-4, 4),
-    st.floats(-4, 4),
-    st.floats(-math.pi, math.pi),
-    st.booleans(),
-)
-def test_index_rays_find_the_same_wall(segs, ox, oy, angle, with_field):
-    segs = np.array(segs, dtype=float)
-    index = SegmentIndex.build(segs, (-5, -5, 5, 5), size=0.3)
-    dx, dy = math.cos(angle), math.sin(angle)
-    field = np.zeros((0, 0))
-    if with_field:
-        world = World(segs, bounds=(-5, -5, 5, 5))
-        field = np.ascontiguousarray(world.distance_field(0.1).data)
-    t0, m0 = sk.ray_segments(ox, oy, dx, dy, segs)
-    t1, m1 = sk.indexed_ray(
-        ox, oy, dx, dy, segs, *index.args, 5.0, field, -5.0, -5.0, 0.1
-    )
-    if t0 < 5.0:
-        assert (t1, m1) == (t0, m0)
-    else:
-        assert m1 == -1 or (t1, m1) == (t0, m0)
-
-
-def test_large_map_field_free_space_and_table_are_unchanged_bit_for_bit():
+def test_large_map_field_and_free_space_are_unchanged_bit_for_bit():
     world = many_point_world()
     assert len(world.obstacles) >= INDEX_MIN_SEGMENTS  # takes the indexed paths
     field = world.distance_field(0.1)
@@ -83,15 +51,6 @@ def test_large_map_field_free_space_and_table_are_unchanged_bit_for_bit():
     np.testing.assert_array_equal(field.data.reshape(-1), ref)
     free = world.free_space(0.1)
     assert free.data.any() and not free.data.all()
-    sonar = SonarModel()
-    table = ConeTable(world, sonar, resolution=0.1)
-    old = np.empty_like(table.table)
-    lk.build_cone_table(
-        np.ascontiguousarray(world.obstacles), *table.origin, 0.1, 72, 1,
-        sonar.n_rays, sonar.cone, sonar.max_range, sonar.min_range,
-        sonar.cos_specular, 16, old,
-    )  # fmt: skip
-    np.testing.assert_array_equal(table.table, old)
 
 
 def test_free_space_without_the_field_is_the_fields_own_mask():

@@ -494,6 +494,7 @@ ALPHABET = st.sampled_from(
 )
 
 
+@pytest.mark.slow
 @SETTINGS
 @given(st.text(ALPHABET, max_size=200) | st.text(max_size=200))
 def test_random_text(text):

@@ -1,12 +1,12 @@
-"""The walls of each direction's strips, for the strips cone-table builder.
+"""The walls of each direction's strips, for the cone-table builder.
 
-`build_strips` sorts the walls into strips parallel to a direction (the
-lists `robotlib.localization._kernels.table_strips` casts its rays
-through), with the margins that make the lists safe: a wall goes into
-every strip its offset across the direction reaches within `_MU`, with
-its span along the direction widened by `_MV`, and walls within
-`_PARALLEL` of the direction span their whole strip. `strip_frame` is the
-box every strip offset is measured in.
+`build_strips` sorts the walls into strips parallel to one direction (the
+lists `robotlib.localization._kernels.cone_table` casts its rays through),
+with the margins that make the lists safe: a wall goes into every strip its
+offset across the direction reaches within `_MU`, with its span along the
+direction widened by `_MV`, and walls within `_PARALLEL` of the direction
+span their whole strip. `strip_frame` is the box every strip offset is
+measured in.
 
 Numba kernels: contiguous arrays and scalars in; they import nothing of
 robotlib but the JIT options and other kernels.

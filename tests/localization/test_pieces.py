@@ -6,11 +6,10 @@ import numpy as np
 import pytest
 
 from robotlib.localization import (
+    MCL,
     BeamParameters,
     BeamSensorModel,
     LikelihoodFieldSensorModel,
-    PaperSensorModel,
-    _kernels,
     cone_table,
     expected_readings,
     kld_bound,
@@ -18,11 +17,14 @@ from robotlib.localization import (
     multinomial_resample,
     odometry_increment,
     paper,
+    resampling,
     residual_resample,
     sample_motion_odometry,
     stratified_resample,
     systematic_resample,
 )
+from robotlib.localization._kernels.kld import kld_bound as kld_bound_kernel
+from robotlib.localization.motion import move_particles
 from robotlib.sensing import SonarModel, expected_ranges
 from tests import naive_mcl as naive
 from tests.worlds import door_corridor
@@ -43,15 +45,13 @@ def test_odometry_increment_hand_cases():
     assert odometry_increment((0, 0, 0), (-0.5, 0, 0)) == pytest.approx((0, -0.5, 0))
 
 
-def test_motion_kernel_matches_numpy_and_compose():
+def test_motion_matches_reference_and_composes():
     rng = np.random.default_rng(1)
     p = rng.uniform(-3, 3, (500, 3))
     normals = rng.standard_normal((500, 3))
-    for kernel in (_kernels.sample_odometry, _kernels.sample_odometry_parallel):
-        out = np.empty_like(p)
-        kernel(p, 0.2, 0.5, -0.1, 0.01, 0.02, 0.03, normals, out)
-        ref = naive.sample_odometry(p, 0.2, 0.5, -0.1, (0.01, 0.02, 0.03), normals)
-        np.testing.assert_allclose(out, ref, atol=1e-12)
+    out = move_particles(p, (0.2, 0.5, -0.1), (0.01, 0.02, 0.03), normals)
+    ref = naive.sample_odometry(p, 0.2, 0.5, -0.1, (0.01, 0.02, 0.03), normals)
+    np.testing.assert_allclose(out, ref, atol=1e-12)
     # no noise: a particle at the odometry pose lands on the new odometry pose
     prev, now = np.array([1.0, 2.0, 0.3]), np.array([1.4, 2.3, 0.9])
     moved = sample_motion_odometry(prev[None], prev, now, (0, 0, 0, 0), rng)
@@ -125,24 +125,13 @@ def test_innovation_weight_is_weak():
     assert ratio < 2.1
 
 
-def test_beam_loglik_matches_reference():
+@pytest.mark.parametrize("exponent", [1.0, 0.2])
+def test_beam_loglik_matches_reference(world, exponent):
     rng = np.random.default_rng(4)
     zhat = rng.uniform(0.1, 5.0, (50, 8))
     z = np.concatenate([rng.uniform(0.1, 4.9, 7), [5.0]])
-    q = BeamParameters()
-    out = np.empty(50)
-    _kernels.beam_loglik(
-        z,
-        zhat,
-        5.0,
-        q.z_hit,
-        q.z_short,
-        q.z_max,
-        q.z_rand,
-        q.sigma_hit,
-        q.lambda_short,
-        out,
-    )
+    q = BeamParameters(exponent=exponent)
+    out = BeamSensorModel(world, params=q).scan_log_likelihood(z, zhat) / exponent
     params = (q.z_hit, q.z_short, q.z_max, q.z_rand, q.sigma_hit, q.lambda_short)
     np.testing.assert_allclose(out, naive.beam_loglik(z, zhat, 5.0, params))
 
@@ -166,21 +155,28 @@ def test_likelihood_field_exact_and_fast_match_reference(world):
     assert np.corrcoef(fast.log_likelihood(poses, z), ref)[0, 1] > 0.95
 
 
-def test_update_weights_matches_reference():
+class _Fixed:
+    """A sensor model that returns given log-likelihoods."""
+
+    def __init__(self, ll):
+        self.ll = ll
+
+    def log_likelihood(self, particles, z):
+        return self.ll
+
+
+def test_update_matches_reference(world):
     rng = np.random.default_rng(6)
     w0 = rng.random(100)
     w0 /= w0.sum()
     ll = rng.normal(-20, 5, 100)
-    out = np.empty(100)
-    log_mean, ess = _kernels.update_weights(w0, ll, out)
+    mcl = MCL(world, _Fixed(ll), n=100, rng=0)
+    mcl.set_particles(mcl.particles, w0)
+    log_mean = mcl.update(np.ones(8))
     ref_w, ref_mean, ref_ess = naive.update_weights(w0, ll)
-    np.testing.assert_allclose(out, ref_w)
+    np.testing.assert_allclose(mcl.weights, ref_w)
     assert log_mean == pytest.approx(ref_mean)
-    assert ess == pytest.approx(ref_ess)
-    # the parallel form gives the same bits (its sums are serial)
-    out2 = np.empty(100)
-    assert _kernels.update_weights_parallel(w0, ll, out2) == (log_mean, ess)
-    np.testing.assert_array_equal(out2, out)
+    assert mcl.ess == pytest.approx(ref_ess)
 
 
 def test_estimate_uses_circular_mean():
@@ -192,9 +188,7 @@ def test_estimate_uses_circular_mean():
     np.testing.assert_allclose(est, naive.pose_mean(p, np.array([3.0, 1.0])))
     rng = np.random.default_rng(12)
     p, w = rng.uniform(-3, 3, (1000, 3)), rng.random(1000)
-    serial = _kernels.weighted_pose_mean(p, w)
-    np.testing.assert_allclose(serial, naive.pose_mean(p, w), atol=1e-12)
-    np.testing.assert_array_equal(_kernels.weighted_pose_mean_parallel(p, w), serial)
+    np.testing.assert_allclose(paper.estimate(p, w), naive.pose_mean(p, w), atol=1e-12)
 
 
 def test_dispersion_index_and_resize_hand_computed():
@@ -212,13 +206,17 @@ def test_resamplers_match_searchsorted_reference():
     rng = np.random.default_rng(7)
     w = rng.random(64)
     positions = np.sort(rng.random(64))
-    a = np.empty(64, dtype=np.int64)
-    b = np.empty(64, dtype=np.int64)
-    _kernels.search_indexes(_kernels.cumulative(w), positions, a)
-    _kernels.sorted_indexes(_kernels.cumulative(w), positions, b)
     ref = naive.resample_positions(w, positions)
-    np.testing.assert_array_equal(a, ref)
-    np.testing.assert_array_equal(b, ref)
+    np.testing.assert_array_equal(resampling._search(w, positions), ref)
+    np.testing.assert_array_equal(
+        systematic_resample(w, np.random.default_rng(3)),
+        naive.resample_positions(w, (np.arange(64) + u_of(3)) / 64),
+    )
+
+
+def u_of(seed):
+    """The first uniform a generator of ``seed`` draws."""
+    return np.random.default_rng(seed).random()
 
 
 def test_systematic_keeps_floor_or_ceil_copies():
@@ -258,10 +256,8 @@ def test_resampling_variance_ordering():
 
 def test_kld_bound_hand_computed():
     z = 2.3263478740408408  # 1 - delta = 0.99
-    assert _kernels.kld_bound(1, 0.05, z) == 1.0
-    assert _kernels.kld_bound(10, 0.05, z) == pytest.approx(
-        naive.kld_bound(10, 0.05, z)
-    )
+    assert kld_bound_kernel(1, 0.05, z) == 1.0
+    assert kld_bound_kernel(10, 0.05, z) == pytest.approx(naive.kld_bound(10, 0.05, z))
     # k = 2: 1/(2 eps) (1 - 2/9 + sqrt(2/9) z)^3
     a = 2 / 9
     assert kld_bound(2, 0.05, 0.01) == math.ceil(10 * (1 - a + math.sqrt(a) * z) ** 3)
@@ -294,85 +290,13 @@ def test_uniform_particles_cover_free_space(world):
     assert p[:, 0].min() < 1.0 and p[:, 0].max() > 5.0
 
 
-def test_cone_table_by_blocks_equals_one_block(world):
-    """Pruning walls per block of cells leaves the table unchanged."""
-    table = cone_table(world)
-    s = table.sonar
-    whole = np.empty_like(table.table)
-    _kernels.build_cone_table(
-        np.ascontiguousarray(world.obstacles),
-        table.origin[0],
-        table.origin[1],
-        table.resolution,
-        table.n_bins,
-        1,
-        int(s.n_rays),
-        float(s.cone),
-        float(s.max_range),
-        float(s.min_range),
-        s.cos_specular,
-        1 << 20,
-        whole,
-    )
-    np.testing.assert_array_equal(whole, table.table)
-    # and small blocks (walls pruned hard: 3 m range) agree with one block too
-    short = SonarModel(max_range=3.0)
-    a = np.empty((30, 60, 72), dtype=np.uint16)
-    b = np.empty_like(a)
-    for block, out in ((4, a), (1 << 20, b)):
-        _kernels.build_cone_table(
-            np.ascontiguousarray(world.obstacles), 0.0, 0.0, 0.1, 72, 1, 7,
-            float(short.cone), 3.0, 0.1, short.cos_specular, block, out,
-        )  # fmt: skip
-    np.testing.assert_array_equal(a, b)
+def test_kld_count_matches_reference():
+    from robotlib.localization._kernels.kld import kld_count
 
-
-@pytest.mark.parametrize("exponent", [1.0, 0.2])
-def test_fused_table_models_match_lookup_then_model(world, exponent):
-    poses = world.sample_free_poses(300, 11)
-    z = expected_readings(world, poses[:1])[0]
-    z[3] = 5.0  # a max reading
-    beam = BeamSensorModel(world, fast=True, params=BeamParameters(exponent=exponent))
-    q = beam.params
-    zhat = beam.expected(poses)
-    ref = np.empty(len(poses))
-    _kernels.beam_loglik(
-        z, zhat, 5.0, q.z_hit, q.z_short, q.z_max, q.z_rand, q.sigma_hit,
-        q.lambda_short, ref,
-    )  # fmt: skip
-    np.testing.assert_allclose(
-        beam.log_likelihood(poses, z), exponent * ref, atol=1e-12
-    )
-    t = beam.table
-    for kernel in (_kernels.beam_table_loglik, _kernels.beam_table_loglik_parallel):
-        out = np.empty(len(poses))
-        kernel(
-            poses, t.sonar.sensors, t.table, t.origin[0], t.origin[1],
-            1 / t.resolution, z, np.exp(-q.lambda_short * z), z >= 5.0 - 1e-3,
-            *beam._norms, q.z_max, q.z_rand / 5.0, 1 / q.sigma_hit, exponent, out,
-        )  # fmt: skip
-        np.testing.assert_allclose(out, exponent * ref, atol=1e-12)
-    # many particles: one model table per scan, then lookups; the same numbers
-    model = (
-        z, np.exp(-q.lambda_short * z), z >= 5.0 - 1e-3, *beam._norms, q.z_max,
-        q.z_rand / 5.0, 1 / q.sigma_hit,
-    )  # fmt: skip
-    lut = np.empty((8, len(beam._norms[0])))
-    _kernels.beam_scan_lut(*model, lut)
-    via_lut = np.empty(len(poses))
-    _kernels.lut_table_loglik_parallel(
-        poses, t.sonar.sensors, t.table, t.origin[0], t.origin[1],
-        1 / t.resolution, lut, exponent, via_lut,
-    )  # fmt: skip
-    np.testing.assert_array_equal(via_lut, out)
-    paper_model = PaperSensorModel(world, fast=True)
-    for kernel in (_kernels.paper_table_loglik, _kernels.paper_table_loglik_parallel):
-        out = np.empty(len(poses))
-        kernel(
-            poses, t.sonar.sensors, t.table, t.origin[0], t.origin[1],
-            1 / t.resolution, z, 1 / len(poses), out,
-        )  # fmt: skip
-        np.testing.assert_allclose(
-            out, np.log(naive.paper_weights_unnormalised(z, zhat)), atol=1e-12
-        )
-    np.testing.assert_array_equal(paper_model.log_likelihood(poses, z), out)
+    rng = np.random.default_rng(5)
+    for k_bins, n_min in ((3, 10), (50, 10), (400, 300), (5000, 20)):
+        bins = rng.integers(0, k_bins, 3000)
+        occupied = np.zeros(k_bins, dtype=bool)
+        got = kld_count(bins, 0.05, 2.326, n_min, occupied)
+        assert got == naive.kld_count(bins, 0.05, 2.326, n_min)
+        assert not occupied.any()  # left as found

@@ -1,0 +1,322 @@
+"""The dynamic window approach (Fox, Burgard and Thrun 1997) on sonar and odometry.
+
+Each cycle the controller samples the velocities ``(v, w)`` it can reach
+from its last command within ``window_time`` s at the Pioneer's
+accelerations (`dynamic_window`), rolls every sample out along its arc for
+``horizon`` s against the obstacle points it knows (`evaluate_window`: the
+distance it drives before its disc touches one, how well it then faces the
+goal, how much nearer the goal it gets), keeps the admissible ones (those that
+can still brake to a stop, after one cycle of latency, before touching
+anything: ``v * latency + v**2 / (2 accel) <= free``) and picks the best of
+the objective (`choose_velocity`: heading, progress, free distance and speed, weighted,
+each about [0, 1]).
+
+The obstacle points are the sonar echoes of the last ``memory`` s, kept in
+the odometry frame: each echo stands for a few points across the middle of
+its cone, since a sonar does not say where in its cone the echo came from.
+The memory keeps what the front ring saw in view while the robot passes it.
+
+DWA is a local method: in a trap whose mouth faces away from the goal it
+turns about inside; it says so (status ``"local_minimum"``) when the distance
+to the goal has not shrunk for ``patience`` s.
+
+Imports: numpy, the kernels, `robotlib.avoidance.base` and `.dwa_settings`;
+never plotting.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..p3dx import CYCLE
+from . import _kernels
+from .base import LOCAL_MINIMUM, Controller, goal_in_robot_frame
+from .dwa_settings import DWASettings
+
+__all__ = [
+    "DWA",
+    "dynamic_window",
+    "evaluate_window",
+    "choose_velocity",
+    "open_directions",
+]
+
+
+def dynamic_window(v0: float, w0: float, settings: DWASettings):
+    """Velocity samples reachable from ``(v0, w0)`` within ``window_time``.
+
+    Parameters
+    ----------
+    v0, w0 : float
+        The current (last commanded) velocities, m/s and rad/s.
+    settings : DWASettings
+
+    Returns
+    -------
+    vs : numpy.ndarray, shape (n_v,)
+        Translational samples in ``[0, max_speed]``, m/s, ascending (equal
+        samples where the window is clipped to a point).
+    ws : numpy.ndarray, shape (n_w,)
+        Rotational samples in ``[-max_turn, max_turn]``, rad/s, ascending;
+        0 is among them whenever the window reaches it.
+    """
+    s = settings
+    dv, dw = s.accel * s.window_time, s.rot_accel * s.window_time
+    v_lo, v_hi = max(0.0, v0 - dv), min(s.max_speed, v0 + dv)
+    if v_lo > v_hi:  # above the limit (a setting changed): brake towards it
+        v_lo = v_hi = max(0.0, min(v0 - dv, s.max_speed))
+    w_lo, w_hi = max(-s.max_turn, w0 - dw), min(s.max_turn, w0 + dw)
+    if w_lo > w_hi:
+        w_lo = w_hi = min(max(w0, -s.max_turn), s.max_turn)
+    vs = np.linspace(v_lo, v_hi, s.n_v)
+    ws = np.linspace(w_lo, w_hi, s.n_w)
+    if w_lo < 0.0 < w_hi:  # driving straight is always among the choices
+        ws[np.argmin(np.abs(ws))] = 0.0
+    return vs, ws
+
+
+def evaluate_window(points, vs, ws, goal, settings: DWASettings):
+    """Roll out each ``(v, w)`` sample against obstacle points (robot frame).
+
+    Parameters
+    ----------
+    points : array_like, shape (P, 2)
+        Obstacle points in the robot frame (x ahead, y left), m.
+    vs, ws : array_like, shape (V,) and (W,)
+        Velocity samples, m/s and rad/s.
+    goal : array_like, shape (2,)
+        The goal in the robot frame, m.
+    settings : DWASettings
+        ``horizon``, ``step`` and ``radius`` are read.
+
+    Returns
+    -------
+    free : numpy.ndarray, shape (V, W)
+        Distance driven along each arc before the disc of ``radius`` touches
+        a point it approaches, m (inf: not within the horizon).
+    heading : numpy.ndarray, shape (V, W)
+        Absolute angle between the heading at the end of the part driven and
+        the direction from there to the goal, rad, in [0, pi].
+    togo : numpy.ndarray, shape (V, W)
+        Distance from the end of the part driven to the goal, m.
+    """
+    pts = np.ascontiguousarray(points, dtype=np.float64).reshape(-1, 2)
+    vs = np.ascontiguousarray(vs, dtype=np.float64).reshape(-1)
+    ws = np.ascontiguousarray(ws, dtype=np.float64).reshape(-1)
+    goal = np.ascontiguousarray(goal, dtype=np.float64).reshape(-1)
+    if goal.shape != (2,):
+        raise ValueError(f"goal must have shape (2,), got {goal.shape}")
+    if not (np.isfinite(pts).all() and np.isfinite(vs).all() and np.isfinite(ws).all()):
+        raise ValueError("points and velocity samples must be finite")
+    steps = int(math.ceil(settings.horizon / settings.step - 1e-9))
+    shape = (len(vs), len(ws))
+    free, heading, togo = np.empty(shape), np.empty(shape), np.empty(shape)
+    _kernels.dwa_evaluate(
+        pts, vs, ws, steps, settings.step, settings.radius, goal, free, heading, togo
+    )
+    return free, heading, togo
+
+
+def choose_velocity(vs, ws, free, heading, togo, goal_distance, settings: DWASettings):
+    """Pick the best admissible sample of the objective.
+
+    A sample is admissible when it can brake to a stop, after
+    ``settings.latency`` s, within its free distance:
+    ``v * latency + v**2 / (2 accel) <= free``. Its score is the weighted sum
+    of four terms: the goal alignment ``1 - heading / pi``; the progress
+    ``(goal_distance - togo) / (max_speed * horizon)``; the free distance
+    ``min(free, clearance_cap) / clearance_cap`` (Fox et al.'s "dist"); and
+    the speed ``v / max_speed``.
+
+    Parameters
+    ----------
+    vs, ws : array_like, shape (V,) and (W,)
+        Velocity samples, m/s and rad/s.
+    free, heading, togo : array_like, shape (V, W)
+        From `evaluate_window`.
+    goal_distance : float
+        The goal's distance now, m.
+    settings : DWASettings
+
+    Returns
+    -------
+    v, w : float
+        The chosen sample; ``(0, 0)`` when none is admissible (stop).
+    score : numpy.ndarray, shape (V, W)
+        The objective, ``-inf`` where inadmissible.
+    """
+    s = settings
+    vs = np.asarray(vs, dtype=float)
+    ws = np.asarray(ws, dtype=float)
+    free = np.asarray(free, dtype=float)
+    v = vs[:, None]
+    admissible = v * s.latency + v**2 / (2.0 * s.accel) <= free
+    score = (
+        s.heading_weight * (1.0 - np.asarray(heading) / math.pi)
+        + s.progress_weight
+        * (goal_distance - np.asarray(togo))
+        / (s.max_speed * s.horizon)
+        + s.clearance_weight * np.minimum(free, s.clearance_cap) / s.clearance_cap
+        + s.velocity_weight * v / s.max_speed
+    )
+    score = np.where(admissible, score, -np.inf)
+    if not admissible.any():
+        return 0.0, 0.0, score
+    i, j = np.unravel_index(int(np.argmax(score)), score.shape)
+    return float(vs[i]), float(ws[j]), score
+
+
+def open_directions(points, radius: float, n: int = 72) -> tuple:
+    """Free straight-line distance in ``n`` directions round the robot.
+
+    Parameters
+    ----------
+    points : array_like, shape (P, 2)
+        Obstacle points, robot frame, m.
+    radius : float
+        The disc swept along each direction, m.
+    n : int
+        Directions, ``-pi + (k + 0.5) 2 pi / n``.
+
+    Returns
+    -------
+    angles : numpy.ndarray, shape (n,)
+        The directions, rad (robot frame).
+    free : numpy.ndarray, shape (n,)
+        Distance the disc can move along each before touching a point it
+        approaches, m (inf: none).
+    """
+    pts = np.asarray(points, dtype=float).reshape(-1, 2)
+    angles = -math.pi + (np.arange(n) + 0.5) * 2.0 * math.pi / n
+    along = np.cos(angles)[:, None] * pts[:, 0] + np.sin(angles)[:, None] * pts[:, 1]
+    perp = -np.sin(angles)[:, None] * pts[:, 0] + np.cos(angles)[:, None] * pts[:, 1]
+    blocks = (np.abs(perp) < radius) & (along > 0.0)
+    dist = along - np.sqrt(np.maximum(radius**2 - perp**2, 0.0))
+    free = np.where(blocks, np.maximum(dist, 0.0), np.inf).min(axis=1, initial=np.inf)
+    return angles, free
+
+
+class DWA(Controller):
+    """Dynamic window approach on the sonar ring and odometry.
+
+    Parameters
+    ----------
+    goal : array_like, shape (2,), optional
+        Goal in the odometry frame, m.
+    settings : DWASettings, optional
+        Window, roll-out, objective and memory (default: `DWASettings()`).
+
+    Attributes
+    ----------
+    settings : DWASettings
+    points : numpy.ndarray, shape (P, 2)
+        The remembered echo points, odometry frame, m.
+    last : tuple of float
+        The last command ``(v, w)``, the centre of the next window.
+    score : numpy.ndarray, shape (n_v, n_w)
+        The last objective (``-inf``: inadmissible), for plotting.
+    window : tuple of numpy.ndarray
+        The last samples ``(vs, ws)``.
+    """
+
+    name = "DWA"
+
+    def __init__(self, goal=None, settings: DWASettings | None = None):
+        s = DWASettings() if settings is None else settings
+        if not isinstance(s, DWASettings):
+            raise TypeError(f"settings must be a DWASettings, got {type(s).__name__}")
+        self.settings = s
+        super().__init__(goal, s.tolerance, s.max_speed, s.max_turn)
+        offsets = np.linspace(-0.5 * s.arc, 0.5 * s.arc, s.arc_points)
+        if s.arc_points == 1:
+            offsets = np.zeros(1)
+        self._offsets = offsets
+
+    def _reset(self) -> None:
+        self.points = np.zeros((0, 2))
+        self._born = np.zeros(0)
+        self._clock = 0.0
+        self.last = (0.0, 0.0)
+        self.score = np.zeros((0, 0))
+        self.window = (np.zeros(0), np.zeros(0))
+        self._best = math.inf
+        self._best_time = 0.0
+
+    def remember(self, sonar: np.ndarray, pose: np.ndarray) -> None:
+        """Add this scan's echoes to the memory and forget the old ones."""
+        s = self.settings
+        echo = sonar < self.max_range
+        sens = self.sensors[echo]
+        r = sonar[echo]
+        ang = sens[:, 2:3] + self._offsets[None, :]
+        px = sens[:, 0:1] + r[:, None] * np.cos(ang)
+        py = sens[:, 1:2] + r[:, None] * np.sin(ang)
+        c, si = math.cos(pose[2]), math.sin(pose[2])
+        world = np.column_stack(
+            [
+                pose[0] + c * px.ravel() - si * py.ravel(),
+                pose[1] + si * px.ravel() + c * py.ravel(),
+            ]
+        )
+        keep = self._born > self._clock - s.memory - 1e-9
+        pts = np.concatenate([world, self.points[keep]])
+        born = np.concatenate([np.full(len(world), self._clock), self._born[keep]])
+        # one point per cell of `cell` m, the newest (np.unique keeps the first)
+        _, first = np.unique(np.floor(pts / s.cell), axis=0, return_index=True)
+        self.points, self._born = pts[first], born[first]
+
+    def local_points(self, pose) -> np.ndarray:
+        """Return the remembered points within reach, robot frame, m, shape (P, 2)."""
+        s = self.settings
+        d = self.points - np.asarray(pose[:2])
+        c, si = math.cos(pose[2]), math.sin(pose[2])
+        local = np.column_stack(
+            [c * d[:, 0] + si * d[:, 1], -si * d[:, 0] + c * d[:, 1]]
+        )
+        reach = s.max_speed * s.horizon + s.radius + s.clearance_cap
+        return np.ascontiguousarray(local[np.hypot(*local.T) < reach])
+
+    def _open_towards(self, points: np.ndarray, target: float) -> float:
+        """Return the open direction nearest ``target`` (robot frame, rad).
+
+        A direction is open when the disc can drive ``clearance_cap`` m along
+        it; ``target`` itself is returned when it is open (or nothing is).
+        """
+        s = self.settings
+        angles, free = open_directions(points, s.radius)
+        k = int((target + math.pi) // (2 * math.pi / len(angles))) % len(angles)
+        open_ = free >= s.clearance_cap
+        if open_[k] or not open_.any():
+            return target
+        off = np.abs(np.remainder(angles - target + math.pi, 2 * math.pi) - math.pi)
+        return float(angles[open_][np.argmin(off[open_])])
+
+    def _command(self, sonar: np.ndarray, pose: np.ndarray) -> tuple[float, float]:
+        s = self.settings
+        self._clock += CYCLE  # one command per robot cycle
+        self.remember(sonar, pose)
+        gx, gy = goal_in_robot_frame(self.goal, pose)
+        dist = math.hypot(gx, gy)
+        if dist < self._best - s.progress:
+            self._best, self._best_time = dist, self._clock
+        if self._clock - self._best_time > s.patience:
+            self.status = LOCAL_MINIMUM
+            self.last = (0.0, 0.0)
+            return 0.0, 0.0
+        vs, ws = dynamic_window(*self.last, s)
+        points = self.local_points(pose)
+        aim = self._open_towards(points, math.atan2(gy, gx))
+        # the goal itself where its direction is open, else a point ahead on
+        # the open direction nearest to it (the objective then steers there)
+        reach = dist if aim == math.atan2(gy, gx) else s.clearance_cap
+        sub = (reach * math.cos(aim), reach * math.sin(aim))
+        free, heading, togo = evaluate_window(points, vs, ws, sub, s)
+        v, w, self.score = choose_velocity(vs, ws, free, heading, togo, reach, s)
+        if v == 0.0 and self.last[0] == 0.0:
+            turn = min(s.max_turn, s.rot_accel * s.window_time + abs(self.last[1]))
+            w = float(np.clip(2.0 * aim, -turn, turn))
+        self.window = (vs, ws)
+        self.last = (v, w)
+        return v, w

@@ -1,0 +1,126 @@
+"""`DWASettings`: the knobs of `robotlib.avoidance.dwa.DWA`, with their defaults.
+
+The velocity window and its samples, the roll-out, the objective's weights,
+the sonar memory and the trap detection. Change one with
+`dataclasses.replace` or build a new one
+(``DWA(settings=DWASettings(clearance_weight=0.5))``).
+
+Imports only the Pioneer's constants; never plots.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from ..p3dx import (
+    CYCLE,
+    DEFAULT_ACCELERATION,
+    DEFAULT_ROT_ACCELERATION,
+    ROBOT_RADIUS,
+    SONAR_CONE,
+)
+
+__all__ = ["DWASettings"]
+
+
+@dataclass(frozen=True)
+class DWASettings:
+    """How `DWA` samples, predicts, scores and remembers (m, rad, s).
+
+    Attributes
+    ----------
+    max_speed, max_turn : float
+        Velocity limits, m/s and rad/s (0.5, 90 degrees/s); no reversing.
+    accel, rot_accel : float
+        Accelerations the window allows and braking assumes, m/s^2 and
+        rad/s^2 (the Pioneer's defaults: 0.3, 100 degrees/s^2).
+    window_time : float
+        The window holds the velocities reachable from the last command within
+        this time, s (0.3).
+    n_v, n_w : int
+        Samples of the translational and rotational velocity in the window
+        (7, 15; both ends included).
+    horizon, step : float
+        Each sample's arc is rolled out for ``horizon`` s in steps of
+        ``step`` s (2.5, 0.1).
+    radius : float
+        The disc that must not touch an obstacle point: the robot's radius
+        plus a safety margin, m (`ROBOT_RADIUS` + 0.05).
+    latency : float
+        Time a command runs before the next one can brake it, s (`CYCLE`);
+        an admissible sample stops within its free distance after it.
+    heading_weight, progress_weight, clearance_weight, velocity_weight : float
+        The objective: weights of the goal alignment at the arc's end
+        (``1 - |angle| / pi``), of the progress towards the goal (as a
+        fraction of ``max_speed * horizon``), of the free distance along the
+        arc (capped at ``clearance_cap``, as a fraction of it) and of the
+        speed (as a fraction of ``max_speed``) (0.5, 1.0, 0.4, 0.2).
+    clearance_cap : float
+        Free distance beyond this counts as this, m (1.0).
+    memory : float
+        Sonar echoes are remembered (in the odometry frame) for this long, s
+        (3.0), so that what the front ring saw stays in view beside the robot.
+    arc : float
+        Each echo stands for points spread over this angle about the sonar's
+        axis, rad (half of `SONAR_CONE`).
+    arc_points : int
+        Points per echo (3).
+    cell : float
+        The memory keeps one point (the newest) per square cell of this
+        side, m (0.05).
+    patience, progress : float
+        A trap (status ``"local_minimum"``) is declared when the distance to
+        the goal has not shrunk by ``progress`` m in ``patience`` s (15, 0.3).
+    tolerance : float
+        Goal reached within this distance, m (0.3).
+    """
+
+    max_speed: float = 0.5
+    max_turn: float = math.radians(90.0)
+    accel: float = DEFAULT_ACCELERATION
+    rot_accel: float = DEFAULT_ROT_ACCELERATION
+    window_time: float = 0.3
+    n_v: int = 7
+    n_w: int = 15
+    horizon: float = 2.5
+    step: float = 0.1
+    radius: float = ROBOT_RADIUS + 0.05
+    latency: float = CYCLE
+    heading_weight: float = 0.5
+    progress_weight: float = 1.0
+    clearance_weight: float = 0.4
+    velocity_weight: float = 0.2
+    clearance_cap: float = 1.0
+    memory: float = 3.0
+    arc: float = 0.5 * SONAR_CONE
+    arc_points: int = 3
+    cell: float = 0.05
+    patience: float = 15.0
+    progress: float = 0.3
+    tolerance: float = 0.3
+
+    def __post_init__(self):
+        put = object.__setattr__
+        floats = ("max_speed", "max_turn", "accel", "rot_accel", "window_time",
+                  "horizon", "step", "radius", "latency", "heading_weight",
+                  "progress_weight", "clearance_weight", "velocity_weight",
+                  "clearance_cap", "cell", "memory", "arc", "patience", "progress",
+                  "tolerance")  # fmt: skip
+        for name in floats:
+            put(self, name, float(getattr(self, name)))
+        for name in ("n_v", "n_w", "arc_points"):
+            put(self, name, int(getattr(self, name)))
+        positive = ("max_speed", "max_turn", "accel", "rot_accel", "window_time",
+                    "horizon", "step", "radius", "clearance_cap", "cell")  # fmt: skip
+        for name in positive:
+            if not getattr(self, name) > 0:
+                raise ValueError(f"{name} must be > 0, got {getattr(self, name)}")
+        if self.n_v < 2 or self.n_w < 2 or self.arc_points < 1:
+            raise ValueError("n_v and n_w must be at least 2, arc_points at least 1")
+        weights = (self.heading_weight, self.progress_weight, self.clearance_weight,
+                   self.velocity_weight)  # fmt: skip
+        if min(weights) < 0:
+            raise ValueError("the objective's weights must be >= 0")
+        if self.latency < 0 or self.memory < 0 or self.arc < 0:
+            raise ValueError("latency, memory and arc must be >= 0")

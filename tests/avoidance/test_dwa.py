@@ -1,0 +1,129 @@
+"""The dynamic window: its roll-out kernel, its safety, its episodes."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+import pytest
+
+from robotlib.avoidance import (
+    DWA,
+    DWASettings,
+    choose_velocity,
+    dynamic_window,
+    evaluate_window,
+    run_episode,
+)
+from robotlib.avoidance import _kernels as kern
+from robotlib.avoidance.dwa import open_directions
+from robotlib.world import World
+from tests import naive_avoidance as naive
+
+
+def _cloud(rng, n=40):
+    r = rng.uniform(0.1, 3.0, n)
+    a = rng.uniform(-math.pi, math.pi, n)
+    return np.column_stack([r * np.cos(a), r * np.sin(a)])
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_rollout_kernel_matches_reference(seed):
+    rng = np.random.default_rng(seed)
+    pts = _cloud(rng)
+    vs = np.linspace(0.0, 0.5, 6)
+    ws = np.linspace(-1.0, 1.0, 9)
+    goal = rng.uniform(-4, 4, 2)
+    out = [np.empty((6, 9)) for _ in range(3)]
+    kern.dwa_evaluate(pts, vs, ws, 25, 0.1, 0.3, goal, *out)
+    ref = naive.dwa_evaluate(pts, vs, ws, 25, 0.1, 0.3, goal)
+    for got, want in zip(out, ref, strict=True):
+        np.testing.assert_allclose(got, want, rtol=1e-9, atol=1e-9)
+
+
+def _touches(points, v, w, distance, radius):
+    """Whether the disc, driven ``distance`` m along the arc, approaches a point."""
+    if v <= 0.0:
+        return False
+    t = np.linspace(0.0, distance / v, 200)
+    if abs(w) > 1e-9:
+        x, y = v / w * np.sin(w * t), v / w * (1 - np.cos(w * t))
+    else:
+        x, y = v * t, 0 * t
+    d = np.hypot(points[:, 0] - x[:, None], points[:, 1] - y[:, None]) - radius
+    d0 = np.hypot(points[:, 0], points[:, 1]) - radius
+    return bool(((d <= 0) & (d < d0 - 0.01)).any())
+
+
+@pytest.mark.parametrize("seed", range(20))
+def test_never_commands_a_velocity_that_hits_a_seen_obstacle_within_braking(seed):
+    rng = np.random.default_rng(seed)
+    s = DWASettings(step=0.02)  # fine steps: the contact found to 1 cm at 0.5 m/s
+    pts = _cloud(rng, 60)
+    v0, w0 = rng.uniform(0, 0.5), rng.uniform(-1, 1)
+    vs, ws = dynamic_window(v0, w0, s)
+    goal = rng.uniform(-4, 4, 2)
+    free, heading, togo = evaluate_window(pts, vs, ws, goal, s)
+    v, w, score = choose_velocity(vs, ws, free, heading, togo, np.hypot(*goal), s)
+    braking = v * s.latency + v**2 / (2 * s.accel)
+    # shrink the disc by what one roll-out step can skip past
+    assert not _touches(pts, v, w, braking, s.radius - 0.5 * s.max_speed * s.step)
+    if np.isfinite(score).any():
+        i, j = np.unravel_index(np.argmax(score), score.shape)
+        assert (vs[i], ws[j]) == (v, w)
+    else:
+        assert (v, w) == (0.0, 0.0)
+
+
+def test_window_respects_the_accelerations_and_limits():
+    s = DWASettings()
+    vs, ws = dynamic_window(0.2, 0.1, s)
+    assert vs.min() == pytest.approx(0.2 - s.accel * s.window_time)
+    assert vs.max() == pytest.approx(0.2 + s.accel * s.window_time)
+    assert np.abs(ws - 0.1).max() <= s.rot_accel * s.window_time + 1e-12
+    assert 0.0 in ws
+    vs, ws = dynamic_window(0.0, s.max_turn, s)
+    assert vs.min() == 0.0 and ws.max() == s.max_turn
+    vs, _ = dynamic_window(0.9, 0.0, s)  # above the limit: brakes towards it
+    assert vs.max() <= s.max_speed
+
+
+def test_nothing_admissible_means_stop():
+    s = DWASettings()
+    wall = np.column_stack([np.full(30, 0.32), np.linspace(-1.5, 1.5, 30)])
+    wall = np.concatenate([wall, wall * [-1, 1], wall[:, ::-1], -wall[:, ::-1]])
+    vs, ws = dynamic_window(0.5, 0.0, s)  # too fast to stop inside the box
+    free, heading, togo = evaluate_window(wall, vs, ws, (3.0, 0.0), s)
+    v, w, score = choose_velocity(vs, ws, free, heading, togo, 3.0, s)
+    assert (v, w) == (0.0, 0.0) and np.isneginf(score).all()
+
+
+def test_open_directions_sees_a_wall_ahead():
+    wall = np.column_stack([np.full(41, 1.0), np.linspace(-2, 2, 41)])
+    angles, free = open_directions(wall, 0.3, n=8)
+    ahead = np.argmin(np.abs(angles - math.pi / 8))
+    assert free[ahead] < 1.0
+    assert np.isinf(free[np.abs(angles) > math.pi / 2]).all()
+
+
+def test_settings_are_checked():
+    with pytest.raises(ValueError, match="horizon"):
+        DWASettings(horizon=0.0)
+    with pytest.raises(ValueError, match="weights"):
+        DWASettings(heading_weight=-1.0)
+    with pytest.raises(TypeError):
+        DWA(settings={"horizon": 2.0})
+    s = dataclasses.replace(DWASettings(), n_v=3)
+    assert isinstance(s.n_v, int) and DWA(settings=s).settings.n_v == 3
+    with pytest.raises(ValueError, match="goal"):
+        evaluate_window(np.zeros((1, 2)), [0.1], [0.0], (1.0, 2.0, 3.0), s)
+
+
+def test_dwa_drives_round_a_box_without_touching_it():
+    walls = [[0, 0, 10, 0], [10, 0, 10, 5], [10, 5, 0, 5], [0, 5, 0, 0]]
+    walls += [[4, 2.0, 5, 2.0], [5, 2.0, 5, 3.0], [5, 3.0, 4, 3.0], [4, 3.0, 4, 2.0]]
+    world = World(segments=walls, start=(1.5, 2.5, 0.0), name="one box")
+    ep = run_episode(world, DWA(), goal=(8.0, 2.5), seed=0, max_time=60)
+    assert ep.outcome == "reached", ep.outcome
+    assert ep.collisions == 0 and ep.min_clearance > 0.02
