@@ -356,20 +356,20 @@ def grade(
         On Ctrl-C or SIGTERM, after every process of the class has ended.
     """
     opts = opts or Options()
-    if opts.sandbox and (why := sb.available()):
-        raise GradeError(f"no sandbox: {why}; pass --no-sandbox to grade without")
     solution = Path(solution) if solution else solution_path(lab)
     sol_nb = read_notebook(solution)
-    sol_text = notebook_text(sol_nb)
-    plan = _plan(sol_text, lab)
     subs = find_submissions(submissions, lab, exclude)
     if not subs:
         raise GradeError(f"no submissions in {submissions}")
-    try:
+    try:  # mistakes in the command first, before anything slow
         check_lab(sol_nb, lab, [p for _, p, _ in subs if p is not None])
         subs = pick(subs, students) if students else subs
     except ValueError as exc:
         raise GradeError(str(exc)) from None
+    if opts.sandbox and (why := sb.available()):
+        raise GradeError(f"no sandbox: {why}; pass --no-sandbox to grade without")
+    sol_text = notebook_text(sol_nb)
+    plan = _plan(sol_text, lab)
     jobs = max(1, jobs or os.cpu_count() or 1)
     store = Records(records, lab) if records else None
     again = Again(store, [s for s, _, _ in subs] if regrade or students else None)
