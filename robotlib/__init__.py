@@ -6,6 +6,7 @@ The paper's robot API is importable from the top level::
 """
 
 from . import _config  # noqa: F401  (first: numba imported lean, `robotlib._config`)
+from ._versions import __version__
 from .robot import (
     Robot,
     RobotState,
@@ -25,9 +26,8 @@ from .robot import (
 )
 from .world import World, load_world, world_names
 
-__version__ = "0.1.0"
-
 __all__ = [
+    "__version__",
     "Robot",
     "RobotState",
     "RobotTimeout",

@@ -1,7 +1,8 @@
 """Where the files shipped beside the package are: worlds, released labs, syllabus.
 
-A checkout (or an editable install) reads them from the repository's own
-folders (``worlds/``, ``labs/``, ``course/``); a wheel or sdist install puts
+A checkout (or an editable install, or the grading sandbox, which binds the
+package beside its ``worlds/``) reads them from the folders beside the
+package (``worlds/``, ``labs/``, ``course/``); a wheel or sdist install puts
 them under ``share/robotlib/`` of its prefix (``pyproject.toml``'s
 ``data-files``), which is a virtual environment's ``sys.prefix``, or the user
 base for ``pip install --user``. The repository's folders stay the only copy:

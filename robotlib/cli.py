@@ -39,12 +39,19 @@ COMMANDS = {
 """Subcommand name to (module, one-line help)."""
 
 
+def _version() -> str:
+    from robotlib._versions import __version__
+
+    return __version__
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run the ``robotlib`` command line; return the exit status."""
     argv = sys.argv[1:] if argv is None else argv
     parser = argparse.ArgumentParser(
         prog="robotlib", description="robotlib: mobile-robotics courseware tools."
     )
+    parser.add_argument("--version", action="version", version=f"robotlib {_version()}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     for name, (_, help_) in COMMANDS.items():
         sub.add_parser(name, help=help_, add_help=False)

@@ -26,12 +26,14 @@ import random
 import sys
 import threading
 import time
+import warnings
 from collections.abc import Callable, Iterable
 from pathlib import Path
 
 import numpy as np
 
 from ._ipython import in_kernel, ipython_shell
+from ._versions import version_mismatch
 
 __all__ = [
     "setup",
@@ -140,7 +142,8 @@ def _warm_models() -> None:
     z = np.full(8, 2.0)
     BeamSensorModel(world).log_likelihood(poses, z)
     fast = BeamSensorModel(world, fast=True, params=BeamParameters(exponent=0.2))
-    fast.log_likelihood(np.tile(poses, (100, 1)), z)
+    fast.log_likelihood(np.tile(poses, (100, 1)), z)  # the table, looked up
+    fast.table.lookup(np.tile(poses, (2000, 1)))  # over threads (4,096 poses and up)
 
 
 def _paper(world):
@@ -373,7 +376,10 @@ def warm_up(parts: Iterable[str] = ("sim",), show: bool = True) -> dict[str, flo
 
 
 def setup(
-    seed: int = 0, warm: Iterable[str] = ("sim",), style: bool = True
+    seed: int = 0,
+    warm: Iterable[str] = ("sim",),
+    style: bool = True,
+    requires: str | None = None,
 ) -> np.random.Generator:
     """Prepare a lab notebook: style, seeds, plain unsolved errors, warm kernels.
 
@@ -389,12 +395,17 @@ def setup(
         Apply the course's figure style (`robotlib.plotting.style`). The
         backend is left to Jupyter (inline) or to ``MPLBACKEND`` (``Agg``
         in CI and grading).
+    requires : str, optional
+        The ``"MAJOR.MINOR"`` robotlib the lab was released for: a warning
+        when the installed one does not fit (`version_mismatch`).
 
     Returns
     -------
     numpy.random.Generator
         ``numpy.random.default_rng(seed)``, for the notebook's own draws.
     """
+    if requires is not None and (message := version_mismatch(requires)):
+        warnings.warn(message, RuntimeWarning, stacklevel=2)
     if style:
         import matplotlib as mpl
 

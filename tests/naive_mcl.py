@@ -100,14 +100,28 @@ def kld_bound(k, epsilon, z):
     return (k - 1) / (2 * epsilon) * (1 - a + math.sqrt(a) * z) ** 3
 
 
-def kld_count(bins, epsilon, z, n_min):
-    """Draws KLD-sampling keeps: the first ``n >= max(n_min, bound(k))``."""
-    seen = set()
-    for n, b in enumerate(bins, start=1):
-        seen.add(int(b))
-        if n >= n_min and n >= kld_bound(len(seen), epsilon, z):
-            return n
-    return len(bins)
+def kld_draw(
+    particles, weights, uniforms, bounds, bin_xy, bin_theta, epsilon, z, n_min
+):
+    """KLD-sampling as a plain loop: the drawn indexes, up to the bound."""
+    c = np.cumsum(weights)
+    xmin, ymin, xmax, ymax = bounds
+    nbx = max(1, math.ceil((xmax - xmin) / bin_xy))
+    nby = max(1, math.ceil((ymax - ymin) / bin_xy))
+    nbt = max(1, math.ceil(2 * math.pi / bin_theta))
+    seen, drawn = set(), []
+    for u in uniforms:
+        j = int(np.searchsorted(c, u * c[-1], side="right"))
+        drawn.append(j)
+        x, y, th = particles[j]
+        seen.add((
+            min(max(math.floor((x - xmin) / bin_xy), 0), nbx - 1),
+            min(max(math.floor((y - ymin) / bin_xy), 0), nby - 1),
+            min(max(math.floor((th + math.pi) / bin_theta), 0), nbt - 1),
+        ))  # fmt: skip
+        if len(drawn) >= n_min and len(drawn) >= kld_bound(len(seen), epsilon, z):
+            break
+    return np.array(drawn)
 
 
 def fused_step(particles, weights, motion, normals, loglik):

@@ -21,6 +21,13 @@ as fast, so a 0.8 m door opens once the robot is near it and facing it. With
 the increment three times the decrement the door stayed painted shut (0 of
 10 pairs of the doorway world; 9 of 10 balanced, ``robotlib bench avoid``).
 
+The grid needs several echoes in a cell to block a sector, and a wall that
+comes into view close (a partition's end met round a corner) may be reached
+before then. A sonar brake backs the grid up: each echo's point on its
+sonar's axis that lies in the disc's path (straight on, or turned by the
+turn being commanded over the next half second) limits the forward speed to
+the speed that stops the robot short of it at ``settings.brake`` m/s^2.
+
 The public functions are what a student writes in Lab 2; `VFH` accepts
 replacements for them (``histogram=``, ``direction=``).
 
@@ -255,6 +262,7 @@ class VFH(Controller):
         self.progress = s.progress
         self.follow_margin = s.follow_margin
         self.mu_goal, self.mu_heading, self.mu_previous = s.mu
+        self.brake = s.brake
         self.histogram_fn = histogram
         self.direction_fn = direction
         super().__init__(goal, s.tolerance, s.max_speed, s.max_turn)
@@ -465,4 +473,23 @@ class VFH(Controller):
         v = self.max_speed * max(slow, 0.2) * turning
         if self.goal is not None:
             v = min(v, 0.3 + 0.5 * dist)  # dist: the goal's, from above
+        if self.brake > 0.0:
+            v = min(v, self._braking_speed(sonar, w))
         return v, w
+
+    def _braking_speed(self, sonar: np.ndarray, w: float) -> float:
+        """Largest forward speed that stops short of any echo in the path, m/s."""
+        s = self.sensors
+        ok = sonar < self.max_range
+        x = s[ok, 0] + sonar[ok] * np.cos(s[ok, 2])
+        y = s[ok, 1] + sonar[ok] * np.sin(s[ok, 2])
+        free = math.inf
+        band = ROBOT_RADIUS + 0.03
+        for turn in (0.0, 0.5 * w):  # straight on, and the heading in 0.5 s
+            c, sn = math.cos(turn), math.sin(turn)
+            ahead, side = c * x + sn * y, -sn * x + c * y
+            hit = (np.abs(side) < band) & (ahead > 0.0)
+            if hit.any():
+                reach = ahead[hit] - np.sqrt(np.maximum(band**2 - side[hit] ** 2, 0.0))
+                free = min(free, float(reach.min()))
+        return math.sqrt(2.0 * self.brake * max(free - 0.05, 0.0))

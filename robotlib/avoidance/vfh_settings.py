@@ -67,6 +67,12 @@ class VFHSettings:
         Rotational velocity per radian of steering error, 1/s (1.5).
     tolerance : float
         Goal reached within this distance, m (0.3).
+    brake : float
+        The sonar brake's deceleration, m/s^2 (0.25; 0: no brake): whatever
+        the grid says, the forward speed never exceeds what stops the robot
+        (at this deceleration) short of an echo in its path, straight on or
+        along the turn it is taking (`VFH` docs). The grid needs several
+        echoes to block a sector; the brake acts on one.
     """
 
     resolution: float = 0.1
@@ -92,6 +98,7 @@ class VFHSettings:
     max_turn: float = math.radians(90.0)
     turn_gain: float = 1.5
     tolerance: float = 0.3
+    brake: float = 0.25
 
     def __post_init__(self):
         put = object.__setattr__
@@ -99,7 +106,7 @@ class VFHSettings:
         for name in ("resolution", "extent", "window", "enlarge", "threshold_low",
                      "threshold_high", "increment", "decrement", "cmax", "cone",
                      "clear_range", "fade", "patience", "progress", "max_speed",
-                     "max_turn", "turn_gain", "tolerance"):  # fmt: skip
+                     "max_turn", "turn_gain", "tolerance", "brake"):  # fmt: skip
             put(self, name, float(getattr(self, name)))
         for name in ("n_sectors", "wide", "follow_margin"):
             put(self, name, int(getattr(self, name)))

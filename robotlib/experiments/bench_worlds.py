@@ -9,7 +9,7 @@ controller on them (120 s of simulated time at most) and prints per
 controller and kind:
 
 - ``true``: the share of episodes that end truly within 0.5 m of the goal,
-  nothing hit (`robotlib.avoidance.Episode.success`);
+  nothing hit (`robotlib.avoidance.Episode.true_success`);
 - ``odometry``: the share the robot itself counts as reached (odometry
   within the controller's tolerance, nothing hit);
 - ``false``: episodes the robot counts as reached while truly more than
@@ -57,8 +57,8 @@ def _row(controller: str, kind: str, faces: bool, episodes) -> dict:
         "kind": kind,
         "end_faces": faces,
         "episodes": len(episodes),
-        "true_success": sum(e.success for e in episodes) / len(episodes),
-        "odometry_success": sum(e.odometry_success for e in episodes) / len(episodes),
+        "true_success": sum(e.true_success for e in episodes) / len(episodes),
+        "odometry_success": sum(e.success for e in episodes) / len(episodes),
         "false_reached": sum(
             e.outcome == "reached" and not e.true_error <= 0.5 for e in episodes
         ),

@@ -18,6 +18,7 @@ BENCHES = {
     "avoid": "robotlib.experiments.bench_avoid",
     "map": "robotlib.experiments.bench_map",
     "slam": "robotlib.experiments.bench_map",
+    "graphslam": "robotlib.experiments.bench_graphslam",
     "logs": "robotlib.experiments.bench_logs",
     "histogram": "robotlib.experiments.bench_histogram",
     "plan": "robotlib.experiments.bench_plan",

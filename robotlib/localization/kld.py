@@ -21,7 +21,7 @@ import numpy as np
 
 from .._random import as_rng
 from ._kernels.kld import kld_bound as _bound
-from ._kernels.kld import kld_count
+from ._kernels.kld import kld_draw
 from .resampling import _weights
 
 __all__ = ["kld_bound", "kld_resample"]
@@ -93,16 +93,12 @@ def kld_resample(
     nbx = max(1, math.ceil((xmax - xmin) / bin_xy))
     nby = max(1, math.ceil((ymax - ymin) / bin_xy))
     nbt = max(1, math.ceil(2 * math.pi / bin_theta))
-    cumulative = np.cumsum(w)
-    draws = as_rng(rng).random(int(n_max)) * cumulative[-1]
-    idx = np.minimum(np.searchsorted(cumulative, draws, side="right"), len(w) - 1)
-    drawn = p[idx]
-    bx = np.clip(np.floor((drawn[:, 0] - xmin) / bin_xy), 0, nbx - 1).astype(np.int64)
-    by = np.clip(np.floor((drawn[:, 1] - ymin) / bin_xy), 0, nby - 1).astype(np.int64)
-    bt = np.floor((drawn[:, 2] + math.pi) / bin_theta)
-    bt = np.clip(bt, 0, nbt - 1).astype(np.int64)
-    bins = (by * nbx + bx) * nbt + bt
     occupied = np.zeros(nbx * nby * nbt, dtype=np.bool_)
+    uniforms = as_rng(rng).random(int(n_max))
+    out = np.empty(int(n_max), dtype=np.int64)
     z = NormalDist().inv_cdf(1.0 - delta)
-    n = kld_count(bins, float(epsilon), z, int(n_min), occupied)
-    return idx[:n].copy()
+    n = kld_draw(
+        p, np.cumsum(w), uniforms, float(xmin), float(ymin), float(bin_xy),
+        float(bin_theta), nbx, nby, nbt, float(epsilon), z, int(n_min), occupied, out,
+    )  # fmt: skip
+    return out[:n].copy()

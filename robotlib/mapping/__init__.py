@@ -1,4 +1,4 @@
-"""Mapping and SLAM: occupancy grids (sonar, laser), map metrics, FastSLAM, EKF-SLAM.
+"""Mapping and SLAM: occupancy grids, map metrics, FastSLAM, EKF-SLAM, graph SLAM.
 
 Estimators here never plot: drawing lives in `robotlib.plotting`.
 """
@@ -12,6 +12,8 @@ from .fastslam import (
 )
 from .fastslam_run import FastSLAMResult, run_fastslam
 from .fastslam_settings import SONAR_SETTINGS, FastSLAMSettings
+from .graphslam import GraphSLAMResult, GraphSLAMSettings, graph_slam
+from .icp import ICPResult, icp, scan_to_points
 from .metrics import MapScore, dilate, heading_rms, map_score, trajectory_rms
 from .motion import apply_arc, arc_increment, arc_noise_cov, sample_arc_motion
 from .occupancy import (
@@ -24,9 +26,22 @@ from .occupancy import (
     map_sonar,
     probability,
 )
+from .posegraph import PoseGraph, optimize, prune_loops
+from .relations import read_relations, relation_errors
 from .sharing import MapDiff
 
 __all__ = [
+    "graph_slam",
+    "GraphSLAMSettings",
+    "GraphSLAMResult",
+    "icp",
+    "ICPResult",
+    "scan_to_points",
+    "PoseGraph",
+    "optimize",
+    "prune_loops",
+    "read_relations",
+    "relation_errors",
     "ROUTES",
     "DriveLog",
     "FastSLAMResult",

@@ -10,7 +10,9 @@ sonar echoes the map does not explain are marked in the configuration space
 and the path is re-planned. A small state machine: LOCALIZE (turn in place,
 wander when that is not enough) until the cloud is tight, then FOLLOW or
 AVOID (the follower's hand-over), back to LOCALIZE when the sonar stops
-agreeing with the map. Its knobs are a `NavSettings`. The true pose is
+agreeing with the map. At the goal it says "reached" only if a second,
+independently seeded filter fed the same readings agrees (`NavSettings.confirm`);
+otherwise it localizes again. Its knobs are a `NavSettings`. The true pose is
 recorded when the backend has one (``true_pose()``, the simulator), for
 evaluation only: it never steers.
 
@@ -24,6 +26,7 @@ import math
 
 import numpy as np
 
+from .._random import as_rng
 from ..localization import BEST, MCL
 from ..p3dx import ROBOT_LENGTH_REAR, ROBOT_RADIUS, ROBOT_WIDTH
 from ..sensing import expected_ranges
@@ -79,7 +82,8 @@ class Navigator:
         The goal, m.
     mcl : MCL, optional
         The filter (default: ``MCL.best(world, rng=rng)``, global
-        localization).
+        localization, with a second one to confirm the goal,
+        `NavSettings.confirm`; a filter given here is trusted alone).
     rng : numpy.random.Generator, int or None
         Seeds the default filter.
     avoider : object, optional
@@ -127,10 +131,13 @@ class Navigator:
             cspace = configuration_space(world, margin=TURN_MARGIN)
         cspace.node(self.goal, "goal")
         self.cspace = cspace
+        kld = {**BEST["kld"], "n_min": 3000}  # keep look-alike places longer
+        second = None
+        if mcl is None and self.settings.confirm > 0:  # own stream: first's unchanged
+            second = MCL.best(world, rng=as_rng(rng).spawn(1)[0], kld=kld)
         if mcl is None:
-            kld = {**BEST["kld"], "n_min": 3000}  # keep look-alike places longer
             mcl = MCL.best(world, rng=rng, kld=kld)
-        self.mcl = mcl
+        self.mcl, self.second = mcl, second
         self.avoider = StopAndTurn() if avoider is None else avoider
         self.planner, self.law = planner, law
         self.mode, self.outcome = LOCALIZE, ""
@@ -170,7 +177,14 @@ class Navigator:
         ok = np.abs(z - expected) < 0.25 + 0.1 * expected
         self._agree += 0.025 * (float(ok.mean()) - self._agree)
         if np.hypot(*(pose[:2] - self.goal)) < s.goal_tolerance:
-            self.outcome = "reached"
+            if self._confirmed(pose):
+                self.outcome = "reached"
+                return 0.0, 0.0
+            # the second filter sees it elsewhere: start again, both
+            self.mcl.reset()
+            self.second.reset()
+            self._start_localizing(now)
+            self._doubt_times.append(now)
             return 0.0, 0.0
         if self._agree < s.lost_agreement or now - self._best_time > s.no_progress:
             # lost: forget the pose and the marks, localize again
@@ -194,6 +208,15 @@ class Navigator:
         v, w = self._follower.command(z, pose, expected)
         self.mode = AVOID if self._follower.avoiding else FOLLOW
         return v, w
+
+    def _confirmed(self, pose) -> bool:
+        """Whether the second filter is tight and within ``confirm`` of ``pose``."""
+        if self.second is None:
+            return True
+        pos, head = _spread(self.second)
+        other = compose(self._second_at, relative(self._odo_at, self._odo))
+        near = math.hypot(*(other[:2] - pose[:2])) < self.settings.confirm
+        return near and pos < self.settings.spread and head < 0.15
 
     def _replan(self, pose, now: float) -> None:
         """Plan from ``pose`` around the marks; a new follower (or no_path)."""
@@ -235,6 +258,7 @@ class Navigator:
         self._ran = True
         s = self.settings
         self._plans, self._plan_times, self._lost_times = [], [], []
+        self._doubt_times = []
         self._need_plan, self._last_plan, self._agree = False, -np.inf, 1.0
         self._best_left, self._best_time = np.inf, np.inf
         self._start_localizing(0.0)
@@ -245,14 +269,19 @@ class Navigator:
         t0 = robot.state.time
         odo_filter = robot.state.pose.copy()
         est_at, odo_at = self.mcl.last_estimate.copy(), odo_filter.copy()
+        if self.second is not None:
+            self._second_at = self.second.last_estimate.copy()
         cycle = 0
         while True:
             st = robot.state
             z, odo, now = st.sonar, st.pose, st.time - t0
             if cycle > 0 and cycle % s.filter_every == 0:
                 est_at = self.mcl.step(odo_filter, odo, z)
+                if self.second is not None:
+                    self._second_at = self.second.step(odo_filter, odo, z)
                 odo_filter, odo_at = odo.copy(), odo.copy()
                 self._steps += 1
+            self._odo_at, self._odo = odo_at, odo
             pose = compose(est_at, relative(odo_at, odo))
             v = w = 0.0
             if st.stalled:
@@ -299,6 +328,7 @@ class Navigator:
             self.localized_at,
             np.array(rec["agree"]),
             np.array(self._lost_times),
+            np.array(self._doubt_times),
         )
 
 

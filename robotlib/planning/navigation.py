@@ -52,6 +52,16 @@ class NavSettings:
     no_progress : float
         It counts itself lost, too, when its plans have not got 0.5 m shorter
         for this long, s (it may be driving a look-alike place's plan) (30).
+    confirm : float
+        Before it says "reached", a second filter, run on the same readings
+        from its own global start and seed, must have a tight cloud whose
+        estimate lies within this of the first's, m (0.5; 0: no second
+        filter). In a building of look-alike places a filter can settle in
+        the wrong one, tight and agreeing with the sonar; two filters
+        settling independently in the same wrong place is much rarer. When
+        they disagree at the goal, both start again from scratch (LOCALIZE).
+        Only with the navigator's own filters (a filter handed to it, e.g.
+        one told the start pose, is trusted alone).
     """
 
     speed: float = 0.3
@@ -67,10 +77,13 @@ class NavSettings:
     off_track: float = 0.7
     lost_agreement: float = 0.62
     no_progress: float = 30.0
+    confirm: float = 0.5
 
     def __post_init__(self):
         if int(self.filter_every) < 1 or int(self.min_filter_steps) < 0:
             raise ValueError("filter_every must be >= 1 and min_filter_steps >= 0")
+        if self.confirm < 0:
+            raise ValueError(f"confirm must be >= 0, got {self.confirm!r}")
         for name in ("speed", "lookahead", "goal_tolerance", "spread", "spin"):
             if not getattr(self, name) > 0:
                 raise ValueError(f"{name} must be > 0, got {getattr(self, name)!r}")
@@ -115,6 +128,9 @@ class Navigation:
         estimate.
     lost_times : numpy.ndarray
         When the robot counted itself lost and localized again, s.
+    doubt_times : numpy.ndarray
+        When the robot stood at the goal by its estimate but the second
+        filter disagreed (`NavSettings.confirm`), so it localized again, s.
     """
 
     time: np.ndarray
@@ -133,6 +149,7 @@ class Navigation:
     localized_at: float = float("nan")
     agreement: np.ndarray = field(default_factory=lambda: np.zeros(0))
     lost_times: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    doubt_times: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
     @property
     def reached(self) -> bool:
@@ -143,6 +160,11 @@ class Navigation:
     def final_error(self) -> float:
         """Distance from the final true position to the goal, m (NaN: no truth)."""
         return float(np.hypot(*(self.truth[-1, :2] - self.goal)))
+
+    @property
+    def false_reached(self) -> bool:
+        """Said "reached" while truly more than 0.5 m from the goal."""
+        return self.reached and not self.final_error <= 0.5
 
     @property
     def success(self) -> bool:

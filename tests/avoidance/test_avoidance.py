@@ -319,3 +319,26 @@ def test_fused_vfh_step_is_the_kernels_one_by_one():
     np.testing.assert_array_equal(g1, g2)
     np.testing.assert_array_equal(h1, h2)
     np.testing.assert_array_equal(b1, b2)
+
+
+def test_vfh_sonar_brake_acts_on_one_echo():
+    # a fresh grid has no certainty yet: only the brake sees the wall 0.3 m ahead
+    sonar = np.full(8, 5.0)
+    sonar[3:5] = 0.3
+    pose, goal = np.zeros(3), np.array([5.0, 0.0])
+    braked = VFH(goal)
+    braked.reset()
+    v, _ = braked.command(sonar, pose)
+    sx, sy, sa = SONAR_POSES[3]
+    x, y = sx + 0.3 * math.cos(sa), sy + 0.3 * math.sin(sa)  # the echo on the axis
+    free = x - math.sqrt(0.28**2 - y**2) - 0.05  # the disc (+3 cm) stops 5 cm short
+    assert 0.0 < v <= math.sqrt(2 * 0.25 * free) + 1e-9
+    blind = VFH(goal, VFHSettings(brake=0.0))
+    blind.reset()
+    assert blind.command(sonar, pose)[0] > v + 0.1
+    # an echo beside the path does not brake
+    side = np.full(8, 5.0)
+    side[[0, 7]] = 0.2
+    braked.reset()
+    blind.reset()
+    assert braked.command(side, pose)[0] == pytest.approx(blind.command(side, pose)[0])

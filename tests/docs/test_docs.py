@@ -1,9 +1,9 @@
 """The documentation site builds with warnings as errors and has its key pages.
 
 The build runs in a temporary copy of the files it reads (``docs/``,
-``course/``, ``CONTRIBUTING.md``), so that the gallery's generated pages land
-there and not in the repository. The site must open from disk: no page loads
-a script or a style sheet from the network.
+``course/``, ``CONTRIBUTING.md``, ``CHANGELOG.md``), so that the gallery's
+generated pages land there and not in the repository. The site must open
+from disk: no page loads a script or a style sheet from the network.
 """
 
 from __future__ import annotations
@@ -29,7 +29,8 @@ def site(tmp_path_factory):
     ignore = shutil.ignore_patterns("_build", "gallery", "sg_execution_times.rst")
     shutil.copytree(ROOT / "docs", src / "docs", ignore=ignore)
     shutil.copytree(ROOT / "course", src / "course")
-    shutil.copy2(ROOT / "CONTRIBUTING.md", src / "CONTRIBUTING.md")
+    for name in ("CONTRIBUTING.md", "CHANGELOG.md"):
+        shutil.copy2(ROOT / name, src / name)
     html = tmp_path_factory.mktemp("html")
     env = {**os.environ, "MPLBACKEND": "Agg", "ROBOTLIB_TABLE_CACHE": "off"}
     cmd = [
@@ -46,7 +47,7 @@ def site(tmp_path_factory):
 def test_key_pages_exist(site):
     pages = [
         "index", "getting-started", "robot-api", "syllabus", "instructor-guide",
-        "contributing", "course/index", "gallery/index", "api/index",
+        "contributing", "changelog", "course/index", "gallery/index", "api/index",
     ]  # fmt: skip
     pages += [f"course/lab{k}" for k in range(7)]
     for page in pages:

@@ -290,13 +290,20 @@ def test_uniform_particles_cover_free_space(world):
     assert p[:, 0].min() < 1.0 and p[:, 0].max() > 5.0
 
 
-def test_kld_count_matches_reference():
-    from robotlib.localization._kernels.kld import kld_count
+def test_kld_resample_matches_reference(world):
+    from statistics import NormalDist
 
     rng = np.random.default_rng(5)
-    for k_bins, n_min in ((3, 10), (50, 10), (400, 300), (5000, 20)):
-        bins = rng.integers(0, k_bins, 3000)
-        occupied = np.zeros(k_bins, dtype=bool)
-        got = kld_count(bins, 0.05, 2.326, n_min, occupied)
-        assert got == naive.kld_count(bins, 0.05, 2.326, n_min)
-        assert not occupied.any()  # left as found
+    for n, spread, n_min in ((2000, 0.1, 10), (2000, 3.0, 10), (500, 3.0, 300)):
+        p = np.column_stack(
+            [1.0 + spread * rng.random(n), 1.0 + spread / 3 * rng.random(n),
+             rng.uniform(-np.pi, np.pi, n)]
+        )  # fmt: skip
+        w = rng.random(n)
+        got = kld_resample(p, w, world.bounds, 7, n_min=n_min, n_max=5000)
+        uniforms = np.random.default_rng(7).random(5000)
+        z = NormalDist().inv_cdf(0.99)
+        ref = naive.kld_draw(
+            p, w, uniforms, world.bounds, 0.5, math.radians(15.0), 0.05, z, n_min
+        )
+        np.testing.assert_array_equal(got, ref)

@@ -37,6 +37,7 @@ LAYERS = {
     "robotlib.notebook": 7,
     "robotlib._unsolved": 0,  # a leaf: the notebook set-up's IPython handler
     "robotlib._ipython": 0,  # a leaf: which shell runs us (notebook, widgets)
+    "robotlib._versions": 0,  # a leaf: the version, and a lab's check against it
     "robotlib._shipped": 0,  # a leaf: where the worlds, labs and syllabus are
     "robotlib.course": 7,
     "robotlib.cli": 8,

@@ -7,6 +7,7 @@ from robotlib.localization import MCL
 from robotlib.pioneer.server import SimServer
 from robotlib.planning import (
     GOALS,
+    Navigation,
     Navigator,
     NavSettings,
     PathFollower,
@@ -159,3 +160,28 @@ def test_navigate_over_tcp(office):
     assert nav.reached, nav.outcome
     assert np.isnan(nav.truth).all()  # a Pioneer reports no true pose
     assert np.hypot(*(nav.estimate[-1, :2] - (2.5, 3.0))) < 0.2
+
+
+def test_navigator_confirms_the_goal_with_a_second_filter_of_its_own(office):
+    own = Navigator(office, (7.5, 5.2), rng=3)
+    assert own.second is not None and own.second is not own.mcl
+    told = MCL.best(office, rng=0, n=2000, init=np.array(office.start))
+    assert Navigator(office, (7.5, 5.2), mcl=told).second is None  # trusted alone
+    alone = Navigator(office, (7.5, 5.2), rng=3, settings=NavSettings(confirm=0.0))
+    assert alone.second is None
+    with pytest.raises(ValueError, match="confirm"):
+        NavSettings(confirm=-1.0)
+
+
+def test_false_reached_is_judged_by_the_truth():
+    def record(outcome, end):
+        truth = np.array([[0.0, 0.0, 0.0], [*end, 0.0]])
+        return Navigation(
+            np.arange(2.0), truth, truth, truth, np.zeros((2, 2)),
+            np.zeros(2, np.int8), np.zeros((2, 8)), np.zeros(2, bool),
+            goal=np.array([5.0, 0.0]), outcome=outcome,
+        )  # fmt: skip
+
+    assert record("reached", (2.0, 0.0)).false_reached
+    assert not record("reached", (4.7, 0.0)).false_reached
+    assert not record("timeout", (2.0, 0.0)).false_reached

@@ -38,9 +38,20 @@ def _reach(world: World, radius: float) -> tuple[np.ndarray, object]:
 
 
 @pytest.mark.parametrize("kind", KINDS)
-@settings(max_examples=6, deadline=None)
+def test_generated_world_valid_closed_and_pairs_reachable(kind):
+    _check_world(kind, 0)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("kind", KINDS)
+@settings(max_examples=10, deadline=None)
 @given(seed=SEEDS)
-def test_generated_world_valid_closed_and_pairs_reachable(kind, seed):
+def test_every_generated_world_valid_closed_and_pairs_reachable(kind, seed):
+    _check_world(kind, seed)
+
+
+def _check_world(kind: str, seed: int) -> None:
+    """Valid, closed, a start that is free, and pairs reachable by own search."""
     w = generate_world(kind, seed)
     assert w.name == kind and len(w.segments) >= 4
     assert np.all(np.isfinite(w.segments))

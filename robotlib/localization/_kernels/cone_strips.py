@@ -107,9 +107,10 @@ def build_strips(segments, c, s, c2, s2, u0, w, n_strips, normals, cos_specular)
 
     A wall ``m``'s code is ``4 m + f``: bit 1 of ``f`` set when a ray along
     ``(c, s)`` that hits it returns an echo (``|c nx + s ny| >=
-    cos_specular`` with ``normals[m] = (nx, ny)``, the test `_ray_entry`
-    made per ray before), bit 2 likewise along ``(c2, s2)``. Codes order
-    as the indexes do, so the rays' tie rule is unchanged.
+    cos_specular`` with ``normals[m] = (nx, ny)``: the specular test of
+    `robotlib.sensing._kernels.cone_echo`, which `cone_table._ray_entry`
+    reads), bit 2 likewise along ``(c2, s2)``. Codes order as the indexes
+    do, so equal hits still go to the lowest wall index.
     """
     n_walls = segments.shape[0]
     count = np.zeros(n_strips + 1, dtype=np.int64)

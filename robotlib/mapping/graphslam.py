@@ -1,0 +1,273 @@
+"""Pose-graph SLAM with laser scan matching (the front end and its settings).
+
+`graph_slam` turns a laser log (odometry poses and scans) into a pose graph
+and optimises it:
+
+1. a *keyframe* is kept whenever odometry has moved ``keyframe_distance`` m
+   or turned ``keyframe_angle`` rad since the last one;
+2. each keyframe is matched by ICP (`robotlib.mapping.icp`) against the
+   points of the few keyframes before it (a local map), starting from the
+   odometry's guess: the match, if it holds, is the edge to the previous
+   keyframe (weighted by its covariance, with a floor), else the odometry;
+3. *loop closures*: keyframes of the current estimate lying within
+   ``loop_radius`` m but at least ``loop_skip`` keyframes back are matched
+   too, and the match becomes an edge when most points pair up closely;
+4. the graph is optimised (`robotlib.mapping.posegraph.optimize`, sparse
+   Gauss-Newton/LM with a Huber kernel against a wrong closure) every
+   ``optimize_every`` keyframes, so that the proximity search of later
+   loops sees corrected poses, and once at the end.
+
+Every scan's pose is then its keyframe's optimised pose composed with the
+odometry since it.
+
+Imports numpy, `.icp` and `.posegraph`; never plots.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from .icp import icp, line_normals, scan_to_points, transform_points
+from .posegraph import PoseGraph, compose, optimize, prune_loops, relative_pose
+
+__all__ = ["GraphSLAMSettings", "GraphSLAMResult", "graph_slam"]
+
+
+@dataclass(frozen=True)
+class GraphSLAMSettings:
+    """The knobs of `graph_slam` (m, rad).
+
+    Attributes
+    ----------
+    keyframe_distance, keyframe_angle : float
+        Odometry motion that starts a new keyframe (0.3 m, 0.3 rad).
+    max_range : float
+        Echoes at or beyond this are dropped, m (20).
+    local_map : int
+        Keyframes before the current one whose points it is matched to (3).
+    gate : float
+        ICP's initial pairing gate, m (0.5; it shrinks to a third).
+    point_to_line : bool
+        Point-to-line ICP (True) or point to point.
+    min_inliers : float
+        A sequential match holds when at least this fraction of points pair
+        (0.5), it converged and it lies within ``max_correction`` of the
+        odometry's guess.
+    max_correction : tuple of float
+        (0.5 m, 0.5 rad).
+    odometry_sigma : tuple of float
+        Standard deviations of an odometry edge per keyframe: along, across
+        (m) and heading (rad) (0.1, 0.1, 0.1).
+    match_sigma_floor : tuple of float
+        Smallest standard deviations given to a match's ``x, y`` (m) and
+        heading (rad), since ICP's own covariance is optimistic (0.02, 0.01).
+    loop_radius : float
+        Keyframes this near (current estimate) are loop candidates, m (1.5).
+    loop_skip : int
+        ... if at least this many keyframes back (30).
+    loop_candidates : int
+        At most this many candidates tried per keyframe (nearest first) (2).
+    loop_every : int
+        Loops are looked for at every this-many-th keyframe (2).
+    loop_gate : float
+        ICP's initial gate for a loop, m (1.0).
+    loop_inliers, loop_rms : float
+        A loop match is accepted with at least this inlier fraction (0.7) and
+        at most this RMS, m (0.05).
+    optimize_every : int
+        Keyframes between optimisations during the run (50).
+    huber : float
+        Huber width on an edge's Mahalanobis distance (3).
+    """
+
+    keyframe_distance: float = 0.3
+    keyframe_angle: float = 0.3
+    max_range: float = 20.0
+    local_map: int = 3
+    gate: float = 0.5
+    point_to_line: bool = True
+    min_inliers: float = 0.5
+    max_correction: tuple[float, float] = (0.5, 0.5)
+    odometry_sigma: tuple[float, float, float] = (0.1, 0.1, 0.1)
+    match_sigma_floor: tuple[float, float] = (0.02, 0.01)
+    loop_radius: float = 1.5
+    loop_skip: int = 30
+    loop_candidates: int = 2
+    loop_every: int = 2
+    loop_gate: float = 1.0
+    loop_inliers: float = 0.7
+    loop_rms: float = 0.05
+    optimize_every: int = 50
+    huber: float = 3.0
+
+    def __post_init__(self):
+        if self.keyframe_distance <= 0 or self.keyframe_angle <= 0:
+            raise ValueError("keyframe_distance and keyframe_angle must be > 0")
+        if self.local_map < 1 or self.loop_skip < 2 or self.optimize_every < 1:
+            raise ValueError("local_map >= 1, loop_skip >= 2, optimize_every >= 1")
+        if min(self.odometry_sigma) <= 0 or min(self.match_sigma_floor) <= 0:
+            raise ValueError("the sigmas must be > 0")
+
+
+@dataclass
+class GraphSLAMResult:
+    """What `graph_slam` built.
+
+    Attributes
+    ----------
+    poses : numpy.ndarray, shape (T, 3)
+        Every scan's estimated pose, m and rad.
+    keyframes : numpy.ndarray of int, shape (K,)
+        The scans kept as keyframes (graph nodes, in order).
+    graph : PoseGraph
+        The optimised graph (node k is ``keyframes[k]``).
+    loops : int
+        Loop-closure edges kept (accepted by ICP, not pruned).
+    failed_matches : int
+        Sequential matches that did not hold (odometry used instead).
+    """
+
+    poses: np.ndarray
+    keyframes: np.ndarray
+    graph: PoseGraph
+    loops: int
+    failed_matches: int
+
+
+def _keyframes(odometry, distance, angle) -> np.ndarray:
+    keep = [0]
+    for t in range(1, len(odometry)):
+        d = relative_pose(odometry[keep[-1]], odometry[t])
+        if math.hypot(d[0], d[1]) >= distance or abs(d[2]) >= angle:
+            keep.append(t)
+    return np.array(keep)
+
+
+def _information(cov, floor) -> np.ndarray:
+    c = np.array(cov, dtype=float)
+    if not np.all(np.isfinite(c)):
+        c = np.diag([floor[0] ** 2, floor[0] ** 2, floor[1] ** 2]) * 25.0
+    c = 0.5 * (c + c.T) + np.diag([floor[0] ** 2, floor[0] ** 2, floor[1] ** 2])
+    return np.linalg.inv(c)
+
+
+def graph_slam(
+    odometry,
+    scans,
+    angles,
+    max_range: float,
+    settings: GraphSLAMSettings | None = None,
+    mount=(0.0, 0.0, 0.0),
+) -> GraphSLAMResult:
+    """Build and optimise a pose graph from a laser log.
+
+    Parameters
+    ----------
+    odometry : array_like, shape (T, 3)
+        Odometry pose of each scan, m and rad.
+    scans : array_like, shape (T, B)
+        Laser ranges, m.
+    angles : array_like, shape (B,)
+        Beam angles in the robot frame, rad.
+    max_range : float
+        The sensor's "no echo" range, m (the settings' ``max_range`` also
+        applies).
+    settings : GraphSLAMSettings, optional
+    mount : array_like, shape (3,)
+        The laser's pose in the robot frame, m and rad (a P3-DX's LMS-200:
+        18 mm ahead of the centre).
+
+    Returns
+    -------
+    GraphSLAMResult
+    """
+    s = GraphSLAMSettings() if settings is None else settings
+    odo = np.asarray(odometry, dtype=float).reshape(-1, 3)
+    z = np.asarray(scans, dtype=float)
+    ang = np.asarray(angles, dtype=float).reshape(-1)
+    if z.ndim != 2 or len(z) != len(odo) or z.shape[1] != len(ang):
+        raise ValueError(
+            f"need scans (T, B) with T = {len(odo)} poses, B = {len(ang)} angles; "
+            f"got {z.shape}"
+        )
+    if not np.isfinite(odo).all():
+        raise ValueError("odometry must be finite")
+    rmax = min(float(max_range), s.max_range)
+    kf = _keyframes(odo, s.keyframe_distance, s.keyframe_angle)
+    mount = np.asarray(mount, dtype=float).reshape(3)
+    points = [transform_points(mount, scan_to_points(z[t], ang, rmax)) for t in kf]
+    sig = np.array(s.odometry_sigma)
+    odo_info = np.diag(1.0 / sig**2)
+    graph = PoseGraph()
+    graph.add_pose(odo[kf[0]])
+    loops = failed = 0
+    for k in range(1, len(kf)):
+        guess = relative_pose(odo[kf[k - 1]], odo[kf[k]])
+        graph.add_pose(compose(graph.poses[k - 1], guess))
+        edge = _sequential(graph, points, k, guess, s)
+        if edge is None:
+            failed += 1
+            graph.add_edge(k - 1, k, guess, odo_info, "odometry")
+        else:
+            graph.add_edge(k - 1, k, edge[0], edge[1], "scan")
+            graph.poses[k] = compose(graph.poses[k - 1], edge[0])
+        if k % s.loop_every == 0:
+            loops += _close_loops(graph, points, k, s)
+        if k % s.optimize_every == 0:
+            optimize(graph, iterations=10, huber=s.huber)
+    pruned = prune_loops(graph, huber=s.huber, iterations=30)
+    owner = np.searchsorted(kf, np.arange(len(odo)), side="right") - 1
+    poses = compose(graph.poses[owner], relative_pose(odo[kf[owner]], odo))
+    return GraphSLAMResult(poses, kf, graph, loops - pruned, failed)
+
+
+def _sequential(graph, points, k, guess, s):
+    """Match keyframe k against the local map; return (z, information) or None."""
+    if len(points[k]) < 10:
+        return None
+    base = graph.poses[k - 1]
+    ref = [points[k - 1]]
+    for m in range(max(0, k - s.local_map), k - 1):
+        ref.append(transform_points(relative_pose(base, graph.poses[m]), points[m]))
+    ref = np.concatenate(ref)
+    if len(ref) < 10:
+        return None
+    tree = cKDTree(ref)
+    normals = line_normals(ref, tree=tree) if s.point_to_line else None
+    r = icp(ref, points[k], guess, max_distance=s.gate, point_to_line=s.point_to_line,
+            tree=tree, normals=normals)  # fmt: skip
+    off = relative_pose(guess, r.pose)
+    if (
+        r.inliers < s.min_inliers
+        or math.hypot(off[0], off[1]) > s.max_correction[0]
+        or abs(off[2]) > s.max_correction[1]
+    ):
+        return None
+    return r.pose, _information(r.covariance, s.match_sigma_floor)
+
+
+def _close_loops(graph, points, k, s) -> int:
+    """Look for loop closures of keyframe k; add the accepted edges."""
+    if k <= s.loop_skip or len(points[k]) < 10:
+        return 0
+    old = graph.poses[: k - s.loop_skip + 1]
+    d = np.hypot(old[:, 0] - graph.poses[k, 0], old[:, 1] - graph.poses[k, 1])
+    near = np.flatnonzero(d < s.loop_radius)
+    if len(near) == 0:
+        return 0
+    added = 0
+    for j in near[np.argsort(d[near])][: s.loop_candidates]:
+        if len(points[j]) < 10:
+            continue
+        guess = relative_pose(graph.poses[j], graph.poses[k])
+        r = icp(points[j], points[k], guess, max_distance=s.loop_gate,
+                point_to_line=s.point_to_line)  # fmt: skip
+        if r.inliers >= s.loop_inliers and r.rms <= s.loop_rms:
+            info = _information(r.covariance, s.match_sigma_floor)
+            graph.add_edge(int(j), k, r.pose, info, "loop")
+            added += 1
+    return added
