@@ -19,6 +19,7 @@ from pathlib import Path
 
 import nbformat
 
+from .astlock import parse
 from .notebooks import CODE_STUB, META_KEY, NotebookError, read_notebook
 from .plan import lab_plan, normalized
 from .release import project_dir
@@ -44,7 +45,7 @@ def _lab_file(nb: dict, given: Path | None) -> Path:
 
 def _defines(source: str) -> set[str]:
     try:
-        tree = ast.parse(source)
+        tree = parse(source)
     except SyntaxError:
         return set()
     kinds = (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)
