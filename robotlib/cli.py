@@ -30,6 +30,10 @@ COMMANDS = {
     ),
     "release": ("robotlib.course.release", "write labs/ from solutions/"),
     "grade": ("robotlib.course.command", "grade a folder of submissions in a sandbox"),
+    "validate": (
+        "robotlib.course.validate",
+        "check a lab notebook before handing it in",
+    ),
     "warmup": ("robotlib.notebook", "compile the numba kernels the labs use, once"),
 }
 """Subcommand name to (module, one-line help)."""

@@ -112,26 +112,45 @@ def _raw(obj):
     return getattr(obj, "__func__", obj)
 
 
-def _places(targets: dict[int, str], roots=("robotlib",)):
+class _Targets:
+    """The listed objects, by identity: ``get(obj)`` is the name listing it, or None.
+
+    Holds the objects themselves: once a tripwire replaces a function in its
+    module, nothing else may keep it alive, and an object made later could
+    be given its id (a call of ``astar`` reported as ``pure_pursuit``).
+    """
+
+    def __init__(self):
+        self.by_id: dict[int, tuple[str, object]] = {}
+
+    def add(self, obj, name: str) -> None:
+        self.by_id.setdefault(id(_raw(obj)), (name, _raw(obj)))
+
+    def get(self, obj) -> str | None:
+        hit = self.by_id.get(id(_raw(obj)))
+        return hit[0] if hit is not None and hit[1] is _raw(obj) else None
+
+
+def _places(targets: _Targets, roots=("robotlib",)):
     """Yield ``(container, attr, listed, dotted)`` for each place a target sits."""
     for name, mod in list(sys.modules.items()):
         if mod is None or not name.startswith(roots):
             continue
         for attr, val in list(vars(mod).items()):
-            if id(_raw(val)) in targets:
-                yield mod, attr, targets[id(_raw(val))], f"{name}.{attr}"
+            if (listed := targets.get(val)) is not None:
+                yield mod, attr, listed, f"{name}.{attr}"
             elif isinstance(val, type) and val.__module__.startswith(roots):
                 for k, v in list(vars(val).items()):
-                    if id(_raw(v)) in targets:
-                        yield val, k, targets[id(_raw(v))], f"{name}.{attr}.{k}"
+                    if (listed := targets.get(v)) is not None:
+                        yield val, k, listed, f"{name}.{attr}.{k}"
 
 
-def _targets(writes: Iterable[str]) -> dict[int, str]:
-    """Map each listed object's id to the first name listing it (in order)."""
-    out: dict[int, str] = {}
+def _targets(writes: Iterable[str]) -> _Targets:
+    """Map each listed object to the first name listing it (in order)."""
+    out = _Targets()
     for w in writes:
         try:
-            out.setdefault(id(_raw(resolve(w))), w)
+            out.add(resolve(w), w)
         except (ImportError, AttributeError):
             continue
     return out
@@ -461,25 +480,24 @@ def arm(
             container = resolve(parent)
         except (ImportError, AttributeError):
             continue
-        if id(_raw(getattr(container, attr, None))) in targets:
-            put(container, attr, targets[id(_raw(getattr(container, attr)))])
+        if (listed := targets.get(getattr(container, attr, None))) is not None:
+            put(container, attr, listed)
     for ns in namespaces:
         for k, v in list(ns.items()):
-            if id(_raw(v)) in targets:
-                ns[k] = wire(targets[id(_raw(v))], k)
+            if (listed := targets.get(v)) is not None:
+                ns[k] = wire(listed, k)
                 n += 1
     _hook(wire, targets, writes)
     return n
 
 
-def _hook(wire: Callable, targets: dict, writes: list[str]) -> None:
+def _hook(wire: Callable, targets: _Targets, writes: list[str]) -> None:
     """Re-arm robotlib modules executed (imported or reloaded) from now on."""
     import importlib.abc
 
     def rearm(module):
         for attr, val in list(vars(module).items()):
-            if id(_raw(val)) in targets:
-                listed = targets[id(_raw(val))]
+            if (listed := targets.get(val)) is not None:
                 setattr(module, attr, wire(listed, _where(module, attr)))
         for w in writes:
             mod, _, attr = w.rpartition(".")

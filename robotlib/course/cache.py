@@ -21,8 +21,8 @@ ever writes a cache another process reads. `save_reference` keeps the
 reference run's lines with that cache and the font list (in the records
 folder), and `load_reference` gives them back while `reference_key` (the
 solution, the library, the tools) is unchanged: adding a late student or
-folding in hand grades does not repeat the reference run. Imports nothing of robotlib's but
-numba's cache folder naming (`robotlib._kernel_cache`).
+folding in hand grades does not repeat the reference run. Imports nothing
+of robotlib's but numba's cache folder naming (`robotlib._kernel_cache`).
 """
 
 from __future__ import annotations

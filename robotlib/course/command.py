@@ -7,8 +7,10 @@ Usage::
     robotlib grade submissions/ --lab lab3_mcl --manual other-sheet.csv
 
 Writes the gradebook from every record of the class (a run over one
-student's folder, or with ``--student``, merges into it), the feedback, and
-the written answers' sheet (``<out>-manual.csv``). What the instructor typed
+student's folder, or with ``--student``, merges into it), the feedback, the
+written answers' sheet (``<out>-manual.csv``), the class report
+(``<out>-report.html``) and, with ``--lms`` and ``--roster``, the LMS's
+grade-import CSV (late penalties applied with ``--due``). What the instructor typed
 into that sheet is read into the hand-grade record (``<out>-hand.json``)
 before the sheet is rewritten, on every run: no run loses a hand grade.
 """
@@ -32,6 +34,7 @@ from .gradebook import (
     write_gradebook,
 )
 from .notebooks import NotebookError, notebook_text, read_notebook
+from .report import class_report, export_lms, read_roster
 from .session import Options
 
 __all__ = ["add_arguments", "fold_manual", "run"]
@@ -137,6 +140,27 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--scheduler",
         help="grade on Dask: 'local' or a scheduler address (extra grade-dask)",
     )
+    parser.add_argument(
+        "--lms",
+        choices=("canvas", "moodle"),
+        help="also write <out>-<lms>.csv for the LMS's grade import (needs --roster)",
+    )
+    parser.add_argument(
+        "--roster",
+        type=Path,
+        help="CSV mapping each submission to a student: folder, id, name, email, "
+        "section, and optionally due (ISO date-time) and submitted",
+    )
+    parser.add_argument(
+        "--due", help="due date-time (ISO, e.g. 2026-12-07T23:59; UTC unless given)"
+    )
+    parser.add_argument(
+        "--late-penalty",
+        type=float,
+        default=0.1,
+        help="fraction of the maximum taken per day late, in the LMS export and "
+        "the report (default: %(default)s)",
+    )
     parser.add_argument("--keep", action="store_true", help="keep the working folders")
     parser.add_argument("--quiet", "-q", action="store_true", help="no progress bar")
 
@@ -155,6 +179,10 @@ def run(args: argparse.Namespace) -> int:
     )
     t0, wall0 = time.monotonic(), time.time()
     records = args.out.with_name(f"{args.out.stem}-records")
+    feedback = args.feedback or args.out.with_name(f"{args.out.stem}-feedback")
+    sheet = args.out.with_name(f"{args.out.stem}-manual.csv")
+    hand_path = args.out.with_name(f"{args.out.stem}-hand.json")
+    outputs = (args.out, records, feedback, sheet, hand_path)  # never students
     status = 0
     try:
         results, items = grade(
@@ -168,6 +196,7 @@ def run(args: argparse.Namespace) -> int:
             args.regrade,
             args.scheduler,
             args.student,
+            outputs,
         )
     except (GradeError, NotebookError, FileNotFoundError, ImportError) as exc:
         sys.stderr.write(f"robotlib grade: {exc}\n")
@@ -188,9 +217,8 @@ def run(args: argparse.Namespace) -> int:
     earlier = [r for r in Records(records, args.lab).all() if r.student not in here]
     results = sorted(results + earlier, key=lambda r: r.student)
     manual = [c for c in items if c.manual]
-    sheet = args.out.with_name(f"{args.out.stem}-manual.csv")
     try:  # what the instructor typed into the sheet is kept before it is rewritten
-        hand = HandGrades(args.out.with_name(f"{args.out.stem}-hand.json"))
+        hand = HandGrades(hand_path)
         for src in (sheet if sheet.exists() else None, args.manual):
             if src is not None and manual:
                 hand.merge(read_manual(src, manual))
@@ -203,8 +231,27 @@ def run(args: argparse.Namespace) -> int:
     write_gradebook(args.out, results, items)
     if manual:
         export_manual(sheet, results, manual, hand)
-    feedback = args.feedback or args.out.with_name(f"{args.out.stem}-feedback")
     write_feedback(feedback, results, items, args.lab)
+    try:
+        roster = read_roster(args.roster) if args.roster else None
+        report = args.out.with_name(f"{args.out.stem}-report.html")
+        class_report(report, results, items, args.lab, args.due, roster)
+        if args.lms:
+            if roster is None:
+                raise ValueError("--lms needs --roster (folder -> student id)")
+            lms = args.out.with_name(f"{args.out.stem}-{args.lms}.csv")
+            missing = export_lms(
+                lms, results, args.lms, args.lab, roster, args.due, args.late_penalty
+            )
+            if missing:
+                sys.stderr.write(
+                    f"robotlib grade: not in the roster, left out of {lms}: "
+                    + ", ".join(missing[:10])
+                    + "\n"
+                )
+    except (OSError, ValueError) as exc:
+        sys.stderr.write(f"robotlib grade: {exc}\n")
+        return 2
     auto = [c for c in items if not c.manual]
     full = sum(all(r.points.get(c.grade_id) == c.points for c in auto) for r in results)
     if busy := sum(r.status == OVERLOADED for r in results):

@@ -50,8 +50,43 @@ def stat(pid: int) -> list[bytes] | None:
     return data[data.rindex(b")") + 2 :].split()
 
 
+def _children(pid: int) -> list[int] | None:
+    """Children of ``pid`` from ``/proc/PID/task/*/children``; None if unsupported."""
+    try:
+        tasks = os.listdir(f"/proc/{pid}/task")
+    except OSError:
+        return []
+    kids: list[int] = []
+    for tid in tasks:
+        try:
+            with open(f"/proc/{pid}/task/{tid}/children", "rb") as f:
+                kids += [int(k) for k in f.read().split()]
+        except FileNotFoundError:
+            if not os.path.exists(f"/proc/{pid}/task/{tid}"):
+                continue  # that thread ended meanwhile
+            return None  # a kernel without CONFIG_PROC_CHILDREN
+        except OSError:
+            continue
+    return kids
+
+
 def descendants(pid: int) -> list[int]:
-    """Every process below ``pid`` (children first seen, then theirs), from /proc."""
+    """Every process below ``pid`` (children first seen, then theirs), from /proc.
+
+    Follows ``/proc/PID/task/*/children`` (a few reads for a sandbox's tree);
+    where the kernel lacks them, reads every process's parent instead.
+    """
+    out, todo = [], [pid]
+    while todo:
+        kids = _children(todo.pop())
+        if kids is None:
+            return _descendants_by_scan(pid)
+        out += kids
+        todo += kids
+    return out
+
+
+def _descendants_by_scan(pid: int) -> list[int]:
     parents: dict[int, list[int]] = {}
     for entry in os.listdir("/proc"):
         if entry.isdigit() and (fields := stat(int(entry))) is not None:

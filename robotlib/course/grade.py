@@ -49,7 +49,7 @@ from .parallel import Bar, dask_map, raise_interrupt, thread_map
 from .plan import LabPlan, lab_plan, normalized, scan_submission, student_cells
 from .release import project_dir
 from .session import JOB_ENV, Options, run_submission
-from .submissions import check_lab, find_submissions, pick
+from .submissions import check_lab, copies, find_submissions, pick
 
 __all__ = [
     "GradeError",
@@ -173,6 +173,7 @@ def grade_notebook(
         return result
     result.answers = _answers(plan, nb)
     cells = student_cells(plan, nb)
+    result.code = {c["exercise"]: c["source"] for c in cells if c["exercise"]}
     zero, flags = scan_submission(plan, cells)
     result.flags += flags
     out = run_submission(plan, cells, opts, slot)
@@ -308,6 +309,7 @@ def grade(
     regrade: bool = False,
     scheduler: str | None = None,
     students: list[str] | None = None,
+    exclude: tuple[Path, ...] = (),
 ) -> tuple[list[Result], list]:
     """Grade every submission of a folder.
 
@@ -335,6 +337,9 @@ def grade(
         ``"local"`` or a ``dask.distributed`` scheduler address.
     students : list of str, optional
         Grade (again) only these students; the others are left as recorded.
+    exclude : tuple of pathlib.Path
+        Paths inside the submissions folder that are not submissions (the
+        grader's own outputs).
 
     Returns
     -------
@@ -351,20 +356,20 @@ def grade(
         On Ctrl-C or SIGTERM, after every process of the class has ended.
     """
     opts = opts or Options()
-    if opts.sandbox and (why := sb.available()):
-        raise GradeError(f"no sandbox: {why}; pass --no-sandbox to grade without")
     solution = Path(solution) if solution else solution_path(lab)
     sol_nb = read_notebook(solution)
-    sol_text = notebook_text(sol_nb)
-    plan = _plan(sol_text, lab)
-    subs = find_submissions(submissions, lab)
+    subs = find_submissions(submissions, lab, exclude)
     if not subs:
         raise GradeError(f"no submissions in {submissions}")
-    try:
+    try:  # mistakes in the command first, before anything slow
         check_lab(sol_nb, lab, [p for _, p, _ in subs if p is not None])
         subs = pick(subs, students) if students else subs
     except ValueError as exc:
         raise GradeError(str(exc)) from None
+    if opts.sandbox and (why := sb.available()):
+        raise GradeError(f"no sandbox: {why}; pass --no-sandbox to grade without")
+    sol_text = notebook_text(sol_nb)
+    plan = _plan(sol_text, lab)
     jobs = max(1, jobs or os.cpu_count() or 1)
     store = Records(records, lab) if records else None
     again = Again(store, [s for s, _, _ in subs] if regrade or students else None)
@@ -407,9 +412,18 @@ def grade(
             else:
                 bar.advance("(reference run: saved)")
             fps = {t[0]: t[3] for t in todo}
+            times = {s: p.stat().st_mtime for s, p, _, _ in todo if p is not None}
+            notes = {
+                s: [f"several copies of the lab: graded the newest, {p.name} "
+                    f"(not {', '.join(c.name for c in others)})"]
+                for s, p, _, _ in todo
+                if p is not None and (others := copies(p, lab))
+            }  # fmt: skip
 
             def done(data: dict) -> None:
                 r = Result.from_json(data)
+                r.flags += notes.get(r.student, [])
+                r.submitted = times.get(r.student, 0.0)
                 results[r.student] = r
                 if store is not None and not r.status.startswith("interrupted"):
                     store.save(r, fps[r.student])

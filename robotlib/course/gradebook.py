@@ -63,6 +63,8 @@ class Result:
     check_lines: dict[str, dict] = field(default_factory=dict)
     details: dict[str, str] = field(default_factory=dict)  # gid -> feedback text
     answers: dict[str, str] = field(default_factory=dict)  # manual gid -> answer
+    code: dict[str, str] = field(default_factory=dict)  # exercise -> their cell
+    submitted: float = 0.0  # the notebook's modification time (Unix time, s)
     source: str = ""
 
     @property

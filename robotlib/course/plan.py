@@ -7,7 +7,10 @@
   followed back through the solution's top-level statements (functions,
   classes, imports, assignments) until only the set-up cell's names and the
   exercises' names are left. A check never sees a name the student's
-  notebook defines, except the exercises' own, through proxies.
+  notebook defines, except the exercises' own, through proxies; and only
+  those of the exercises it grades (its ``exercises``): for the others it
+  gets the solution's versions (``LabPlan.answers``), so one mistake costs
+  the checks of its own exercise, not every later check that uses it.
 - `student_cells` (per submission): the student's code for each exercise
   (their cell matched by exercise id, cell id, or the names it defines) and
   the cells they added, in order; check cells and the lab's other cells
@@ -30,6 +33,7 @@ from nbformat import NotebookNode
 from . import answers
 from .astlock import parse
 from .notebooks import (
+    ANSWER_STUB,
     HIDDEN,
     META_KEY,
     SOLUTION,
@@ -63,6 +67,7 @@ class LabPlan:
     solution_ids: set[str] = field(default_factory=set)
     lab_sources: set[str] = field(default_factory=set)  # `normalized` lab cells
     prompts: dict[str, str] = field(default_factory=dict)  # written answer -> question
+    answers: list[str] = field(default_factory=list)  # the solution's exercise cells
     same: dict[str, list[str]] = field(default_factory=dict)  # listed -> equals
 
     def listed_as(self, function: str, exercise: str | None) -> str:
@@ -182,7 +187,12 @@ def lab_plan(solution: NotebookNode, name: str) -> LabPlan:
         free = _free_names(src)
         values = sorted(n for n in free if names.get(n, {}).get("kind") == "value")
         check_specs.append(
-            {"gid": c.grade_id, "source": _with_marker(src), "values": values}
+            {
+                "gid": c.grade_id,
+                "source": _with_marker(src),
+                "values": values,
+                "exercises": list(c.exercises) or [c.grade_id],
+            }
         )
         todo = list(free)
         while todo:
@@ -219,8 +229,10 @@ def lab_plan(solution: NotebookNode, name: str) -> LabPlan:
     plan.same = answers.equivalents(writes) if writes else {}
     plan.solution_ids = {c.get("id") for c in solution.cells}
     plan.lab_sources = _lab_sources(solution, exs)
+    plan.answers = [solution.cells[e.index].source for e in exs]
     for c in manual:  # the question, above the solution region
-        question = solution.cells[c.index].source.split(SOLUTION[0])[0]
+        source = solution.cells[c.index].source  # a released lab: the stub
+        question = source.split(SOLUTION[0])[0].split(ANSWER_STUB[0])[0]
         plan.prompts[c.grade_id] = normalized(question)
     return plan
 

@@ -189,6 +189,7 @@ class Proc:
         # set-up cell's warm-ups (numba loads each kernel from it when used)
         spec = {**spec, "skip_warm_up": cache.exists()}
         cache.mkdir(exist_ok=True)
+        self.scratch, self.base = scratch, sb.scratch_bytes(scratch)
         if uid is not None:
             for root, dirs, files in os.walk(scratch):
                 for n in (root, *(os.path.join(root, d) for d in dirs)):

@@ -13,7 +13,7 @@
   Python, the virtual environment, the installed library and its worlds;
   never ``solutions/``, the submissions, the gradebook or the grader's work
   folders; its own writable scratch folder at ``/scratch`` and a private
-  ``/tmp``;
+  ``/tmp`` (writable by all, its size limited);
 - under resource limits (``prlimit``): address space, processes, file size,
   open files, CPU time, no core files.
 
@@ -32,7 +32,14 @@ import sys
 from dataclasses import dataclass
 from pathlib import Path
 
-__all__ = ["Limits", "available", "command", "readonly_paths", "SCRATCH"]
+__all__ = [
+    "Limits",
+    "available",
+    "command",
+    "readonly_paths",
+    "scratch_bytes",
+    "SCRATCH",
+]
 
 SCRATCH = "/scratch"
 """Where the submission's writable scratch folder appears in the sandbox."""
@@ -54,6 +61,11 @@ class Limits:
         Open file descriptors.
     cpu : int
         CPU time, s.
+    tmp : int
+        Size of the sandbox's private ``/tmp`` (memory), bytes.
+    disk : int
+        Bytes a submission may add to its scratch folder (the grader measures
+        it every second and ends the process past it; see `scratch_bytes`).
     """
 
     memory: int = 6 << 30
@@ -61,6 +73,8 @@ class Limits:
     file_size: int = 256 << 20
     open_files: int = 512
     cpu: int = 900
+    tmp: int = 512 << 20
+    disk: int = 1 << 30
 
     def prlimit(self) -> list[str]:
         """Return the ``prlimit`` command prefix setting these limits."""
@@ -109,7 +123,26 @@ _SYSTEM = ("/usr", "/etc", "/opt")
 _LINKS = {"/bin": "usr/bin", "/sbin": "usr/sbin", "/lib": "usr/lib"}
 
 
-def _bwrap(scratch: Path, uid: int | None, cwd: str) -> list[str]:
+def scratch_bytes(folder: Path) -> int:
+    """Return the bytes the files under ``folder`` take (links not followed)."""
+    total, todo = 0, [str(folder)]
+    while todo:
+        try:
+            with os.scandir(todo.pop()) as it:
+                for e in it:
+                    try:
+                        if e.is_dir(follow_symlinks=False):
+                            todo.append(e.path)
+                        else:
+                            total += e.stat(follow_symlinks=False).st_blocks * 512
+                    except OSError:
+                        continue
+        except OSError:
+            continue
+    return total
+
+
+def _bwrap(scratch: Path, uid: int | None, cwd: str, tmp: int) -> list[str]:
     args = [
         "bwrap",
         "--unshare-pid",
@@ -140,7 +173,8 @@ def _bwrap(scratch: Path, uid: int | None, cwd: str) -> list[str]:
         elif os.path.isdir(lib):
             args += ["--ro-bind", lib, lib]
     # /tmp first: a checkout or venv under /tmp is then bound on top of it
-    args += ["--proc", "/proc", "--dev", "/dev", "--tmpfs", "/tmp"]
+    args += ["--proc", "/proc", "--dev", "/dev"]
+    args += ["--perms", "1777", "--size", str(tmp), "--tmpfs", "/tmp"]
     ro = [p for p in readonly_paths() if not str(p).startswith(_SYSTEM)]
     for parent in _parents(ro):
         if not str(parent).startswith(_SYSTEM):
@@ -185,7 +219,7 @@ def command(
     if not sandbox:
         fix = functools.partial(_rewrite, str(scratch))
         return [*limits.prlimit(), *map(fix, argv)], {k: fix(v) for k, v in env.items()}
-    args = _bwrap(scratch, uid, cwd)
+    args = _bwrap(scratch, uid, cwd, limits.tmp)
     for k, v in env.items():
         args += ["--setenv", k, v]
     args.append("--")

@@ -110,6 +110,7 @@ def run_submission(
             "defs": plan.defs,
             "checks": plan.check_specs,
             "names": plan.names,
+            "answers": plan.answers,
             "start": index,
         }
         scratch = root / f"check{gen['check']}"
@@ -128,6 +129,8 @@ def run_submission(
         if procs["student"] is None:
             return  # given up already: a late event of the last process
         procs["student"].kill()
+        if not opts.keep:  # what it wrote goes now, not at the end
+            shutil.rmtree(procs["student"].scratch, ignore_errors=True)
         out.restarts += 1
         if st["cell"] is not None:
             cid = st["cell"][0]
@@ -182,7 +185,7 @@ def run_submission(
                     "(CPU hogs): slowed down, its own CPU time charged"
                 )
 
-    sampled = 0.0
+    sampled = weighed = 0.0
     try:
         start_student()
         start_check(0)
@@ -197,6 +200,16 @@ def run_submission(
                     if p is not None:
                         p.sample()
                 watch_hogs(procs["student"])
+            if now - weighed >= 1.0 and procs["student"] is not None:
+                weighed = now
+                p = procs["student"]
+                if sb.scratch_bytes(p.scratch) - p.base > opts.limits.disk:
+                    mib = opts.limits.disk / (1 << 20)
+                    note = f"wrote more than {mib:g} MiB to disk"
+                    if note not in out.flags:
+                        out.flags.append(note)
+                    student_died(f"your code {note}")
+                    continue
             spent = sum(p.last.cpu for p in made)
             if spent > opts.timeout or now - t_start > opts.timeout * opts.backstop:
                 over = spent <= opts.timeout

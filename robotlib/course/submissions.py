@@ -13,13 +13,55 @@ from __future__ import annotations
 
 import json
 import os
+import re
 from pathlib import Path
 
-__all__ = ["check_lab", "find_submissions", "pick"]
+__all__ = ["check_lab", "copies", "find_submissions", "is_copy_of", "pick"]
 
 
 def _name(p: Path) -> str:
-    return os.fsdecode(p.name).encode("utf-8", "backslashreplace").decode("utf-8")
+    """Return the file name as text: UTF-8, else Latin-1 (old Windows zips)."""
+    raw = os.fsencode(p.name)
+    try:
+        return raw.decode("utf-8")
+    except UnicodeDecodeError:
+        return raw.decode("latin-1")
+
+
+_COPY = re.compile(r"(\s*\(\d+\)|\s*-\s*copy\d*|\s+copy(\s*\d+)?)+$", re.IGNORECASE)
+
+
+def is_copy_of(path: Path, lab: str) -> bool:
+    """Whether ``path`` is the lab's notebook or a copy (``lab (1)``, ``lab-Copy1``)."""
+    stem = _COPY.sub("", path.stem.strip())
+    return stem.strip().lower() == lab.lower()
+
+
+def copies(path: Path, lab: str) -> list[Path]:
+    """Return the other copies of the lab beside ``path`` (graded: the newest)."""
+    folder = path.parent
+    return sorted(
+        p
+        for p in folder.glob("*.ipynb")
+        if p != path and is_copy_of(p, lab) and not p.is_symlink()
+    )
+
+
+def _newest(paths: list[Path]) -> Path:
+    return max(paths, key=lambda p: (p.stat().st_mtime, p.name))
+
+
+def _sections(entry: Path, lab: str) -> list[Path] | None:
+    """Sub-folders that are students (``section2/alice/lab.ipynb``), or None."""
+    if any(entry.glob("*.ipynb")) or (entry / lab).is_dir():
+        return None
+    subs = [
+        d
+        for d in sorted(entry.iterdir())
+        if d.is_dir() and not d.name.startswith(".") and not d.is_symlink()
+    ]
+    with_nb = [d for d in subs if any(_notebooks(d))]
+    return with_nb if len(with_nb) >= 2 else None
 
 
 def _notebooks(folder: Path) -> list[Path]:
@@ -33,46 +75,43 @@ def _notebooks(folder: Path) -> list[Path]:
 
 
 def find_submissions(
-    folder: str | Path, lab: str
+    folder: str | Path, lab: str, exclude: tuple[Path, ...] = ()
 ) -> list[tuple[str, Path | None, str]]:
     """List ``(student, notebook, status)`` of a submissions folder.
 
     ``status`` is "" when the notebook is clear, else why it was not graded
     ("no notebook", "several notebooks: a.ipynb, b.ipynb"); then ``notebook``
-    is None. Student names are the folder or file names (undecodable bytes
-    escaped); equal names get ``#2``, ``#3``.
+    is None. Student names are the folder or file names (UTF-8, else
+    Latin-1); equal names get ``#2``, ``#3``. Of several copies of the lab's
+    notebook (``lab.ipynb``, ``lab (1).ipynb``) the newest is graded; a
+    folder of folders that each hold notebooks is a section, each sub-folder
+    a student (``section2/alice``); ``exclude`` (the grader's own outputs)
+    is skipped.
     """
+    skip = {Path(p).resolve() for p in exclude}
     folder = Path(folder)
     if not folder.is_dir():
         raise FileNotFoundError(f"no submissions folder {folder}")
     out: list[tuple[str, Path | None, str]] = []
-    for entry in sorted(folder.iterdir(), key=lambda p: os.fsencode(p.name)):
-        if entry.name.startswith("."):
+    entries = sorted(folder.iterdir(), key=lambda p: os.fsencode(p.name))
+    while entries:
+        entry = entries.pop(0)
+        if entry.name.startswith(".") or entry.resolve() in skip:
             continue
+        prefix = "" if entry.parent == folder else f"{_name(entry.parent)}/"
         if entry.is_symlink():
-            out.append((_name(entry), None, "a symbolic link, not graded"))
+            name = _name(entry.with_suffix("") if entry.suffix == ".ipynb" else entry)
+            out.append((prefix + name, None, "a symbolic link, not graded"))
             continue
         if entry.is_file() and entry.suffix == ".ipynb":
-            out.append((_name(entry.with_suffix("")), entry, ""))
+            out.append((prefix + _name(entry.with_suffix("")), entry, ""))
             continue
         if not entry.is_dir():
             continue
-        student = _name(entry)
-        found = [
-            p
-            for p in _notebooks(entry)
-            if ".ipynb_checkpoints" not in p.parts and not p.is_symlink()
-        ]
-        named = [p for p in found if p.stem.strip().lower() == lab.lower()]
-        if len(named) == 1:
-            out.append((student, named[0], ""))
-        elif len(found) == 1:
-            out.append((student, found[0], ""))
-        elif not found:
-            out.append((student, None, "no notebook"))
-        else:
-            rel = ", ".join(str(p.relative_to(entry)) for p in (named or found)[:4])
-            out.append((student, None, f"several notebooks, none chosen: {rel}"))
+        if entry.parent == folder and (section := _sections(entry, lab)):
+            entries[:0] = section  # each sub-folder a student of the section
+            continue
+        out.append((prefix + _name(entry), *_choose(entry, lab)))
     seen: dict[str, int] = {}
     unique = []
     for student, path, status in out:
@@ -127,3 +166,24 @@ def check_lab(solution: dict, lab: str, notebooks: list[Path]) -> None:
             f"(their metadata), the solution of --lab {lab} is lab {want!r}: "
             "pick the lab they were handed out as"
         )
+
+
+def _choose(entry: Path, lab: str) -> tuple[Path | None, str]:
+    """Pick a student folder's notebook: ``(path, "")`` or ``(None, why not)``."""
+    found = [
+        p
+        for p in _notebooks(entry)
+        if ".ipynb_checkpoints" not in p.parts and not p.is_symlink()
+    ]
+    named = [p for p in found if is_copy_of(p, lab)]
+    if named:
+        return _newest(named), ""
+    if not found:
+        return None, "no notebook"
+    mine = [p for p in found if not p.stem.lower().startswith("untitled")]
+    if len(mine) == 1:
+        return mine[0], ""
+    if len(found) == 1:
+        return found[0], ""
+    rel = ", ".join(str(p.relative_to(entry)) for p in (mine or found)[:4])
+    return None, f"several notebooks, none chosen: {rel}"

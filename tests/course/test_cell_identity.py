@@ -120,3 +120,27 @@ def test_honest_notebooks_that_lost_ids_get_full_marks(tmp_path):
     r = rows["cheat_pasted"]
     assert r.points["mean"] == 0 and r.points["add"] == 1, r.reasons
     assert "numpy.mean" in r.reasons["mean"]
+
+
+def test_listed_functions_are_known_by_identity_not_a_recycled_id():
+    """A listed function replaced by a tripwire may be freed; its id then reused.
+
+    The grader named a call of ``astar`` as ``pure_pursuit`` when a later
+    object took a freed function's id: the listed objects are held, and
+    compared by identity.
+    """
+    import gc
+
+    from robotlib.course.answers import _Targets
+
+    targets = _Targets()
+
+    def listed():
+        return 0
+
+    targets.add(listed, "m.listed")
+    assert targets.get(listed) == "m.listed"
+    del listed
+    gc.collect()
+    made = [(lambda i=i: i) for i in range(2000)]
+    assert [m for m in made if targets.get(m) is not None] == []

@@ -70,7 +70,24 @@ LAB5_CONSTANTS = (
     "L_OCC, L_FREE, THICKNESS, HALF_CONE, MAX_RANGE = "
     "0.9, -0.35, 0.1, math.radians(15), 5.0\n\n\n"
 )
+LAB0_NEVER_MOVED = """
+def drive_square(r, side):
+    x, y, th = pose(r)
+    corners = [(x, y, th)]
+    for _ in range(4):  # computed, never driven
+        x, y, th = x + side * math.cos(th), y + side * math.sin(th), th + math.pi / 2
+        corners.append((x, y, th))
+    return np.array(corners)
+"""
 WRONG = {
+    # corners computed without driving: the check asks the simulator's clock
+    "lab0_getting_started": {
+        "never_moved": (
+            "solution",
+            {"l0-05": LAB0_NEVER_MOVED},
+            {"square": "did not drive"},
+        ),
+    },
     "lab3_mcl": {
         # ignores the sonar (dead reckoning), never resamples (identity) and
         # does nothing for the 2 x 2 table (zeros); on the check's route dead

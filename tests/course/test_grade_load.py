@@ -10,16 +10,26 @@ limit would fail. Its points must be the same; the classmate is flagged.
 
 from __future__ import annotations
 
+import copy
 import subprocess
 import sys
 import time
 
+import nbformat
 import pytest
 
 from robotlib.course import cpu
 from robotlib.course import grade as g
 from robotlib.course.notebooks import write_notebook
-from tests.course.test_course_grade import FULL, MEAN, TINY, solution, with_cell
+from tests.course.test_course_grade import (
+    ADD,
+    FULL,
+    MEAN,
+    TINY,
+    by_id,
+    solution,
+    with_cell,
+)
 from tests.sandboxing import need_sandbox
 
 CELL_LIMIT = 5.0
@@ -113,3 +123,31 @@ def test_cpu_time_counts_the_whole_tree_and_not_sleep():
     finally:
         proc.kill()
         proc.wait()
+
+
+@pytest.mark.slow
+def test_tmp_is_writable_and_the_disk_has_a_quota(tmp_path):
+    """``/tmp`` in the sandbox is writable (as the guide says); filling the disk
+    past the quota ends the process and is flagged, and the others' points stand."""
+    from robotlib.course.sandbox import Limits
+
+    need_sandbox()
+    sol = solution()
+    tmp_add = with_cell(
+        sol, ADD, "open('/tmp/x', 'w').write('ok')\n" + by_id(sol, ADD).source
+    )
+    hog = copy.deepcopy(sol)
+    hog.cells.append(nbformat.v4.new_code_cell(
+        "for i in range(8):\n    with open(f'fill{i}', 'wb') as f:\n"
+        "        f.write(bytes(8 << 20))\n"
+        "import time\ntime.sleep(5)\n"
+    ))  # fmt: skip
+    subs = tmp_path / "subs"
+    for name, nb in (("tmp", tmp_add), ("filler", hog)):
+        (subs / name).mkdir(parents=True)
+        write_notebook(nb, subs / name / "tiny.ipynb")
+    opts = g.Options(cell_timeout=20, timeout=120, limits=Limits(disk=32 << 20))
+    results, _ = g.grade(subs, "tiny", TINY, jobs=2, opts=opts, progress=False)
+    rows = {r.student: r for r in results}
+    assert rows["tmp"].points["add"] == 1, rows["tmp"].reasons
+    assert any("MiB to disk" in f for f in rows["filler"].flags), rows["filler"].flags

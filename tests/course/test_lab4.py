@@ -44,7 +44,14 @@ def test_lab4_grades_honestly(tmp_path):
             cell.source = DO_NOTHING[ex]
             found.add(ex)
     assert found == set(DO_NOTHING)
-    for name, nb in {"solution": sol, "released": released, "lazy": lazy}.items():
+    # a sign error in steer costs steer's own checks, not navigate's (which
+    # grades A* and drives with the solution's steering law)
+    sign = copy.deepcopy(sol)
+    cell = next(c for c in sign.cells if "def steer" in c.source)
+    wrong = "pose[2], 2 * math.pi)\n    alpha = -alpha"
+    cell.source = cell.source.replace("pose[2], 2 * math.pi)", wrong)
+    subs = {"solution": sol, "released": released, "lazy": lazy, "sign": sign}
+    for name, nb in subs.items():
         (tmp_path / name).mkdir()
         write_notebook(nb, tmp_path / name / f"{LAB}.ipynb")
     opts = g.GradeOptions(cell_timeout=120, timeout=600)
@@ -57,3 +64,5 @@ def test_lab4_grades_honestly(tmp_path):
     for student in ("released", "lazy"):
         assert rows[student].total == 0, (student, rows[student].points)
     assert all(r.status == "ok" for r in results), [r.status for r in results]
+    lost = {k for k, v in rows["sign"].points.items() if v == 0}
+    assert lost == {"steer", "tracking"}, rows["sign"].reasons
