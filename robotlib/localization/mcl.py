@@ -386,7 +386,7 @@ class MCL:
         if weights is None:
             w = np.full(len(p), 1.0 / len(p))
         else:
-            w = np.asarray(weights, dtype=float) / np.sum(weights)
+            w = np.ascontiguousarray(weights, dtype=float) / np.sum(weights)
         if w.shape != (len(p),):
             raise ValueError("weights must have shape (N,)")
         self.particles, self.weights = p, w

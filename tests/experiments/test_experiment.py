@@ -164,6 +164,7 @@ def test_periodic_corridor_fools_the_best_filter_early():
     assert hist.error[-1] > 0.5 and hist.n_particles[-1] > 1000
 
 
+@pytest.mark.slow
 def test_bench_mcl_cli_writes_json(tmp_path):
     """The bench runs (tiny sizes) and reports median and fastest per path."""
     out = tmp_path / "b.json"

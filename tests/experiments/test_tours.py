@@ -138,6 +138,7 @@ def test_kidnap_summary_counts_recoveries():
     assert out["recovery_steps_median"] == pytest.approx(1.5)
 
 
+@pytest.mark.slow
 def test_reproduce_kidnap_on_a_world_file(tmp_path, monkeypatch):
     path = tmp_path / "two_rooms.map"
     write_map(two_rooms(), path)

@@ -74,6 +74,7 @@ def grid_map(tmp_path_factory):
     return path
 
 
+@pytest.mark.slow
 def test_the_point_grid_table_equals_every_ray_against_every_wall(grid_map):
     world = load_world(grid_map)
     table = ConeTable(world)
@@ -101,6 +102,7 @@ def test_the_point_grid_tells_a_cells_last_bits_apart(grid_map):
     assert differ > 0
 
 
+@pytest.mark.slow
 def test_bench_large_map_checks_every_sampled_cell_of_the_point_grid(grid_map):
     r = bench_large_map.bench_maps(grid_map, resolution=0.05, sample=400)
     assert r["reference_entries"] == 400 * 72

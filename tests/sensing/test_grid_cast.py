@@ -11,6 +11,7 @@ floats, which are the same IEEE doubles.
 import math
 
 import numpy as np
+import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -60,6 +61,7 @@ def _reference(grid, poses, angles, max_range):
     )
 
 
+@pytest.mark.slow
 def test_grid_caster_equals_the_walk_in_the_office():
     world = load_world("office")
     grid = world.occupancy_grid(0.05)
