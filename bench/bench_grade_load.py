@@ -88,8 +88,9 @@ def main() -> None:
             wall = time.monotonic() - t0
             lo, hi = (min(loads), max(loads)) if loads else (0.0, 0.0)
             print(f"+{extra} busy: {wall:.0f} s, load {lo:.1f}-{hi:.1f}", flush=True)
-            for r in results:
+            for r in results:  # printed as they come: an interrupted bench keeps them
                 rows.setdefault(r.student, []).append((r.total, r.status, r.points))
+                print(f"  {r.student:12s} {r.total:g} ({r.status}) {r.points}")
     for student, runs in sorted(rows.items()):
         totals = [f"{t:g} ({s})" for t, s, _ in runs]
         same = "same" if len({str(a) for _, _, a in runs}) == 1 else "DIFFERENT"
