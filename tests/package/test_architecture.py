@@ -35,6 +35,7 @@ LAYERS = {
     "robotlib.plotting": 6,
     "robotlib.widgets": 7,
     "robotlib.notebook": 7,
+    "robotlib.warmups": 6,  # what `robotlib warmup` runs: the layers below, once
     "robotlib._unsolved": 0,  # a leaf: the notebook set-up's IPython handler
     "robotlib._ipython": 0,  # a leaf: which shell runs us (notebook, widgets)
     "robotlib._versions": 0,  # a leaf: the version, and a lab's check against it
