@@ -506,6 +506,7 @@ def _hook(wire: Callable, targets: _Targets, writes: list[str]) -> None:
             owner, _, cls = mod.rpartition(".")
             if module.__name__ == owner and isinstance(getattr(module, cls, 0), type):
                 setattr(getattr(module, cls), attr, wire(w, w))
+
     class Loader(importlib.abc.Loader):
         def __init__(self, inner):
             self.inner = inner

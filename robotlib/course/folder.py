@@ -110,7 +110,7 @@ def _quoted(path: Path) -> str:
 
 
 def next_commands(folder: Path) -> list[str]:
-    """The two commands after ``robotlib course``: warm the kernels, open the folder."""
+    """Return the two commands after ``robotlib course``: warm up, open the folder."""
     return [
         f"{_command('robotlib')} warmup",
         f"{_command('jupyter')} lab {_quoted(folder)}",

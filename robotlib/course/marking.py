@@ -31,7 +31,10 @@ def check_header(points) -> str:
     """Return a check cell's first line for ``points`` points."""
     p = f"{points:g}" if isinstance(points, float) else str(points)
     unit = "point" if p == "1" else "points"
-    return f"# CHECK (graded, {p} {unit}): run this cell to test your work; do not edit it."
+    return (
+        f"# CHECK (graded, {p} {unit}): "
+        "run this cell to test your work; do not edit it."
+    )
 
 
 def _graded(cell: dict) -> dict | None:
@@ -49,7 +52,7 @@ def _source(cell: dict) -> str:
 
 
 def unmarked(nb: dict) -> list[str]:
-    """What is missing in a notebook's graded check cells (empty: none).
+    """Return what is missing in a notebook's graded check cells (empty: none).
 
     Parameters
     ----------
@@ -71,7 +74,9 @@ def unmarked(nb: dict) -> list[str]:
         if m is None:
             out.append(f"{gid}: no '# CHECK (graded, N points)' first line")
         elif float(m.group(1)) != float(meta.get("points", 0)):
-            out.append(f"{gid}: header says {m.group(1)} points, metadata {meta['points']}")
+            out.append(
+                f"{gid}: header says {m.group(1)} points, metadata {meta['points']}"
+            )
         if TAG not in cell.get("metadata", {}).get("tags", []):
             out.append(f"{gid}: no '{TAG}' tag")
     return out
@@ -129,7 +134,7 @@ def main(argv: list[str] | None = None) -> int:
         n = mark_checks(nb)
         if n:
             path.write_text(_dump(nb, text), encoding="utf-8")
-        print(f"{path}: {n} check cell(s) marked")
+        sys.stdout.write(f"{path}: {n} check cell(s) marked\n")
     return 0
 
 

@@ -18,7 +18,6 @@ from pathlib import Path
 import pytest
 
 from robotlib.course.notebooks import read_notebook, release_notebook, write_notebook
-
 from tests.sandboxing import adopt_orphans, need_sandbox, procs_with
 
 pytestmark = pytest.mark.slow  # a class graded on a Dask cluster

@@ -54,4 +54,3 @@ def test_a_file_in_the_way_is_a_clear_error(tmp_path, capsys):
     (tmp_path / "course").write_text("")
     assert main(["course", str(tmp_path / "course")]) == 2
     assert "is a file" in capsys.readouterr().err
-

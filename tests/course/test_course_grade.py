@@ -27,7 +27,6 @@ import pytest
 
 from robotlib.course import grade as g
 from robotlib.course.notebooks import read_notebook, release_notebook, write_notebook
-
 from tests.sandboxing import adopt_orphans, need_sandbox, procs_with
 
 ROOT = Path(__file__).resolve().parents[2]

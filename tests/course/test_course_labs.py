@@ -27,7 +27,6 @@ from robotlib.course.notebooks import (
     release_notebook,
     write_notebook,
 )
-
 from tests.sandboxing import need_sandbox
 
 pytestmark = pytest.mark.slow  # every lab graded whole in the sandbox
