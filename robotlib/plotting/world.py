@@ -306,8 +306,8 @@ _GLYPHS = {
     "fa-fast-forward": "&#x23ED;",
     "fa-plus": "+",
 }
-_START = (
-    "(function start(tries) {\n"
+_START = (  # the ";" ends the last frame's line, which has none (else it is called)
+    ";(function start(tries) {\n"
     "        /* JupyterLab may insert the output after this script ran */\n"
     "        if (!document.getElementById(img_id)) {\n"
     "            if (tries < 2400) setTimeout(start, 250, tries + 1);\n"
