@@ -42,23 +42,30 @@ import numpy as np
 __all__ = ["add_arguments", "run", "bench_mcl", "bench_table", "bench_first_step"]
 
 
-def _time(fn, reps: int, min_seconds: float = 0.2) -> tuple[float, float]:
-    """Return the median and the fastest of ``reps`` calls (more if fast), ms.
+def _time(fns: dict, reps: int, min_seconds: float = 0.2) -> dict:
+    """Time each of ``fns`` (name -> call), interleaved; return name -> (median, min).
 
-    Calls that take less than ``min_seconds / reps`` are repeated up to
-    ``min_seconds`` in all (at most 2000 times), so that a fast step is
-    timed warm, over many repetitions.
+    The calls take turns, so a change in the machine's load falls on all of
+    them alike. Calls that take less than ``min_seconds / reps`` are repeated
+    up to ``min_seconds`` in all (at most 2000 times), so that a fast step is
+    timed warm, over many repetitions. Times in ms.
     """
-    t0 = time.perf_counter()
-    fn()
-    once = time.perf_counter() - t0
-    reps = max(reps, min(2000, int(min_seconds / max(once, 1e-9))))
-    times = []
-    for _ in range(reps):
+    once = 0.0
+    for fn in fns.values():
         t0 = time.perf_counter()
         fn()
-        times.append(time.perf_counter() - t0)
-    return 1000.0 * float(np.median(times)), 1000.0 * float(np.min(times))
+        once = max(once, time.perf_counter() - t0)
+    reps = max(reps, min(2000, int(min_seconds / max(once, 1e-9))))
+    times = {name: [] for name in fns}
+    for _ in range(reps):
+        for name, fn in fns.items():
+            t0 = time.perf_counter()
+            fn()
+            times[name].append(time.perf_counter() - t0)
+    return {
+        name: (1000.0 * float(np.median(ts)), 1000.0 * float(np.min(ts)))
+        for name, ts in times.items()
+    }
 
 
 def _plain_pipeline():
@@ -110,6 +117,7 @@ def bench_mcl(
     rows = []
     for n in counts:
         start = world.sample_free_poses(n, 0)
+        steps = {}
         for path in ("robotlib", "exact", "plain"):
             if (path == "exact" and n > 10_000) or (path == "plain" and plain is None):
                 continue
@@ -139,9 +147,11 @@ def bench_mcl(
                     mcl.set_particles(start)
                     mcl.step(odo0, odo1, z)
 
-            step()
-            r = reps if n <= 100_000 else max(3, reps // 4)
-            ms, ms_min = _time(step, r)
+            steps[path] = step
+        r = reps if n <= 100_000 else max(3, reps // 4)
+        exact = {"exact": steps.pop("exact")} if "exact" in steps else {}
+        timed = {**_time(steps, r), **(_time(exact, max(3, r // 3)) if exact else {})}
+        for path, (ms, ms_min) in timed.items():  # robotlib and plain in turns
             rows.append({"path": path, "n": n, "ms_per_step": ms, "ms_min": ms_min})
     return rows
 
@@ -178,7 +188,7 @@ def bench_rtb(counts, reps: int = 10) -> list[dict] | str:
             np.diag([0.1, 0.1]), nparticles=n, history=False, seed=0,
         )  # fmt: skip
         pf._init()
-        ms, ms_min = _time(pf._step, reps)
+        ms, ms_min = _time({"rtb": pf._step}, reps)["rtb"]
         rows.append({"path": "rtb", "model": "landmark", "n": n, "ms_per_step": ms,
                      "ms_min": ms_min})  # fmt: skip
     return rows
