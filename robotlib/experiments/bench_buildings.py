@@ -98,7 +98,7 @@ if counts:  # one step of the path set up, as `robotlib bench mcl` times it
             mcl.set_particles(start)
             mcl.step(odo0, odo1, z)
         step()
-        ms, ms_min = _time(step, 10)
+        ms, ms_min = _time({"step": step}, 10)["step"]
         out["steps"].append({"path": "fast" if fast else "exact", "n": n,
                              "ms_per_step": ms, "ms_min": ms_min})
         print(json.dumps(out), flush=True)
