@@ -97,6 +97,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "waiting for a CPU (default: %(default)s)",
     )
     parser.add_argument(
+        "--slower",
+        type=float,
+        default=20.0,
+        help="a check may take this many times the solution's CPU time for it, "
+        "or --cell-timeout if more; the submission this many times the "
+        "solution's, or --timeout if more (default: %(default)s)",
+    )
+    parser.add_argument(
         "--timeout",
         type=float,
         default=600.0,
@@ -170,6 +178,7 @@ def run(args: argparse.Namespace) -> int:
     limits = sb.Limits(memory=int(args.memory * (1 << 30)))
     opts = Options(
         cell_timeout=args.cell_timeout,
+        slower=args.slower,
         timeout=args.timeout,
         backstop=args.backstop,
         restarts=args.restarts,

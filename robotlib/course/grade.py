@@ -31,6 +31,7 @@ submissions are kept, nothing keeps running.
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import os
 import signal
@@ -59,6 +60,7 @@ __all__ = [
     "find_submissions",
     "grade",
     "grade_notebook",
+    "limits",
     "reference_run",
     "solution_path",
     "write_gradebook",
@@ -176,7 +178,8 @@ def grade_notebook(
     result.code = {c["exercise"]: c["source"] for c in cells if c["exercise"]}
     zero, flags = scan_submission(plan, cells)
     result.flags += flags
-    out = run_submission(plan, cells, opts, slot)
+    budgets, opts = limits(reference, opts)
+    out = run_submission(plan, cells, opts, slot, budgets)
     result.passes = 1 + out.restarts
     result.flags += out.flags
     for function, ex, *via in out.tripwires:
@@ -202,6 +205,7 @@ def grade_notebook(
             result.check_lines[c.grade_id] = {
                 "lines": rec.get("lines", []),
                 "hidden": rec.get("hidden", []),
+                "cpu": rec.get("cpu", 0.0),
             }
             continue
         result.reasons[c.grade_id] = why[:300]
@@ -218,6 +222,23 @@ def grade_notebook(
         result.flags.insert(0, "answer reaches the library's own version")
     result.seconds = time.monotonic() - t0
     return result
+
+
+def limits(reference: dict | None, opts: Options) -> tuple[dict[str, float], Options]:
+    """Return each check's limit and the options, scaled from the solution's times.
+
+    A check may take ``opts.slower`` times the charged time (`cpu`) the
+    solution took for it, or ``opts.cell_timeout`` if more; the submission
+    ``opts.slower`` times the solution's checks in all, or ``opts.timeout``
+    if more. So a correct answer ten times slower than the solution passes
+    (the default is twenty), whatever the machine's load.
+    """
+    times = {g: float(r.get("cpu", 0.0)) for g, r in (reference or {}).items()}
+    budgets = {g: max(opts.cell_timeout, opts.slower * t) for g, t in times.items()}
+    total = max(opts.timeout, opts.slower * sum(times.values()))
+    cpu = max(opts.limits.cpu, int(total) + 60)  # each process's RLIMIT_CPU
+    limits = dataclasses.replace(opts.limits, cpu=cpu)
+    return budgets, Options(**{**vars(opts), "timeout": total, "limits": limits})
 
 
 def reference_run(plan: LabPlan, solution: dict, opts: Options) -> dict:
