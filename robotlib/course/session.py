@@ -70,12 +70,15 @@ def run_submission(
     opts: Options,
     slot: int = 0,
     budgets: dict[str, float] | None = None,
+    modules: dict[str, str] | None = None,
 ) -> Outcome:
     """Run ``cells`` (the student's) against ``plan``'s checks.
 
     ``budgets`` maps a check's grade id to its limit in charged time, s
-    (its own time and its calls; default ``opts.cell_timeout``). Never
-    raises for anything the submission does.
+    (its own time and its calls; default ``opts.cell_timeout``);
+    ``modules`` (file name to source) are written beside the student's
+    cells, where they can import them. Never raises for anything the
+    submission does.
     """
     budgets = budgets or {}
     out = Outcome()
@@ -108,6 +111,9 @@ def run_submission(
             "owner": plan.owner,
         }
         scratch = root / f"student{gen['student']}"
+        scratch.mkdir()
+        for name, source in (modules or {}).items():  # names checked: x.py
+            (scratch / name).write_text(source, encoding="utf-8")
         procs["student"] = Proc(
             "student", spec, scratch, opts, uid, events, gen["student"], logf, share
         )
