@@ -47,7 +47,14 @@ from .astlock import format_exc
 from .gradebook import Again, Records, Result, write_gradebook
 from .notebooks import META_KEY, notebook_text, read_notebook
 from .parallel import Bar, dask_map, raise_interrupt, thread_map
-from .plan import LabPlan, lab_plan, normalized, scan_submission, student_cells
+from .plan import (
+    LabPlan,
+    lab_plan,
+    normalized,
+    release_notes,
+    scan_submission,
+    student_cells,
+)
 from .release import project_dir
 from .session import JOB_ENV, Options, run_submission
 from .submissions import check_lab, copies, find_submissions, helpers, pick
@@ -179,6 +186,7 @@ def grade_notebook(
         result.reasons = {c.grade_id: "not a notebook" for c in items}
         return result
     result.answers = _answers(plan, nb)
+    result.flags += release_notes(plan, nb)
     cells = student_cells(plan, nb)
     result.code = {c["exercise"]: c["source"] for c in cells if c["exercise"]}
     scanned = [{"id": n, "source": m, "exercise": None} for n, m in modules.items()]

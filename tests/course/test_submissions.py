@@ -2,14 +2,24 @@
 
 from __future__ import annotations
 
+import copy
 import os
 
 import pytest
 
 from robotlib.course import grade as g
-from robotlib.course.notebooks import write_notebook
+from robotlib.course.notebooks import release_notebook, write_notebook
+from robotlib.course.plan import lab_plan, release_notes
 from robotlib.course.submissions import copies, find_submissions, helpers
-from tests.course.test_course_grade import FULL, MEAN, TINY, solution, with_cell
+from tests.course.test_course_grade import (
+    ADD,
+    ADD_CHECK,
+    FULL,
+    MEAN,
+    TINY,
+    solution,
+    with_cell,
+)
 from tests.sandboxing import need_sandbox
 
 
@@ -89,3 +99,30 @@ def test_a_helper_module_is_graded_with_its_notebook(tmp_path):
     assert rows["honest"].flags == [], rows["honest"].flags
     assert rows["cheat"].points["mean"] == 0
     assert any("numpy.mean" in f for f in rows["cheat"].flags), rows["cheat"].flags
+
+
+def test_a_notebook_from_an_older_release_is_noted():
+    """An older release renamed ``add`` (``plus``): its check cell differs."""
+    sol = solution()
+    plan = lab_plan(sol, "tiny")
+    older = with_cell(sol, ADD, "def plus(a, b):\n    return a + b\n")
+    older = with_cell(older, ADD_CHECK, 'print("CHECK add", plus(2, 3))\n')
+    for nb in (release_notebook(older, "tiny"), _bare(release_notebook(older, "tiny"))):
+        notes = release_notes(plan, nb)
+        assert len(notes) == 1 and "older release" in notes[0], notes
+        assert "cells add differ" in notes[0]
+    for nb in (
+        sol,
+        release_notebook(sol, "tiny"),
+        _bare(release_notebook(sol, "tiny")),
+    ):
+        assert release_notes(plan, nb) == []  # the solution, as released, no ids
+
+
+def _bare(nb):
+    """The notebook as an old nbformat leaves it: no cell metadata or ids."""
+    nb = copy.deepcopy(nb)
+    for cell in nb.cells:
+        cell.metadata = {}
+        cell.pop("id", None)
+    return nb
