@@ -170,6 +170,7 @@ class Proc:
 
     def __init__(self, role, spec, scratch, opts, uid, events, gen, log, share):
         self.role, self.gen, self.job = role, gen, secrets.token_hex(8)
+        self.started = time.monotonic()
         self.worker: int | None = None
         self.last = cpu.Usage()
         scratch.mkdir(parents=True, exist_ok=True)

@@ -210,10 +210,13 @@ def run_submission(
     def watch_hogs(proc: Proc | None, final: bool = False):
         """Flag (once) and slow down a student process running CPU hogs.
 
-        Seen in two samples (a burst at start-up is one), or still running
-        when the process is ended (``final``: an honest one is idle then).
+        Seen in two samples after its first second (the sandbox's wrappers
+        start it), or still running when the process is ended (``final``:
+        an honest one is idle then).
         """
         if proc is None or proc.popen is None or proc.last.running <= cpu.HOGS:
+            return
+        if not final and time.monotonic() - proc.started < 1.0:
             return
         if not (proc.alive or final):
             return  # its last sample, counted already
