@@ -271,7 +271,7 @@ def release_notes(plan: LabPlan, nb: dict) -> list[str]:
         ids = list(dict.fromkeys([*plan.released, *theirs]))
         differ = [g for g in ids if theirs.get(g) != plan.released.get(g)]
     else:
-        present = {normalized(_source(c)) for c in code}
+        present = {normalized(_without_hidden(_source(c))) for c in code}
         differ = [g for g, src in plan.released.items() if src not in present]
     if not differ:
         return []
