@@ -113,7 +113,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--backstop",
         type=float,
-        default=10.0,
+        default=30.0,
         help="wall-time limit, in multiples of the limits above: a submission "
         "that reaches it is reported 'machine overloaded: re-grade', never "
         "scored (default: %(default)s)",

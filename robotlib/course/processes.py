@@ -41,7 +41,7 @@ class Options:
     cell_timeout: float = 60.0  # charged time (`cpu`) per student cell, call, check
     slower: float = 20.0  # a check's limit: this times the solution's, if more
     timeout: float = 600.0  # CPU time of the whole submission
-    backstop: float = 10.0  # wall limit, in multiples of the above: overloaded
+    backstop: float = 30.0  # wall limit, in multiples of the above: overloaded
     restarts: int = 3
     keep: bool = False
     workroot: Path | None = None
