@@ -7,7 +7,10 @@ the menu and checks what a student would see: no error output in a
 solution; in a released lab, only "Exercise N is not done yet" messages of a
 few lines; no browser console errors but those of the external requests the
 test blocks; every panel's image redraws after its first slider moves, and
-shows feedback first; every animation's player advances. Screenshots and
+shows feedback first; every animation's player advances; after ``robotlib
+warmup`` no kernel compiles anything (``ROBOTLIB_COMPILE_LOG``). This is the
+run of every solution in a plain kernel (`tests.notebooks.test_notebooks`
+runs them under nbval only where there is no browser). Screenshots and
 ``timings.json`` go to ``artifacts/browser/`` (git-ignored; CI keeps it).
 
 Skipped where chromium or playwright is missing, unless
@@ -16,7 +19,6 @@ Skipped where chromium or playwright is missing, unless
 
 from __future__ import annotations
 
-import importlib.util
 import json
 import os
 import time
@@ -28,6 +30,7 @@ from tests.browser import (
     CHROMIUM,
     Browser,
     Lab,
+    have_browser,
     run_notebook,
     run_notebooks,
     unexplained_console_errors,
@@ -49,7 +52,7 @@ PANEL_RUNNING_IN_PAGE = 0.3
 UNSOLVED_LINES = 4
 SHRUNK = 0.7  # a figure shown below 70 % of its own width is too wide for the page
 
-_have = importlib.util.find_spec("playwright") is not None and Path(CHROMIUM).exists()
+_have = have_browser()
 if not _have and os.environ.get("ROBOTLIB_BROWSER_TEST") == "1":
     raise RuntimeError(f"the browser test needs playwright and {CHROMIUM}")
 pytestmark = [
@@ -59,8 +62,11 @@ pytestmark = [
 
 
 @pytest.fixture(scope="module")
-def lab(tmp_path_factory):
-    server = Lab(ROOT, tmp=tmp_path_factory.mktemp("jupyterlab"))
+def lab(tmp_path_factory, warm):
+    tmp = tmp_path_factory.mktemp("jupyterlab")
+    compiled = tmp / "compiled.txt"  # every kernel's late compilations
+    server = Lab(ROOT, tmp=tmp, env={"ROBOTLIB_COMPILE_LOG": str(compiled)})
+    server.compile_log = compiled
     yield server
     server.close(keep_log=ARTIFACTS / "jupyterlab.log")  # a CI artefact too
 
@@ -150,6 +156,10 @@ def test_every_notebook_in_a_real_browser(lab, browser):
             issues.append("a released lab's checks should fail until it is solved")
         if issues:
             found[run.path] = issues
+    log = lab.compile_log
+    late = sorted(set(log.read_text().split())) if log.exists() else []
+    if late:  # (two notebooks run at once: the kernels are named, not the notebook)
+        found["compiled after robotlib warmup"] = late
     assert not found, json.dumps(found, indent=1)
 
 
