@@ -179,6 +179,7 @@ class Run:
     check_s: float | None = None  # screenshots, panels, animations and save, s
     check_parts: dict = field(default_factory=dict)  # check_s by part, s
     notebook: dict = field(default_factory=dict)
+    compiling: int = 0  # outputs that say numba compiles (after robotlib warmup)
 
 
 class Browser:
@@ -331,6 +332,9 @@ _OPEN = """(path) => {
   window.jupyterapp.commands.execute('docmanager:open', { path });
 }"""
 """Open a notebook in a page that has JupyterLab loaded (not waiting for it)."""
+_COMPILING = """() => [...document.querySelectorAll('.jp-OutputArea-output')]
+  .filter((e) => e.innerText.includes('compiling kernels')).length"""
+"""How many outputs show robotlib's "compiling kernels" bar."""
 _CLOSE = """() => {
   for (const w of [...window.jupyterapp.shell.widgets('main')]) w.dispose();
 }"""
@@ -434,6 +438,7 @@ class _Session:
             "e => [e.naturalWidth, e.getBoundingClientRect().width])",
         )
         part("screenshot")
+        run.compiling = page.evaluate(_COMPILING)
         if run.finished:
             shots = self.browser.screenshots / stem
             run.panels = check_panels(
