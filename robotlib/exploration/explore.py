@@ -39,7 +39,14 @@ from ..mapping import (
     OccupancyGrid,
     map_score,
 )
-from ..p3dx import CYCLE, ROBOT_LENGTH_REAR, ROBOT_RADIUS, ROBOT_WIDTH, SONAR_POSES
+from ..p3dx import (
+    CYCLE,
+    ROBOT_LENGTH_FRONT,
+    ROBOT_LENGTH_REAR,
+    ROBOT_RADIUS,
+    ROBOT_WIDTH,
+    SONAR_POSES,
+)
 from ..planning import PurePursuit, astar
 from ..planning.follow import sonar_points
 from ..sim import Simulator
@@ -62,8 +69,12 @@ AXIS = slice(3, 5)
 """The sonars at +-10 degrees."""
 
 BODY = math.hypot(ROBOT_LENGTH_REAR, ROBOT_WIDTH / 2) + 0.05
-"""Cells within this distance (m) of a robot's believed centre are marked free
-each cycle (its rear corners, with half a cell to spare)."""
+"""A teammate's reach from its centre, m: its rear corners, and a little."""
+
+PARK = 2.5
+"""A robot driving home that a teammate blocks this near its start (m) parks
+there: the start poses of a team lie in one file, and the first one home
+would otherwise stand in the way of the others."""
 
 EXPLORE, HOME, DONE = "explore", "home", "done"
 """A robot's modes: driving to a frontier, driving home, home (or idle)."""
@@ -118,6 +129,10 @@ class _Robot:
             settings.goal_tolerance,
         )  # fmt: skip
         self.waited = self.stuck = 0.0
+
+    def distance_home(self) -> float:
+        """Distance from the believed position to the start, m."""
+        return float(np.hypot(*(self.pose[:2] - self.home[:2])))
 
     def remaining_path(self) -> np.ndarray:
         """Return the part of the path still ahead, (K, 2) m."""
@@ -257,10 +272,12 @@ class Exploration:
             if pick[n] >= 0 and self._plan(r, spaces[n], targets[n][pick[n]]):
                 r.mode = EXPLORE
                 r.targets.append(r.target.copy())
-            elif spaces[n] is not cs:
+            elif spaces[n] is not cs and r.mode != HOME:
                 r.waited = 0.0  # nothing reachable around the teammates: wait again
+            elif r.mode == HOME and r.blocked and r.distance_home() < PARK:
+                r.mode, r.follower, r.target = DONE, None, None  # parked by home
             else:
-                self._go_home(r, cs)
+                self._go_home(r, spaces[n])
 
     def _plan(self, r: _Robot, cs, goal) -> bool:
         start = _start(cs, r.pose)
@@ -284,7 +301,7 @@ class Exploration:
             r.mode, r.follower, r.target = DONE, None, None
 
     def _clear_bodies(self) -> None:
-        """Mark the cells under every robot free: a body stands there, no wall.
+        """Mark the cells under every robot's body free: it stands there, no wall.
 
         The laser and sonar see teammates' bodies; without this, a teammate
         would leave a trail of obstacles on the shared map.
@@ -298,7 +315,14 @@ class Exploration:
             ii, jj = np.mgrid[win]
             cx = g.origin[0] + (jj + 0.5) * g.resolution
             cy = g.origin[1] + (ii + 0.5) * g.resolution
-            inside = np.hypot(cx - r.pose[0], cy - r.pose[1]) <= BODY
+            c, si = math.cos(r.pose[2]), math.sin(r.pose[2])
+            dx, dy = cx - r.pose[0], cy - r.pose[1]
+            along, across = c * dx + si * dy, c * dy - si * dx
+            pad = g.resolution / 2
+            inside = (along <= ROBOT_LENGTH_FRONT + pad) & (
+                along >= -ROBOT_LENGTH_REAR - pad
+            )
+            inside &= np.abs(across) <= ROBOT_WIDTH / 2 + pad
             cells = g.logodds[win]
             cells[inside] = np.minimum(cells[inside], level)
 
@@ -445,7 +469,7 @@ class Exploration:
         if self._snap:
             self.snapshots.append(self._snapshot())
         at_home = all(
-            np.hypot(*(r.body.true_pose[:2] - r.home[:2])) < 0.6 for r in self.robots
+            np.hypot(*(r.body.true_pose[:2] - r.home[:2])) < PARK for r in self.robots
         )
         outcome = (
             "timeout" if not self.finished else ("home" if at_home else "explored")

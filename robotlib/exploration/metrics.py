@@ -2,7 +2,8 @@
 
 - `reachable_area`: the true free cells a robot can see from where its body
   can go: cells without a wall within one robot radius (plus a cell) of the
-  admissible area (`robotlib.world.World.free_space`, the piece of free
+  admissible area and joined to it through such cells (not the inside of a
+  box) (`robotlib.world.World.free_space`, the piece of free
   space holding ``World.start``).
 - `explored_fraction`: the share of those cells the map knows (free or
   occupied, `robotlib.exploration.frontiers.classify`).
@@ -21,6 +22,7 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
+from scipy import ndimage
 
 from ..mapping import MapScore, OccupancyGrid, dilate
 from ..p3dx import ROBOT_RADIUS
@@ -47,7 +49,9 @@ def reachable_area(world: World, resolution: float = 0.1) -> np.ndarray:
     admissible = world.free_space(resolution, ROBOT_RADIUS).data
     walls = world.occupancy_grid(resolution).data
     near = dilate(admissible, int(math.ceil(ROBOT_RADIUS / resolution)) + 1)
-    return near & ~walls
+    labels, _ = ndimage.label(near & ~walls)  # 4-connected: walls part pieces
+    keep = np.unique(labels[admissible & (labels > 0)])
+    return np.isin(labels, keep)
 
 
 def explored_fraction(grid, reachable, free_level: float = 0.2) -> float:
