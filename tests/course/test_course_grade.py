@@ -528,11 +528,11 @@ def test_notes_name_the_function_the_exercise_lists_and_the_alias():
     # the run-time tripwire reports the listed name and the place it was reached
     code = (
         "import robotlib.mapping, robotlib.mapping.occupancy as o\n"
-        "from robotlib.course import answers\n"
+        "from robotlib.course import tripwires\n"
         "hits = []\n"
-        f"answers.arm({[occ, pkg]!r}, lambda f, via: hits.append((f, via)))\n"
+        f"tripwires.arm({[occ, pkg]!r}, lambda f, via: hits.append((f, via)))\n"
         "for fn in (robotlib.mapping.inverse_sonar_model, o.inverse_sonar_model):\n"
-        "    try:\n        fn()\n    except answers.Tripwire:\n        pass\n"
+        "    try:\n        fn()\n    except tripwires.Tripwire:\n        pass\n"
         "print(hits)\n"
     )
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)  # fmt: skip
