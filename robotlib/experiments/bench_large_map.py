@@ -136,8 +136,8 @@ def every_wall_entries(world, table, rows, cols) -> np.ndarray:
 
     Each direction bin's ray from the cell's centre (the table's own
     arithmetic: ``origin + (index + 0.5) * resolution``) is cast by the
-    simulator's sonar kernel against every wall and end face, as a one-ray sonar pointing
-    along the bin, and each cone takes the nearest of its rays
+    simulator's sonar kernel against every wall and end face, as a one-ray
+    sonar pointing along the bin, and each cone takes the nearest of its rays
     (`robotlib.localization.cones.ray_offsets`). No strips, no sharing.
 
     Returns
