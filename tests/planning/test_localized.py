@@ -78,7 +78,8 @@ def test_waypoints_lead_through_the_door_of_a_room():
         )
         for plan in (False, True)
     }  # fmt: skip
-    assert runs[False].outcome == "timeout"  # VFH alone follows the wall the wrong way
     e = runs[True]
     assert e.true_success and e.collisions == 0 and e.duration < 40.0
+    # VFH alone first follows the partition the wrong way (20-30 m driven)
+    assert e.path_length < 0.6 * runs[False].path_length
     assert e.truth[:, 1].max() > 4.8  # it went round the partition's end
