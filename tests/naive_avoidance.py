@@ -156,7 +156,7 @@ def dwa_evaluate(points, vs, ws, steps, dt, radius, goal):
     y = np.where(turning, v / safe_w * (1 - np.cos(th)), 0.0)
     d = np.hypot(pts[:, 0] - x[..., None], pts[:, 1] - y[..., None]) - radius
     d0 = np.hypot(pts[:, 0], pts[:, 1]) - radius
-    hit = ((d <= 0) & (d < d0 - 0.01)).any(axis=-1)  # (V, W, K+1)
+    hit = ((d <= 0) & (d < d0 - 1e-3)).any(axis=-1)  # (V, W, K+1)
     hit[..., 0] = False
     first = np.where(hit.any(axis=-1), hit.argmax(axis=-1), steps + 1)
     last = first - 1  # the last pose driven

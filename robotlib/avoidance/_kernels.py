@@ -379,7 +379,7 @@ def dwa_evaluate(points, vs, ws, steps, dt, radius, goal, free, heading, togo):
     velocities; sample ``(i, j)`` drives the arc of ``(vs[i], ws[j])`` for
     ``steps`` steps of ``dt`` s from the origin, heading along x. A point
     stops the arc at the first step where it lies within ``radius`` m of
-    the arc's pose and more than 1 cm nearer than at the start (a point already inside
+    the arc's pose and more than 1 mm nearer than at the start (a point already inside
     ``radius`` does not forbid moving away from it). Writes, per sample:
     ``free[i, j]``, the distance driven before that step, m (inf when
     nothing stops the arc, which is always so at ``v == 0``: turning on the
@@ -415,7 +415,7 @@ def dwa_evaluate(points, vs, ws, steps, dt, radius, goal, free, heading, togo):
                     if d0[p] > reach:
                         continue
                     d = math.hypot(points[p, 0] - xk, points[p, 1] - yk) - radius
-                    if d <= 0.0 and d < d0[p] - 0.01:
+                    if d <= 0.0 and d < d0[p] - 1e-3:
                         hit = True
                         break
                 if hit:

@@ -32,7 +32,8 @@ import numpy as np
 
 from ..p3dx import CYCLE
 from . import _kernels
-from .base import LOCAL_MINIMUM, Controller, goal_in_robot_frame
+from .base import Controller, goal_in_robot_frame
+from .dwa_grid import ObstacleGrid
 from .dwa_settings import DWASettings
 
 __all__ = [
@@ -127,8 +128,9 @@ def choose_velocity(vs, ws, free, heading, togo, goal_distance, settings: DWASet
     ``v * latency + v**2 / (2 accel) <= free``. Its score is the weighted sum
     of four terms: the goal alignment ``1 - heading / pi``; the progress
     ``(goal_distance - togo) / (max_speed * horizon)``; the free distance
-    ``min(free, clearance_cap) / clearance_cap`` (Fox et al.'s "dist"); and
-    the speed ``v / max_speed``.
+    ``min(free, clearance_cap) / clearance_cap`` (Fox et al.'s "dist"; a
+    sample at rest, ``v == 0``, counts that of the slowest sample moving off
+    along its turn); and the speed ``v / max_speed``.
 
     Parameters
     ----------
@@ -153,12 +155,17 @@ def choose_velocity(vs, ws, free, heading, togo, goal_distance, settings: DWASet
     free = np.asarray(free, dtype=float)
     v = vs[:, None]
     admissible = v * s.latency + v**2 / (2.0 * s.accel) <= free
+    clear = np.minimum(free, s.clearance_cap) / s.clearance_cap
+    if len(vs) > 1 and vs[0] == 0.0 < vs[1]:
+        # at rest a sample is as clear as setting off along its turn: were
+        # standing still always clearest, DWA would stall beside a box
+        clear[0] = clear[1]
     score = (
         s.heading_weight * (1.0 - np.asarray(heading) / math.pi)
         + s.progress_weight
         * (goal_distance - np.asarray(togo))
         / (s.max_speed * s.horizon)
-        + s.clearance_weight * np.minimum(free, s.clearance_cap) / s.clearance_cap
+        + s.clearance_weight * clear
         + s.velocity_weight * v / s.max_speed
     )
     score = np.where(admissible, score, -np.inf)
@@ -198,6 +205,7 @@ def open_directions(points, radius: float, n: int = 72) -> tuple:
     return angles, free
 
 
+
 class DWA(Controller):
     """Dynamic window approach on the sonar ring and odometry.
 
@@ -206,19 +214,24 @@ class DWA(Controller):
     goal : array_like, shape (2,), optional
         Goal in the odometry frame, m.
     settings : DWASettings, optional
-        Window, roll-out, objective and memory (default: `DWASettings()`).
+        Window, roll-out, objective, grid and escape (default: `DWASettings()`).
 
     Attributes
     ----------
     settings : DWASettings
-    points : numpy.ndarray, shape (P, 2)
-        The remembered echo points, odometry frame, m.
+    grid : ObstacleGrid
+        The short-memory certainty grid and its navigation function.
     last : tuple of float
         The last command ``(v, w)``, the centre of the next window.
+    aim : numpy.ndarray, shape (2,)
+        The point the goal terms aimed at last (odometry frame, m): the
+        navigation function's carrot, or the goal.
     score : numpy.ndarray, shape (n_v, n_w)
         The last objective (``-inf``: inadmissible), for plotting.
     window : tuple of numpy.ndarray
         The last samples ``(vs, ws)``.
+    escapes : int
+        How often the robot found itself stuck and turned to look round.
     """
 
     name = "DWA"
@@ -228,55 +241,49 @@ class DWA(Controller):
         if not isinstance(s, DWASettings):
             raise TypeError(f"settings must be a DWASettings, got {type(s).__name__}")
         self.settings = s
-        super().__init__(goal, s.tolerance, s.max_speed, s.max_turn)
         offsets = np.linspace(-0.5 * s.arc, 0.5 * s.arc, s.arc_points)
-        if s.arc_points == 1:
-            offsets = np.zeros(1)
-        self._offsets = offsets
+        self._offsets = offsets if s.arc_points > 1 else np.zeros(1)
+        self.grid = ObstacleGrid(s.resolution, s.extent, s.memory, s.occupied,
+                                 s.cmax, self._offsets if s.paint_arc else (0.0,))  # fmt: skip
+        super().__init__(goal, s.tolerance, s.max_speed, s.max_turn)
 
     def _reset(self) -> None:
-        self.points = np.zeros((0, 2))
-        self._born = np.zeros(0)
+        self.grid.reset()
         self._clock = 0.0
         self.last = (0.0, 0.0)
+        self.aim = np.zeros(2)
         self.score = np.zeros((0, 0))
         self.window = (np.zeros(0), np.zeros(0))
-        self._best = math.inf
-        self._best_time = 0.0
+        self.escapes = 0
+        self._planned_for, self._next_plan = None, 0.0
+        self._best, self._best_time, self._togo = math.inf, 0.0, math.inf
+        self._turn_until = -1.0
 
-    def remember(self, sonar: np.ndarray, pose: np.ndarray) -> None:
-        """Add this scan's echoes to the memory and forget the old ones."""
-        s = self.settings
+    def echo_points(self, sonar: np.ndarray) -> np.ndarray:
+        """This scan's echoes, a few across each cone's middle, robot frame, m.
+
+        Returns
+        -------
+        numpy.ndarray, shape (P, 2)
+        """
         echo = sonar < self.max_range
-        sens = self.sensors[echo]
-        r = sonar[echo]
+        sens, r = self.sensors[echo], sonar[echo]
         ang = sens[:, 2:3] + self._offsets[None, :]
         px = sens[:, 0:1] + r[:, None] * np.cos(ang)
         py = sens[:, 1:2] + r[:, None] * np.sin(ang)
-        c, si = math.cos(pose[2]), math.sin(pose[2])
-        world = np.column_stack(
-            [
-                pose[0] + c * px.ravel() - si * py.ravel(),
-                pose[1] + si * px.ravel() + c * py.ravel(),
-            ]
-        )
-        keep = self._born > self._clock - s.memory - 1e-9
-        pts = np.concatenate([world, self.points[keep]])
-        born = np.concatenate([np.full(len(world), self._clock), self._born[keep]])
-        # one point per cell of `cell` m, the newest (np.unique keeps the first)
-        _, first = np.unique(np.floor(pts / s.cell), axis=0, return_index=True)
-        self.points, self._born = pts[first], born[first]
+        return np.column_stack([px.ravel(), py.ravel()])
 
-    def local_points(self, pose) -> np.ndarray:
-        """Return the remembered points within reach, robot frame, m, shape (P, 2)."""
+    def _target(self, pose: np.ndarray) -> tuple[np.ndarray, float]:
+        """The point to aim at and the path length left to the goal, m."""
         s = self.settings
-        d = self.points - np.asarray(pose[:2])
-        c, si = math.cos(pose[2]), math.sin(pose[2])
-        local = np.column_stack(
-            [c * d[:, 0] + si * d[:, 1], -si * d[:, 0] + c * d[:, 1]]
-        )
-        reach = s.max_speed * s.horizon + s.radius + s.clearance_cap
-        return np.ascontiguousarray(local[np.hypot(*local.T) < reach])
+        goal = tuple(float(g) for g in self.goal)
+        if goal != self._planned_for or self._clock >= self._next_plan:
+            self.grid.plan(pose, self.goal, s.block, s.margin, s.border)
+            self._planned_for, self._next_plan = goal, self._clock + s.replan
+        carrot, togo = self.grid.carrot(pose, self.goal, s.lookahead)
+        if carrot is None:  # no known path: straight for the goal
+            return np.asarray(self.goal, dtype=float), math.dist(pose[:2], self.goal)
+        return carrot, togo
 
     def _open_towards(self, points: np.ndarray, target: float) -> float:
         """Return the open direction nearest ``target`` (robot frame, rad).
@@ -293,30 +300,36 @@ class DWA(Controller):
         off = np.abs(np.remainder(angles - target + math.pi, 2 * math.pi) - math.pi)
         return float(angles[open_][np.argmin(off[open_])])
 
+
+    def _stuck(self, togo: float) -> bool:
+        """Whether the path left has not shrunk by ``progress`` in ``patience`` s."""
+        s = self.settings
+        if togo < self._best - s.progress or not math.isfinite(self._best):
+            self._best, self._best_time = min(togo, self._best), self._clock
+        return self._clock - self._best_time > s.patience
+
     def _command(self, sonar: np.ndarray, pose: np.ndarray) -> tuple[float, float]:
         s = self.settings
         self._clock += CYCLE  # one command per robot cycle
-        self.remember(sonar, pose)
-        gx, gy = goal_in_robot_frame(self.goal, pose)
-        dist = math.hypot(gx, gy)
-        if dist < self._best - s.progress:
-            self._best, self._best_time = dist, self._clock
-        if self._clock - self._best_time > s.patience:
-            self.status = LOCAL_MINIMUM
-            self.last = (0.0, 0.0)
-            return 0.0, 0.0
+        self.grid.update(sonar, pose)
+        self.aim, togo = self._target(pose)
+        ax, ay = goal_in_robot_frame(self.aim, pose)
+        bearing = math.atan2(ay, ax)
+        if self._stuck(togo):
+            self.escapes += 1
+            self._best, self._best_time = math.inf, self._clock
+            self._turn_until = self._clock + s.look_time
+        reach = s.max_speed * s.horizon + s.radius + s.clearance_cap
+        points = np.concatenate([self.grid.points(pose, reach), self.echo_points(sonar)])
         vs, ws = dynamic_window(*self.last, s)
-        points = self.local_points(pose)
-        aim = self._open_towards(points, math.atan2(gy, gx))
-        # the goal itself where its direction is open, else a point ahead on
-        # the open direction nearest to it (the objective then steers there)
-        reach = dist if aim == math.atan2(gy, gx) else s.clearance_cap
-        sub = (reach * math.cos(aim), reach * math.sin(aim))
-        free, heading, togo = evaluate_window(points, vs, ws, sub, s)
-        v, w, self.score = choose_velocity(vs, ws, free, heading, togo, reach, s)
-        if v == 0.0 and self.last[0] == 0.0:
+        if self._clock < self._turn_until:  # escape: stop and turn to look round
+            vs = np.zeros_like(vs)
+        free, heading, togo_arc = evaluate_window(points, vs, ws, (ax, ay), s)
+        dist = math.hypot(ax, ay)
+        v, w, self.score = choose_velocity(vs, ws, free, heading, togo_arc, dist, s)
+        if v == 0.0 and self.last[0] == 0.0:  # at rest: turn to the open way
             turn = min(s.max_turn, s.rot_accel * s.window_time + abs(self.last[1]))
-            w = float(np.clip(2.0 * aim, -turn, turn))
+            w = float(np.clip(2.0 * self._open_towards(points, bearing), -turn, turn))
         self.window = (vs, ws)
         self.last = (v, w)
         return v, w

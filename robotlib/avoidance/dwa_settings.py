@@ -1,7 +1,7 @@
 """`DWASettings`: the knobs of `robotlib.avoidance.dwa.DWA`, with their defaults.
 
 The velocity window and its samples, the roll-out, the objective's weights,
-the sonar memory and the trap detection. Change one with
+the obstacle grid, its navigation function and the escape when stuck. Change one with
 `dataclasses.replace` or build a new one
 (``DWA(settings=DWASettings(clearance_weight=0.5))``).
 
@@ -58,22 +58,42 @@ class DWASettings:
         speed (as a fraction of ``max_speed``) (0.5, 1.0, 0.4, 0.2).
     clearance_cap : float
         Free distance beyond this counts as this, m (1.0).
+    resolution, extent : float
+        The obstacle grid's cell and side, m (0.1, 40; centred on the first
+        pose seen).
     memory : float
-        Sonar echoes are remembered (in the odometry frame) for this long, s
-        (3.0), so that what the front ring saw stays in view beside the robot.
+        The grid's cells within sonar range fade with this time constant, s
+        (30): what the front ring saw stays in view beside the robot and
+        while it turns about, and what moved away is forgotten.
+    occupied, cmax : float
+        Certainty at which a cell is an obstacle, and its ceiling (2, 10;
+        an echo adds 1, a sonar looking through takes 1).
     arc : float
-        Each echo stands for points spread over this angle about the sonar's
-        axis, rad (half of `SONAR_CONE`).
+        Each echo of the current scan stands for points spread over this
+        angle about the sonar's axis, rad (half of `SONAR_CONE`).
     arc_points : int
-        Points per echo (3).
-    cell : float
-        The memory keeps one point (the newest) per square cell of this
-        side, m (0.05).
+        Points per echo of the current scan (3).
+    block, margin : float
+        The navigation function's paths keep at least ``block`` m from an
+        occupied cell and pay more within ``block + margin`` m (`ROBOT_RADIUS`,
+        0.5).
+    border : float
+        The navigation function covers the robot and the goal with this
+        much to spare, m (2.0).
+    replan : float
+        Seconds between navigation functions (0.5; at once on a new goal).
+    lookahead : float
+        The goal terms aim at the point this far along the descent of the
+        navigation function, m (1.5).
     patience, progress : float
-        A trap (status ``"local_minimum"``) is declared when the distance to
-        the goal has not shrunk by ``progress`` m in ``patience`` s (15, 0.3).
+        Stuck when the path left to the goal (the navigation function at the
+        robot) has not shrunk by ``progress`` m in ``patience`` s (10, 0.3)
+        with nothing new seen.
+    look_time : float
+        When stuck, the robot stops and turns for this long, s (3), so the
+        front ring sees what lies beside it.
     tolerance : float
-        Goal reached within this distance, m (0.3).
+        Goal reached within this distance of the odometry pose, m (0.15).
     """
 
     max_speed: float = 0.5
@@ -92,27 +112,39 @@ class DWASettings:
     clearance_weight: float = 0.4
     velocity_weight: float = 0.2
     clearance_cap: float = 1.0
-    memory: float = 3.0
+    resolution: float = 0.1
+    extent: float = 40.0
+    memory: float = 30.0
+    occupied: float = 2.0
+    cmax: float = 10.0
     arc: float = 0.5 * SONAR_CONE
     arc_points: int = 3
-    cell: float = 0.05
-    patience: float = 15.0
+    paint_arc: bool = False
+    block: float = ROBOT_RADIUS
+    margin: float = 0.5
+    border: float = 3.0
+    replan: float = 0.5
+    lookahead: float = 1.5
+    patience: float = 10.0
     progress: float = 0.3
-    tolerance: float = 0.3
+    look_time: float = 3.0
+    tolerance: float = 0.15
 
     def __post_init__(self):
         put = object.__setattr__
         floats = ("max_speed", "max_turn", "accel", "rot_accel", "window_time",
                   "horizon", "step", "radius", "latency", "heading_weight",
                   "progress_weight", "clearance_weight", "velocity_weight",
-                  "clearance_cap", "cell", "memory", "arc", "patience", "progress",
-                  "tolerance")  # fmt: skip
+                  "clearance_cap", "resolution", "extent", "memory", "occupied",
+                  "cmax", "arc", "block", "margin", "border", "replan", "lookahead",
+                  "patience", "progress", "look_time", "tolerance")  # fmt: skip
         for name in floats:
             put(self, name, float(getattr(self, name)))
         for name in ("n_v", "n_w", "arc_points"):
             put(self, name, int(getattr(self, name)))
         positive = ("max_speed", "max_turn", "accel", "rot_accel", "window_time",
-                    "horizon", "step", "radius", "clearance_cap", "cell")  # fmt: skip
+                    "horizon", "step", "radius", "clearance_cap", "resolution",
+                    "extent", "occupied", "cmax", "block", "lookahead")  # fmt: skip
         for name in positive:
             if not getattr(self, name) > 0:
                 raise ValueError(f"{name} must be > 0, got {getattr(self, name)}")
@@ -122,5 +154,9 @@ class DWASettings:
                    self.velocity_weight)  # fmt: skip
         if min(weights) < 0:
             raise ValueError("the objective's weights must be >= 0")
-        if self.latency < 0 or self.memory < 0 or self.arc < 0:
-            raise ValueError("latency, memory and arc must be >= 0")
+        if min(self.latency, self.memory, self.arc, self.margin, self.border,
+               self.replan, self.patience, self.progress, self.look_time) < 0:  # fmt: skip
+            raise ValueError(
+                "latency, memory, arc, margin, border, replan, patience, progress "
+                "and look_time must be >= 0"
+            )

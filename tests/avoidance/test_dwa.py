@@ -53,7 +53,7 @@ def _touches(points, v, w, distance, radius):
         x, y = v * t, 0 * t
     d = np.hypot(points[:, 0] - x[:, None], points[:, 1] - y[:, None]) - radius
     d0 = np.hypot(points[:, 0], points[:, 1]) - radius
-    return bool(((d <= 0) & (d < d0 - 0.01)).any())
+    return bool(((d <= 0) & (d < d0 - 1e-3)).any())
 
 
 @pytest.mark.parametrize("seed", range(20))
