@@ -205,7 +205,6 @@ def open_directions(points, radius: float, n: int = 72) -> tuple:
     return angles, free
 
 
-
 class DWA(Controller):
     """Dynamic window approach on the sonar ring and odometry.
 
@@ -243,12 +242,12 @@ class DWA(Controller):
         self.settings = s
         offsets = np.linspace(-0.5 * s.arc, 0.5 * s.arc, s.arc_points)
         self._offsets = offsets if s.arc_points > 1 else np.zeros(1)
-        self.grid = ObstacleGrid(s.resolution, s.extent, s.memory, s.occupied,
-                                 s.cmax, self._offsets if s.paint_arc else (0.0,))  # fmt: skip
+        self.grid = ObstacleGrid(s.resolution, s.extent, s.memory, s.occupied, s.cmax)
         super().__init__(goal, s.tolerance, s.max_speed, s.max_turn)
 
     def _reset(self) -> None:
         self.grid.reset()
+        self._recent = np.zeros((0, 3))  # echo points (x, y odometry, time seen)
         self._clock = 0.0
         self.last = (0.0, 0.0)
         self.aim = np.zeros(2)
@@ -260,7 +259,7 @@ class DWA(Controller):
         self._turn_until = -1.0
 
     def echo_points(self, sonar: np.ndarray) -> np.ndarray:
-        """This scan's echoes, a few across each cone's middle, robot frame, m.
+        """Return this scan's echoes, a few across each cone's middle, robot frame, m.
 
         Returns
         -------
@@ -273,8 +272,28 @@ class DWA(Controller):
         py = sens[:, 1:2] + r[:, None] * np.sin(ang)
         return np.column_stack([px.ravel(), py.ravel()])
 
+    def _echoes(self, sonar: np.ndarray, pose: np.ndarray) -> np.ndarray:
+        """Return the echo points of the last ``recent`` s, robot frame, m.
+
+        The grid lets a sonar looking past a corner clear it; these are
+        never cleared, so a corner seen a moment ago still stops the arcs.
+        """
+        local = self.echo_points(sonar)
+        c, si = math.cos(pose[2]), math.sin(pose[2])
+        now = np.column_stack([
+            pose[0] + c * local[:, 0] - si * local[:, 1],
+            pose[1] + si * local[:, 0] + c * local[:, 1],
+            np.full(len(local), self._clock),
+        ])  # fmt: skip
+        keep = self._recent[:, 2] > self._clock - self.settings.recent - 1e-9
+        self._recent = np.concatenate([now, self._recent[keep]])
+        d = self._recent[:, :2] - pose[:2]
+        return np.column_stack(
+            [c * d[:, 0] + si * d[:, 1], -si * d[:, 0] + c * d[:, 1]]
+        )
+
     def _target(self, pose: np.ndarray) -> tuple[np.ndarray, float]:
-        """The point to aim at and the path length left to the goal, m."""
+        """Return the point to aim at and the path length left to the goal, m."""
         s = self.settings
         goal = tuple(float(g) for g in self.goal)
         if goal != self._planned_for or self._clock >= self._next_plan:
@@ -300,7 +319,6 @@ class DWA(Controller):
         off = np.abs(np.remainder(angles - target + math.pi, 2 * math.pi) - math.pi)
         return float(angles[open_][np.argmin(off[open_])])
 
-
     def _stuck(self, togo: float) -> bool:
         """Whether the path left has not shrunk by ``progress`` in ``patience`` s."""
         s = self.settings
@@ -320,7 +338,8 @@ class DWA(Controller):
             self._best, self._best_time = math.inf, self._clock
             self._turn_until = self._clock + s.look_time
         reach = s.max_speed * s.horizon + s.radius + s.clearance_cap
-        points = np.concatenate([self.grid.points(pose, reach), self.echo_points(sonar)])
+        seen = self.grid.points(pose, reach)
+        points = np.concatenate([seen, self._echoes(sonar, pose)])
         vs, ws = dynamic_window(*self.last, s)
         if self._clock < self._turn_until:  # escape: stop and turn to look round
             vs = np.zeros_like(vs)

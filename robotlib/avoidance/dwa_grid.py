@@ -13,7 +13,8 @@ still count beside and behind the robot.
 "global dynamic window", 1999): the length of the shortest 8-connected
 path from every cell of a box around the robot and the goal to the goal,
 keeping ``block`` from any occupied cell where it can, each step costing
-more the nearer it passes to one (within ``margin`` beyond ``block``). Unseen cells are free. `ObstacleGrid.carrot` follows its
+more the nearer it passes to one (within ``margin`` beyond ``block``).
+Unseen cells are free. `ObstacleGrid.carrot` follows its
 steepest descent from the robot a given length: the point DWA's goal terms
 aim at, round the wall of a trap rather than into it.
 
@@ -148,9 +149,6 @@ class ObstacleGrid:
         Certainty at which a cell counts as an obstacle.
     cmax : float
         Certainty ceiling (an echo adds 1; a sonar looking through takes 1).
-    offsets : sequence of float
-        Each echo paints at its range along rays turned by these angles from
-        its sonar's axis (and clears the cones nearer along them), rad.
 
     Attributes
     ----------
@@ -165,16 +163,12 @@ class ObstacleGrid:
     """
 
     def __init__(
-        self, resolution=0.1, extent=40.0, memory=30.0, occupied=2.0, cmax=10.0,
-        offsets=(0.0,),
-    ):  # fmt: skip
+        self, resolution=0.1, extent=40.0, memory=30.0, occupied=2.0, cmax=10.0
+    ):
         self.resolution, self.memory = float(resolution), float(memory)
         self.occupied, self.cmax = float(occupied), float(cmax)
         self.n = int(math.ceil(extent / resolution))
-        # each sonar paints (and clears) along a few rays spread over its cone
-        rays = [SONAR_POSES + np.array([0.0, 0.0, a]) for a in offsets]
-        self.sensors = np.ascontiguousarray(np.concatenate(rays), dtype=np.float64)
-        self._copies = len(rays)
+        self.sensors = np.ascontiguousarray(SONAR_POSES, dtype=np.float64)
         self.reset()
 
     def reset(self) -> None:
@@ -196,8 +190,7 @@ class ObstacleGrid:
             _kernels.fade(self.certainty, x0, y0, res, pose[0], pose[1],
                           SONAR_MAX_RANGE, fade)  # fmt: skip
         _kernels.certainty_update(
-            self.certainty, x0, y0, res, pose, readonly(self.sensors),
-            np.tile(sonar, self._copies),
+            self.certainty, x0, y0, res, pose, readonly(self.sensors), sonar,
             SONAR_MAX_RANGE, 0.5 * SONAR_CONE, 2.5, 1.0, 1.0, self.cmax,
         )  # fmt: skip
 
@@ -259,7 +252,8 @@ class ObstacleGrid:
         d = self.distance
         i, j = self.cell(pose)
         i, j = i - self.box[0], j - self.box[1]
-        if not (0 <= i < d.shape[0] and 0 <= j < d.shape[1]) or not np.isfinite(d[i, j]):
+        inside = 0 <= i < d.shape[0] and 0 <= j < d.shape[1]
+        if not inside or not np.isfinite(d[i, j]):
             return None, math.inf
         togo = float(d[i, j])
         walked = 0.0

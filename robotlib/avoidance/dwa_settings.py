@@ -69,10 +69,14 @@ class DWASettings:
         Certainty at which a cell is an obstacle, and its ceiling (2, 10;
         an echo adds 1, a sonar looking through takes 1).
     arc : float
-        Each echo of the current scan stands for points spread over this
-        angle about the sonar's axis, rad (half of `SONAR_CONE`).
+        Each echo stands for points spread over this angle about the
+        sonar's axis where the arcs are rolled out, rad (half of `SONAR_CONE`).
     arc_points : int
-        Points per echo of the current scan (3).
+        Points per echo (3).
+    recent : float
+        The arcs are also stopped by every echo point of the last ``recent``
+        s (in the odometry frame; the grid may have cleared a corner since),
+        s (2).
     block, margin : float
         The navigation function's paths keep at least ``block`` m from an
         occupied cell and pay more within ``block + margin`` m (`ROBOT_RADIUS`,
@@ -119,7 +123,7 @@ class DWASettings:
     cmax: float = 10.0
     arc: float = 0.5 * SONAR_CONE
     arc_points: int = 3
-    paint_arc: bool = False
+    recent: float = 2.0
     block: float = ROBOT_RADIUS
     margin: float = 0.5
     border: float = 3.0
@@ -136,8 +140,9 @@ class DWASettings:
                   "horizon", "step", "radius", "latency", "heading_weight",
                   "progress_weight", "clearance_weight", "velocity_weight",
                   "clearance_cap", "resolution", "extent", "memory", "occupied",
-                  "cmax", "arc", "block", "margin", "border", "replan", "lookahead",
-                  "patience", "progress", "look_time", "tolerance")  # fmt: skip
+                  "cmax", "arc", "recent", "block", "margin", "border", "replan",
+                  "lookahead", "patience", "progress", "look_time",
+                  "tolerance")  # fmt: skip
         for name in floats:
             put(self, name, float(getattr(self, name)))
         for name in ("n_v", "n_w", "arc_points"):
@@ -154,9 +159,10 @@ class DWASettings:
                    self.velocity_weight)  # fmt: skip
         if min(weights) < 0:
             raise ValueError("the objective's weights must be >= 0")
-        if min(self.latency, self.memory, self.arc, self.margin, self.border,
-               self.replan, self.patience, self.progress, self.look_time) < 0:  # fmt: skip
+        if min(self.latency, self.memory, self.arc, self.recent, self.margin,
+               self.border, self.replan, self.patience, self.progress,
+               self.look_time) < 0:  # fmt: skip
             raise ValueError(
-                "latency, memory, arc, margin, border, replan, patience, progress "
-                "and look_time must be >= 0"
+                "latency, memory, arc, recent, margin, border, replan, patience, "
+                "progress and look_time must be >= 0"
             )
