@@ -89,6 +89,7 @@ def _warm_plan() -> None:
 
 def _warm_avoidance() -> None:
     from .avoidance import (
+        DWA,
         VFH,
         Bug2,
         PotentialField,
@@ -110,6 +111,7 @@ def _warm_avoidance() -> None:
         PotentialField(),
         Bug2(),
         WallFollower(),
+        DWA(),
     )
     for c in controllers:
         run_episode(box, c, goal=(3.0, 1.5), start=(1.0, 1.5, 0.0), seed=0, max_time=1)

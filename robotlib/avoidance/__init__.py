@@ -11,8 +11,9 @@ only what a real robot sees (eight sonar ranges, the odometry pose, a goal):
 - `Braitenberg` (the vehicles of `BRAITENBERG` as weight matrices) and
   `WallFollower`: reactive, no memory;
 - `DWA`: the dynamic window approach (velocity samples within the
-  accelerations, rolled out against remembered echoes, an objective of
-  heading, clearance and speed);
+  accelerations, rolled out against a short-memory sonar grid, an objective
+  of heading, progress, clearance and speed aimed along a navigation
+  function over that grid, and a look round when stuck);
 - `Bug2`: the m-line and boundary following, on sonar and odometry.
 
 `run_episode` drives any `robotlib.robot.Robot` with one until it reaches

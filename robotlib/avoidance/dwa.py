@@ -11,17 +11,28 @@ anything: ``v * latency + v**2 / (2 accel) <= free``) and picks the best of
 the objective (`choose_velocity`: heading, progress, free distance and speed, weighted,
 each about [0, 1]).
 
-The obstacle points are the sonar echoes of the last ``memory`` s, kept in
-the odometry frame: each echo stands for a few points across the middle of
-its cone, since a sonar does not say where in its cone the echo came from.
-The memory keeps what the front ring saw in view while the robot passes it.
+The obstacle points are the occupied cells of a short-memory certainty grid
+(`robotlib.avoidance.dwa_grid.ObstacleGrid`, filled from the sonar as
+VFH's is, fading with a time constant of ``memory`` s) and the echoes of
+the last ``recent`` s, each standing for a few points across the middle of
+its cone (a sonar does not say where in its cone the echo came from): the
+grid keeps a wall end seen earlier beside the robot, the recent echoes a
+corner the grid may have cleared since.
 
-DWA is a local method: in a trap whose mouth faces away from the goal it
-turns about inside; it says so (status ``"local_minimum"``) when the distance
-to the goal has not shrunk for ``patience`` s.
+The goal terms do not aim at the goal itself but at the point ``lookahead``
+m along the steepest descent of a navigation function over the grid (the
+shortest way to the goal round everything seen; Brock and Khatib 1999), so
+the robot heads for the door it has seen, and out of a U-shaped trap
+round its arm, instead of circling in front of the wall between it and the
+goal. Unseen cells count as free, so it still drives into a trap it has
+not seen; once inside, the grid shows the way out. When the length of that
+way has not shrunk by ``progress`` m in ``patience`` s the robot is stuck:
+it stops and turns for ``look_time`` s, and the front ring sees what lies
+beside it. At rest with no admissible way forward it turns to the open
+direction nearest its aim (`open_directions`).
 
-Imports: numpy, the kernels, `robotlib.avoidance.base` and `.dwa_settings`;
-never plotting.
+Imports: numpy, the kernels, `robotlib.avoidance.base`, `.dwa_grid` and
+`.dwa_settings`; never plotting.
 """
 
 from __future__ import annotations

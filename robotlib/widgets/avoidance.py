@@ -4,9 +4,10 @@ Thin wrappers over plain, tested functions:
 
 - `make_controller` builds a controller from the panel's choices (`KINDS`,
   with its gains), `episode_for` runs it on one seeded start/goal pair of an
-  avoidance world; `EpisodePanel` adds sliders for the gains and the VFH
-  threshold (``continuous_update=False``: an episode runs when a slider is
-  released) and redraws the path and the clearance.
+  avoidance world; `EpisodePanel` adds sliders for the gains, the VFH
+  threshold and DWA's clearance weight (``continuous_update=False``: an
+  episode runs when a slider is released) and redraws the path and the
+  clearance.
 - `vfh_replay` replays an episode's sonar and odometry through a VFH and
   records its polar histogram, chosen direction and goal bearing at every
   cycle; `HistogramPanel` shows them with a time slider, beside the map.
@@ -26,9 +27,11 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from ..avoidance import (
+    DWA,
     VFH,
     Braitenberg,
     Bug2,
+    DWASettings,
     PotentialField,
     VFHSettings,
     run_episode,
@@ -55,15 +58,18 @@ __all__ = [
     "HistogramPanel",
 ]
 
-KINDS = ("VFH", "potential field", "Braitenberg explorer", "Bug2")
+KINDS = ("VFH", "DWA", "potential field", "Braitenberg explorer", "Bug2")
 """Controllers the episode panel offers."""
 
-_DEFAULTS = {"threshold": 150.0, "k_rep": 0.5, "d0": 1.2, "reach": 1.5}
+_DEFAULTS = {
+    "threshold": 150.0, "clearance": 0.4, "k_rep": 0.5, "d0": 1.2, "reach": 1.5,
+}  # fmt: skip
 
 
 def make_controller(
     kind: str,
     threshold=150.0,
+    clearance=0.4,
     k_rep=0.5,
     d0=1.2,
     reach=1.5,
@@ -75,6 +81,7 @@ def make_controller(
     """Build a controller of `KINDS` with the panel's gains.
 
     ``threshold``: VFH's upper threshold (the lower one is half of it);
+    ``clearance``: DWA's weight of the free distance along an arc;
     ``k_rep``, ``d0``: the potential field's repulsion; ``reach``: the range
     at which a Braitenberg vehicle's sonars start to respond, m.
     ``histogram``, ``direction`` (VFH), ``force`` (potential field) and
@@ -84,6 +91,8 @@ def make_controller(
     if kind == "VFH":
         gains = VFHSettings(threshold_high=threshold, threshold_low=threshold / 2)
         return VFH(settings=gains, histogram=histogram, direction=direction)
+    if kind == "DWA":
+        return DWA(settings=DWASettings(clearance_weight=clearance))
     if kind == "potential field":
         if force is not None:
             return PotentialField(force=partial(force, k_rep=k_rep, d0=d0))
@@ -119,9 +128,9 @@ class EpisodePanel:
     seed : int
         Seed of the pairs and of the simulator.
     **gains
-        Initial ``threshold``, ``k_rep``, ``d0``, ``reach``; and parts that
-        replace the library's (``histogram``, ``direction``, ``force``,
-        ``weights``: see `make_controller`).
+        Initial ``threshold``, ``clearance``, ``k_rep``, ``d0``, ``reach``;
+        and parts that replace the library's (``histogram``, ``direction``,
+        ``force``, ``weights``: see `make_controller`).
 
     Attributes
     ----------
@@ -146,6 +155,10 @@ class EpisodePanel:
             value=start["threshold"], min=20.0, max=1000.0, step=10.0,
             description="VFH thr.", **opts,
         )  # fmt: skip
+        self.clearance = w.FloatSlider(
+            value=start["clearance"], min=0.0, max=2.0, step=0.1,
+            description="DWA clear.", **opts,
+        )  # fmt: skip
         self.k_rep = w.FloatSlider(
             value=start["k_rep"], min=0.05, max=3.0, step=0.05,
             description="PF k_rep", **opts,
@@ -161,7 +174,8 @@ class EpisodePanel:
         self.output = w.Output()
         self.output.add_class("robotlib-figure")
         controls = (
-            self.kind, self.pair, self.threshold, self.k_rep, self.d0, self.reach,
+            self.kind, self.pair, self.threshold, self.clearance, self.k_rep,
+            self.d0, self.reach,
         )  # fmt: skip
         for c in controls:
             c.observe(lambda change: self.refresh(), names="value")
@@ -170,8 +184,9 @@ class EpisodePanel:
             [
                 w.HTML(STALE_CSS),
                 w.HBox([self.kind, self.pair]),
-                w.HBox([self.threshold, self.k_rep]),
-                w.HBox([self.d0, self.reach]),
+                w.HBox([self.threshold, self.clearance]),
+                w.HBox([self.k_rep, self.d0]),
+                w.HBox([self.reach]),
                 self.status,
                 self.output,
             ]
@@ -191,6 +206,7 @@ class EpisodePanel:
         """Return the current gains, as `make_controller` keywords."""
         return {
             "threshold": float(self.threshold.value),
+            "clearance": float(self.clearance.value),
             "k_rep": float(self.k_rep.value),
             "d0": float(self.d0.value),
             "reach": float(self.reach.value),

@@ -14,6 +14,7 @@ def test_make_controller_kinds():
         assert panels.make_controller(kind).name.startswith(kind.split()[0])
     vfh = panels.make_controller("VFH", threshold=300.0)
     assert vfh.threshold_high == 300.0 and vfh.threshold_low == 150.0
+    assert panels.make_controller("DWA", clearance=1.5).settings.clearance_weight == 1.5
     with pytest.raises(ValueError, match="controller"):
         panels.make_controller("teleport")
 
@@ -25,6 +26,9 @@ def test_episode_panel_reruns_on_a_change():
     assert panel.episode.controller == "VFH"
     panel.threshold.value = 300.0
     assert "VFH" in panel.status.value
+    panel.kind.value = "DWA"
+    panel.clearance.value = 1.0  # DWA's slider re-runs it with the new weight
+    assert panel.episode.controller == "DWA" and "DWA" in panel.status.value
 
 
 def test_replay_matches_the_controller_that_drove():
