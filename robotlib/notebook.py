@@ -1,7 +1,8 @@
 """The one call every lab notebook starts with: ``robotlib.notebook.setup()``.
 
 It applies the course's figure style (`robotlib.plotting.style`), seeds what
-can be seeded, says unsolved exercises plainly (`explain_unsolved`), and
+can be seeded, says unsolved exercises plainly (`explain_unsolved`, and
+`demo` for a demonstration that calls a student's code), and
 compiles (or loads from numba's cache) the kernels the lab will use, with a
 progress bar naming what compiles, so that later cells show only teaching
 code and graded cells do not pay for compilation::
@@ -42,6 +43,7 @@ __all__ = [
     "WARMUPS",
     "progress",
     "explain_unsolved",
+    "demo",
     "warmed_parts",
     "add_arguments",
     "run",
@@ -353,6 +355,27 @@ def explain_unsolved(shell=None) -> bool:
 
     shell = ipython_shell() if shell is None else shell
     return shell is not None and install(shell)
+
+
+def demo():
+    """Wrap a demonstration that calls a student's code: ``with demo(): ...``.
+
+    In a released lab whose exercise is not done yet, the block stops where
+    it calls the unsolved code, and the cell prints one line instead of an
+    error: ``This demonstration needs your `drive_square` (Exercise 1): ...``
+    (also for a name an exercise defines, or one a stopped cell above did
+    not get to). The cell succeeds, so Run All goes on to the next
+    demonstration. Other errors, and every error in a notebook with no
+    exercise left to do (a solution), propagate as usual.
+
+    Returns
+    -------
+    robotlib._unsolved.Demo
+        The context manager.
+    """
+    from ._unsolved import Demo
+
+    return Demo()
 
 
 def add_arguments(parser) -> None:

@@ -15,6 +15,7 @@ players are checked by `tests.browser_panels` (`check_panels`,
 
 from __future__ import annotations
 
+import importlib.util
 import json
 import os
 import re
@@ -31,6 +32,14 @@ from pathlib import Path
 from tests.browser_panels import check_animations, check_panels
 
 CHROMIUM = "/usr/bin/chromium"
+
+
+def have_browser() -> bool:
+    """Can the browser test run here (playwright and Debian's chromium)?"""
+    playwright = importlib.util.find_spec("playwright") is not None
+    return playwright and Path(CHROMIUM).exists()
+
+
 LAB_SETTINGS = {
     "@jupyterlab/notebook-extension/tracker.jupyterlab-settings": {
         "windowingMode": "none",
@@ -53,7 +62,13 @@ def _free_port() -> int:
 class Lab:
     """A JupyterLab server on a temporary copy of some notebook folders."""
 
-    def __init__(self, repo: Path, folders=("solutions", "labs"), tmp: Path = None):
+    def __init__(
+        self,
+        repo: Path,
+        folders=("solutions", "labs"),
+        tmp: Path = None,
+        env: dict | None = None,
+    ):
         self.root = Path(tmp) / "root"
         for folder in folders:
             if (repo / folder).is_dir():
@@ -70,6 +85,7 @@ class Lab:
             "JUPYTERLAB_WORKSPACES_DIR": str(Path(tmp) / "workspaces"),
             "JUPYTER_RUNTIME_DIR": str(Path(tmp) / "runtime"),
             "MPLBACKEND": "module://matplotlib_inline.backend_inline",
+            **(env or {}),  # the kernels inherit it
         }
         cmd = [
             sys.executable, "-m", "jupyterlab", "--no-browser", "--allow-root",

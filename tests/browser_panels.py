@@ -223,19 +223,23 @@ def check_panels(
 def check_animations(page, wait: float = 2.0) -> list[dict]:
     """Press play on every jshtml player, wait once; return each one's frames.
 
+    ``shown``: whether the player showed a frame before play was pressed.
+
     The players play at the same time (each on its own page timer), so one
     wait of ``wait`` s serves them all.
     """
     players = page.locator(".jp-OutputArea-output .animation").element_handles()
-    frames, starts = [], []
+    frames, starts, shown = [], [], []
     for player in players:
         player.scroll_into_view_if_needed()
+        image = player.query_selector("img")  # a frame, before anything is pressed
+        shown.append(bool(image and image.evaluate("e => e.naturalWidth > 0")))
         frames.append(player.query_selector("input[type=range]"))
         starts.append(int(frames[-1].input_value()))
         player.query_selector("button[title='Play']").click()
     if players:
         page.wait_for_timeout(int(wait * 1000))
     return [
-        {"player": k, "start": start, "after": int(frame.input_value())}
-        for k, (start, frame) in enumerate(zip(starts, frames, strict=True))
+        {"player": k, "start": start, "after": int(f.input_value()), "shown": seen}
+        for k, (start, f, seen) in enumerate(zip(starts, frames, shown, strict=True))
     ]

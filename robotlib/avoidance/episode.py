@@ -8,9 +8,9 @@ reports that it is trapped (``status == "local_minimum"``). It returns an
 `Episode` of plain arrays with two verdicts: `Episode.true_success`, judged
 on the true pose where the backend has one (the simulator: the controller's
 "reached" counts only if the robot truly ends within `TRUE_TOLERANCE` of the
-goal), and beside it the robot's own, `Episode.success` (odometry; what Lab
-2's graded check counts, since odometry drift alone puts a correct VFH 0.5 m
-off in the clutter arena in a few episodes of ten).
+goal; what Lab 2's graded check counts), and beside it the robot's own,
+`Episode.success` (odometry: drift alone puts a correct VFH more than 0.5 m
+off in one or two episodes of ten in the clutter arena).
 `run_episodes` runs many seeded start/goal pairs in a world, in parallel
 processes if asked (spawn-safe).
 

@@ -27,6 +27,9 @@ before then. A sonar brake backs the grid up: each echo's point on its
 sonar's axis that lies in the disc's path (straight on, or turned by the
 turn being commanded over the next half second) limits the forward speed to
 the speed that stops the robot short of it at ``settings.brake`` m/s^2.
+When every sector is blocked (boxed in between boxes) it steers into the
+thinnest valley, the threshold raised two, four, eight times, rather than
+turning in place for ever.
 
 The public functions are what a student writes in Lab 2; `VFH` accepts
 replacements for them (``histogram=``, ``direction=``).
@@ -390,6 +393,33 @@ class VFH(Controller):
             self.mu_previous,
         )
 
+    def _relaxed(self, hist: np.ndarray, target: float) -> float:
+        """Boxed in: steer into the thinnest valley (the threshold raised x2, x4, x8).
+
+        Between boxes 0.8 m apart the enlarged cells block every sector,
+        and a robot that only turns in place sees the same walls for ever
+        (it spun for 90 s of a 120 s episode in the generated halls). The
+        sonar brake still stops it short of any echo in its path.
+        """
+        for factor in (2.0, 4.0, 8.0):
+            threshold = factor * self.threshold_high
+            if self.direction_fn is not None:
+                steer = float(self.direction_fn(hist, threshold, target))
+            else:
+                blocked = hist >= threshold
+                if blocked.all():
+                    continue
+                previous = 0.0
+                if self._has_previous:
+                    previous = _wrap(self._previous - self._heading)
+                steer = _kernels.plus_direction(
+                    blocked, target, previous, self.wide, self.mu_goal,
+                    self.mu_heading, self.mu_previous,
+                )  # fmt: skip
+            if not math.isnan(steer):
+                return steer
+        return math.nan
+
     def _escape(self, pose, dist: float, target: float, steer: float) -> float:
         """Trap escape: follow the obstacle's boundary until nearer the goal.
 
@@ -458,6 +488,8 @@ class VFH(Controller):
             steer = self._choose(hist, target)
         if self.goal is not None and self.escape:
             steer = self._escape(pose, dist, target, steer)
+        if math.isnan(steer):
+            steer = self._relaxed(hist, target)
         self.steer = steer
         if not math.isnan(steer):
             self._previous = _wrap(pose[2] + steer)

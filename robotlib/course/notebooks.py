@@ -367,12 +367,22 @@ def _has_marker(source: str, markers: tuple[str, str]) -> bool:
     return any(line.strip() in markers for line in source.splitlines())
 
 
+def _raises_at_top(cell) -> bool:
+    """Whether a released code cell raises its stub outside any function."""
+    return cell.cell_type == "code" and any(
+        line == CODE_STUB[1] for line in cell.source.splitlines()
+    )
+
+
 def release_notebook(nb: NotebookNode, name: str = "notebook") -> NotebookNode:
     """Return the student version of a solution notebook.
 
     Solutions are replaced by stubs, hidden tests removed, outputs and
     execution counts cleared, cell metadata reduced to the check tag (check
-    cells are also marked not deletable and not editable), cell ids kept
+    cells are also marked not deletable and not editable), cells that fail
+    until solved (check cells, and stubs outside a function) tagged
+    ``raises-exception`` so that JupyterLab's Run All goes past them to the
+    demonstrations further down, cell ids kept
     (or derived from ``name`` and the position when missing), notebook
     metadata reduced to the kernelspec and the ``robotlib`` entry.
 
@@ -416,6 +426,9 @@ def release_notebook(nb: NotebookNode, name: str = "notebook") -> NotebookNode:
             new.metadata = {META_KEY: keep, "deletable": False, "editable": False}
         if meta is not None and not meta["manual"]:
             new.metadata["tags"] = ["graded"]  # JupyterLab shows it: a graded check
+        if (meta is not None and not meta["manual"]) or _raises_at_top(new):
+            # fails until solved; JupyterLab's Run All goes on past it
+            new.metadata.setdefault("tags", []).append("raises-exception")
         cells.append(new)
     out = nbformat.v4.new_notebook(cells=cells)
     out.metadata = {"kernelspec": dict(KERNELSPEC), "language_info": {"name": "python"}}

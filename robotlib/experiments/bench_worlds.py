@@ -1,7 +1,8 @@
 """``robotlib bench worlds``: avoidance on seeded, untuned worlds, judged by truth.
 
 ``robotlib bench worlds [--kinds ...] [--worlds 3] [--pairs 20] [--seed 0]
-[--controllers VFH Bug2] [--compare-end-faces] [--json FILE]`` draws
+[--controllers VFH Bug2] [--localized] [--compare-end-faces] [--json FILE]``
+draws
 ``--worlds`` worlds of each kind (`robotlib.world.generate_world`, seeded
 ``[seed, kind, k]``) and ``--pairs`` reachable start/goal pairs in each
 (`robotlib.world.reachable_pairs`, drawn afresh per world), runs every
@@ -16,16 +17,19 @@ controller and kind:
   0.5 m off;
 - collisions, timeouts and reported local minima.
 
-``--compare-end-faces`` runs everything twice, the second time with walls
-that show no end face to the sensors (``Simulator(end_faces=False)``), to
-measure what the end faces change. Targets (issue 31, measured not
-asserted): VFH truly within 0.5 m in at least 85 % of episodes and no
-collision in any; Bug2 at least 60 %.
+``--localized`` also runs every controller aimed by MCL tracking on the map
+(`robotlib.planning.Localized`, rows ``VFH+MCL``...) instead of by its
+odometry alone. ``--compare-end-faces`` runs everything twice, the second
+time with walls that show no end face to the sensors
+(``Simulator(end_faces=False)``), to measure what the end faces change.
+Targets (issue 31, measured not asserted): VFH truly within 0.5 m in at
+least 85 % of episodes and no collision in any; Bug2 at least 60 %.
 """
 
 from __future__ import annotations
 
 import argparse
+import itertools
 import json
 import os
 import zlib
@@ -70,23 +74,27 @@ def _row(controller: str, kind: str, faces: bool, episodes) -> dict:
 
 
 def bench_rows(
-    kinds, controllers, n_worlds=3, n_pairs=20, seed=0, faces=(True,), jobs=1
-):
-    """One row per controller, kind and end-face setting (see the module)."""
+    kinds, controllers, n_worlds=3, n_pairs=20, seed=0, faces=(True,), jobs=1,
+    localized=(False,),
+):  # fmt: skip
+    """One row per controller, kind, end-face setting and aim (see the module)."""
     from ..avoidance import CONTROLLERS, run_episodes
+    from ..planning import Localized
 
     rows = []
     for kind in kinds:
         worlds = [world_pairs(kind, k, n_pairs, seed) for k in range(n_worlds)]
-        for name in controllers:
-            for f in faces:
-                eps = []
-                for k, (world, pairs) in enumerate(worlds):
-                    eps += run_episodes(
-                        world, CONTROLLERS[name](), pairs, seed=seed * 1000 + k,
-                        jobs=jobs, sim_options={"end_faces": f},
-                    )  # fmt: skip
-                rows.append(_row(name, kind, f, eps))
+        for name, f, loc in itertools.product(controllers, faces, localized):
+            eps = []
+            for k, (world, pairs) in enumerate(worlds):
+                c = CONTROLLERS[name]()
+                if loc:
+                    c = Localized(c, world, rng=[seed, k])
+                eps += run_episodes(
+                    world, c, pairs, seed=seed * 1000 + k, jobs=jobs,
+                    sim_options={"end_faces": f},
+                )  # fmt: skip
+            rows.append(_row(name + ("+MCL" if loc else ""), kind, f, eps))
     return rows
 
 
@@ -119,6 +127,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--compare-end-faces", action="store_true", help="also without end faces"
     )
+    parser.add_argument(
+        "--localized", action="store_true", help="also aimed by MCL on the map"
+    )
     parser.add_argument("--json", type=Path, default=None, help="write results here")
 
 
@@ -127,7 +138,7 @@ def run(args: argparse.Namespace) -> int:
     faces = (True, False) if args.compare_end_faces else (True,)
     rows = bench_rows(
         args.kinds, args.controllers, args.worlds, args.pairs, args.seed, faces,
-        args.jobs,
+        args.jobs, (False, True) if args.localized else (False,),
     )  # fmt: skip
     _print(rows)
     load = os.getloadavg() if hasattr(os, "getloadavg") else (float("nan"),) * 3

@@ -27,6 +27,7 @@ BENCHES = {
     "large-map": "robotlib.experiments.bench_large_map",
     "buildings": "robotlib.experiments.bench_buildings",
     "worlds": "robotlib.experiments.bench_worlds",
+    "explore": "robotlib.experiments.bench_explore",
 }
 """Topic name to the module that measures it."""
 

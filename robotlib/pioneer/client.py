@@ -61,6 +61,10 @@ class PioneerRobot(Robot):
         Send ENABLE 1 and SONAR 1 after opening.
     reset_odometry : bool
         Send SETO after opening, so odometry starts at (0, 0, 0).
+    lockstep : bool
+        For a lock-step ``robotlib sim-server``: every poll asks for the next
+        cycle (``SIM_STEP``) before waiting for its SIP. The server is silent
+        between polls, so only a poll's wait counts against the link timeout.
 
     Attributes
     ----------
@@ -81,10 +85,12 @@ class PioneerRobot(Robot):
         enable_motors: bool = True,
         sonar: bool = True,
         reset_odometry: bool = False,
+        lockstep: bool = False,
     ):
         super().__init__()
         self.transport = transport
         self.timeouts = timeouts
+        self.lockstep = bool(lockstep)
         self.config: dict | None = None
         self._decoder = PacketDecoder()
         self._cond = threading.Condition()
@@ -222,7 +228,7 @@ class PioneerRobot(Robot):
                         self._handle(pkt)
                     if packets:
                         last_packet = now
-                if now - last_packet > t.link:
+                if not self.lockstep and now - last_packet > t.link:
                     raise LinkTimeout(
                         f"{self.transport.name}: nothing valid from the robot for "
                         f"{now - last_packet:.1f} s (link timeout {t.link} s): "
@@ -302,6 +308,8 @@ class PioneerRobot(Robot):
         deadline = time.monotonic() + self.timeouts.link
         with self._cond:
             target = self._sips + 1
+            if self.lockstep:
+                self._write(encode_si("SIM_STEP"))
             while self._sips < target:
                 self._check()
                 left = deadline - time.monotonic()

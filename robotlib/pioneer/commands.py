@@ -65,6 +65,8 @@ class Command(IntEnum):
     ESTOP = 55
     SIM_SET_POSE = 224
     SIM_RESET = 225
+    SIM_STEP = 250
+    """robotlib's own (not ARCOS or MobileSim): a lock-step server's next cycle."""
 
 
 SYNC0, SYNC1, SYNC2 = 0, 1, 2
@@ -91,7 +93,7 @@ VEL2_DIVISOR = 20.0
 """VEL2 wheel-speed unit on a Pioneer 3-DX, mm/s."""
 
 _FLAGS = {"ENABLE", "SONAR", "OPEN", "CLOSE", "CONFIG"}
-_BARE = {"PULSE", "SETO", "STOP", "ESTOP", "SIM_RESET"}
+_BARE = {"PULSE", "SETO", "STOP", "ESTOP", "SIM_RESET", "SIM_STEP"}
 
 
 def command(number: int, arg: int | bytes | str | None = None) -> bytes:
@@ -156,8 +158,8 @@ def encode_si(name: str, value=None, vel2_divisor: float = VEL2_DIVISOR) -> byte
         HEAD / DHEAD rad, VEL / SETV m/s, SETA m/s^2, RVEL / ROTATE / SETRV
         rad/s, SETRA rad/s^2. ENABLE, SONAR, OPEN, CLOSE, CONFIG take a flag
         (default 1). VEL2 takes ``(left, right)`` m/s. SIM_SET_POSE takes
-        ``(x, y, theta)`` m, m, rad. PULSE, SETO, STOP, ESTOP, SIM_RESET take
-        nothing.
+        ``(x, y, theta)`` m, m, rad. PULSE, SETO, STOP, ESTOP, SIM_RESET,
+        SIM_STEP take nothing.
     value : float, bool, tuple or None
     vel2_divisor : float
         VEL2 wheel-speed unit, mm/s.

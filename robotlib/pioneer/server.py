@@ -3,7 +3,11 @@
 Each simulated robot listens on its own TCP port (8101, 8102, ... on
 127.0.0.1 by default) or on a pseudo-terminal (the serial path). A client
 runs the SYNC handshake, sends OPEN and then gets a SIP every 100 ms of
-simulated time; the simulator runs in real time, or ``speed`` times faster.
+simulated time; the simulator runs in real time, or ``speed`` times faster,
+or in lock-step: one cycle each time every open client has asked for it
+(``SIM_STEP``, robotlib's own command; connect with
+``robotlib.robot(address, lockstep=True)``), so a slow or busy client sees
+exactly the run a fast one sees.
 `robotlib.pioneer.session.Session` is the protocol of one link, bytes in
 and bytes out, with no I/O (re-exported here); `SimServer` moves bytes
 between sessions and sockets in one thread with a selector. Garbage, bad
@@ -108,7 +112,12 @@ class SimServer:
     host : str
         Address to bind (loopback by default).
     speed : float
-        Simulated seconds per wall-clock second (1 = real time).
+        Simulated seconds per wall-clock second (1 = real time); ignored in
+        lock-step.
+    lockstep : bool
+        Step the simulator only when every client that drives a robot has
+        asked for the next cycle (``SIM_STEP``), whatever the wall clock says.
+        Clients that do not ask (MobileSim's) then get no SIP.
     seed : Generator, int or None
         The simulator's randomness.
     sim : robotlib.sim.Simulator, optional
@@ -136,6 +145,7 @@ class SimServer:
         port: int = DEFAULT_PORT,
         host: str = "127.0.0.1",
         speed: float = 1.0,
+        lockstep: bool = False,
         seed=None,
         sim=None,
         drop_after: float = 10.0,
@@ -161,6 +171,7 @@ class SimServer:
         self.sim = sim
         self.host = host
         self.period = CYCLE / float(speed)
+        self.lockstep = bool(lockstep)
         self.drop_after = drop_after
         self.handshake_timeout = float(handshake_timeout)
         self.max_pending = int(max_pending)
@@ -274,7 +285,9 @@ class SimServer:
                             ep.session.close()
                 now = time.monotonic()
                 self._expire(now)
-                if now >= next_tick:
+                if self.lockstep:
+                    self._step_when_asked()
+                elif now >= next_tick:
                     self._tick()
                     next_tick += self.period
                     if now - next_tick > 5 * self.period:  # fell behind: do not burst
@@ -300,6 +313,19 @@ class SimServer:
                     log.info("robot %s: no handshake in time, closing", ep.port)
                     self._drop(ep, c)
 
+    def _step_when_asked(self) -> None:
+        """Lock-step: step once every driving client has asked for its next cycle.
+
+        A client that has just opened gets the present state at once (no
+        step), so it can join while the others wait for it.
+        """
+        active = [ep for ep in self.endpoints if ep.active is not None]
+        for ep in active:
+            if ep.active.step_asked and ep.active.fresh:
+                self._send_sip(ep)
+        if active and all(ep.active.step_asked for ep in active):
+            self._tick()
+
     def _tick(self) -> None:
         active = [ep for ep in self.endpoints if ep.active is not None]
         if not active:
@@ -307,18 +333,20 @@ class SimServer:
         self.sim.step()
         now = time.monotonic()
         for ep in active:
-            s = ep.active
-            if now - s.last_packet > self.drop_after:
+            if now - ep.active.last_packet > self.drop_after:
                 log.info("robot %s: client silent, closing its session", ep.port)
                 if ep.kind == "tcp":
                     self._drop(ep, ep.owner)
                 else:
-                    s.close()
+                    ep.active.close()
                 continue
-            if ep.kind == "tcp":
-                self._send(ep, s.tick(), ep.owner)
-            else:
-                self._send(ep, s.tick())
+            self._send_sip(ep)
+
+    def _send_sip(self, ep: _Endpoint) -> None:
+        if ep.kind == "tcp":
+            self._send(ep, ep.active.tick(), ep.owner)
+        else:
+            self._send(ep, ep.active.tick())
 
     # -- TCP ------------------------------------------------------------------
     def _claim(self, ep: _Endpoint, conn_ref: list) -> bool:
@@ -487,6 +515,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--speed", type=float, default=1.0, help="simulated s per real s (1: real time)"
     )
+    parser.add_argument(
+        "--lockstep", action="store_true",
+        help="step only when every client asks (SIM_STEP; clients: lockstep=True)",
+    )  # fmt: skip
     parser.add_argument("--seed", type=int, default=None, help="simulator seed")
     parser.add_argument("--name", default="robotlib", help="name in the SYNC2 reply")
     parser.add_argument(
@@ -504,6 +536,7 @@ def run(args: argparse.Namespace) -> int:
         port=args.port,
         host=args.host,
         speed=args.speed,
+        lockstep=args.lockstep,
         seed=args.seed,
         name=args.name,
     )

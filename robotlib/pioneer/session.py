@@ -87,6 +87,8 @@ class Session:
         self.was_open = False
         self._claim = claim
         self._watchdog_fired = False
+        self.step_asked = False  # SIM_STEP received since the last SIP
+        self.fresh = False  # opened, no SIP sent yet
 
     def receive(self, data: bytes) -> bytes:
         """Take bytes from the client; return the bytes to send back."""
@@ -132,6 +134,8 @@ class Session:
                 body.reset_odometry()
         elif name == "CLOSE":
             self.close()
+        elif name == "SIM_STEP":
+            self.step_asked = True  # a lock-step server steps when all have asked
         # PULSE, OPEN again, HOSTBAUD and unknown commands: nothing to do
         return b""
 
@@ -149,7 +153,7 @@ class Session:
             if self._claim is not None and not self._claim(self):
                 self.refused = True
                 return b""
-            self.open = self.was_open = True
+            self.open = self.was_open = self.fresh = True
             self.body.begin_session()
             return b""
         if packet_id in (SYNC0, SYNC1, SYNC2):
@@ -170,6 +174,7 @@ class Session:
 
     def tick(self) -> bytes:
         """After a simulator step: the SIP to send (b"" unless open)."""
+        self.step_asked = self.fresh = False
         if not self.open:
             return b""
         if not self._watchdog_fired and self.clock() - self.last_packet > self.watchdog:

@@ -12,6 +12,8 @@
 - `navigate`: localize with MCL from sonar and odometry, plan with A*,
   follow, avoid, re-plan; returns a `Navigation` record. `GOALS`,
   `office_with_boxes` for its scenarios.
+- `Localized`: an avoidance controller aimed by MCL tracking on the map
+  instead of by the drifting odometry (no planner).
 
 Planners never plot; `robotlib.plotting` draws what they return.
 """
@@ -29,6 +31,7 @@ from .grid import (
     wavefront_field,
     weighted_astar,
 )
+from .localized import Localized
 from .navigate import Navigation, Navigator, NavSettings, navigate
 from .rrt import Tree, edge_free, path_free, rrt, rrt_star, shortcut
 from .scenarios import GOALS, OFFICE_BOXES, office_with_boxes, with_boxes
@@ -37,6 +40,7 @@ __all__ = [
     "GOALS",
     "OFFICE_BOXES",
     "CSpace",
+    "Localized",
     "Navigation",
     "Navigator",
     "NavSettings",

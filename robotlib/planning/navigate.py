@@ -12,7 +12,10 @@ wander when that is not enough) until the cloud is tight, then FOLLOW or
 AVOID (the follower's hand-over), back to LOCALIZE when the sonar stops
 agreeing with the map. At the goal it says "reached" only if a second,
 independently seeded filter fed the same readings agrees (`NavSettings.confirm`);
-otherwise it localizes again. Its knobs are a `NavSettings`. The true pose is
+otherwise it localizes again; and where the map looks the same turned (a
+warehouse of racks) and the drive since localizing fits the turned place as
+well, it says "ambiguous" instead (`robotlib.planning.aliasing`). Its knobs
+are a `NavSettings`. The true pose is
 recorded when the backend has one (``true_pose()``, the simulator), for
 evaluation only: it never steers.
 
@@ -31,6 +34,7 @@ from ..localization import BEST, MCL
 from ..p3dx import ROBOT_LENGTH_REAR, ROBOT_RADIUS, ROBOT_WIDTH
 from ..sensing import expected_ranges
 from ..world import World, compose, relative
+from .aliasing import look_alike, map_symmetries
 from .cspace import CSpace, configuration_space
 from .follow import PathFollower, PurePursuit, StopAndTurn, cross_track, sonar_points
 from .grid import astar, path_length
@@ -138,6 +142,8 @@ class Navigator:
         if mcl is None:
             mcl = MCL.best(world, rng=rng, kld=kld)
         self.mcl, self.second = mcl, second
+        # turns that map the walls onto themselves: no sensor tells them apart
+        self.symmetries = map_symmetries(world) if second is not None else []
         self.avoider = StopAndTurn() if avoider is None else avoider
         self.planner, self.law = planner, law
         self.mode, self.outcome = LOCALIZE, ""
@@ -158,6 +164,7 @@ class Navigator:
         pos, head = _spread(self.mcl)
         if self._steps >= s.min_filter_steps and pos < s.spread and head < 0.15:
             self.mode, self._need_plan, self._agree = FOLLOW, True, 1.0
+            self._since = len(self._rec["est"])
             self._best_left, self._best_time = np.inf, now
             if math.isnan(self.localized_at):
                 self.localized_at = now
@@ -178,7 +185,7 @@ class Navigator:
         self._agree += 0.025 * (float(ok.mean()) - self._agree)
         if np.hypot(*(pose[:2] - self.goal)) < s.goal_tolerance:
             if self._confirmed(pose):
-                self.outcome = "reached"
+                self.outcome = "ambiguous" if self._aliased() else "reached"
                 return 0.0, 0.0
             # the second filter sees it elsewhere: start again, both
             self.mcl.reset()
@@ -217,6 +224,14 @@ class Navigator:
         other = compose(self._second_at, relative(self._odo_at, self._odo))
         near = math.hypot(*(other[:2] - pose[:2])) < self.settings.confirm
         return near and pos < self.settings.spread and head < 0.15
+
+    def _aliased(self) -> bool:
+        """Whether a symmetry of the map explains the drive as well (`look_alike`)."""
+        if not self.symmetries:
+            return False
+        rec, k = self._rec, self._since
+        poses, scans = np.array(rec["est"][k::5]), np.array(rec["sonar"][k::5])
+        return look_alike(self.world, poses, scans, self.symmetries) is not None
 
     def _replan(self, pose, now: float) -> None:
         """Plan from ``pose`` around the marks; a new follower (or no_path)."""
@@ -264,7 +279,8 @@ class Navigator:
         self._start_localizing(0.0)
         has_truth = hasattr(robot, "true_pose")
         names = ("time", "truth", "odo", "est", "cmd", "mode", "sonar", "st", "agree")
-        rec = {k: [] for k in names}
+        rec = self._rec = {k: [] for k in names}
+        self._since = 0
         robot.readsonar()
         t0 = robot.state.time
         odo_filter = robot.state.pose.copy()

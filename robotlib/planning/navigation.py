@@ -120,7 +120,10 @@ class Navigation:
         The goal, m.
     outcome : str
         ``"reached"`` (the estimate within the tolerance of the goal),
-        ``"collision"``, ``"timeout"`` or ``"no_path"``.
+        ``"ambiguous"`` (at the goal by the estimate, but the map looks the
+        same turned and the drive since localizing fits the turned place as
+        well: `robotlib.planning.aliasing`), ``"collision"``, ``"timeout"``
+        or ``"no_path"``.
     localized_at : float
         When the filter first converged, s (NaN if never).
     agreement : numpy.ndarray, shape (T,)

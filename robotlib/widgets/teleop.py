@@ -2,9 +2,11 @@
 
 `teleop` moves a robot one step and reads its sonar; `TeleopPanel` adds
 buttons and a map, which shows where the next step and turns would go (it
-redraws when a slider moves). The panel runs headless (its callbacks are plain
-methods), so tests press its buttons programmatically. Imports the robot API
-and plotting; never an estimator.
+redraws when a slider moves), and a status line: what the robot is doing
+(the buttons are disabled meanwhile), then its odometry and nearest echo.
+The panel runs headless (its callbacks are plain methods), so tests press
+its buttons programmatically. Imports the robot API and plotting; never an
+estimator.
 """
 
 from __future__ import annotations
@@ -95,26 +97,60 @@ class TeleopPanel:
         for c, b in self.buttons.items():
             b.on_click(lambda _b, c=c: self.send(c))
         self.output = w.Output()
+        self.status = w.Label()
         self.widget = w.VBox(
             [
                 w.HBox(list(self.buttons.values())),
                 w.HBox([self.distance, self.angle]),
+                self.status,
                 self.output,
             ]
         )
         self.figure = plt.figure(figsize=(WIDTH, 4.0))
         plt.close(self.figure)
         self.pose, self.sonar = r.pose(), r.readsonar()
+        self.status.value = self._report("ready")
         self.draw()
 
     def send(self, command: str):
-        """Run one command (what a button does); return ``(pose, sonar)``."""
-        self.pose, self.sonar = teleop(
-            self.robot, command, self.distance.value, math.radians(self.angle.value)
-        )
+        """Run one command (what a button does); return ``(pose, sonar)``.
+
+        The buttons are disabled and the status line says what runs until
+        the robot has done it.
+        """
+        step, turn = self.distance.value, self.angle.value
+        doing = {
+            "forward": f"moving {step:.1f} m forward",
+            "back": f"moving {step:.1f} m back",
+            "left": f"turning {turn:.0f} deg left",
+            "right": f"turning {turn:.0f} deg right",
+            "stop": "stopping",
+        }.get(command, command)
+        for b in self.buttons.values():
+            b.disabled = True
+        self.status.value = f"{doing} ..."
+        try:
+            self.pose, self.sonar = teleop(
+                self.robot, command, step, math.radians(turn)
+            )
+        except BaseException:
+            self.status.value = f"{doing}: failed"
+            raise
+        finally:
+            for b in self.buttons.values():
+                b.disabled = False
         self.log.append(command)
+        self.status.value = self._report(f"done ({doing})")
         self.draw()
         return self.pose, self.sonar
+
+    def _report(self, head: str) -> str:
+        x, y, th = (float(v) + 0.0 for v in self.pose)
+        k = int(np.argmin(self.sonar))
+        return (
+            f"{head}: odometry x {x:.2f} m, y {y:.2f} m, heading {math.degrees(th):.0f}"
+            f" deg; nearest echo {float(self.sonar[k]):.2f} m (sonar {k})"
+        )
 
     def draw(self) -> None:
         """Redraw the map, the robot and its sonar."""

@@ -342,3 +342,21 @@ def test_vfh_sonar_brake_acts_on_one_echo():
     braked.reset()
     blind.reset()
     assert braked.command(side, pose)[0] == pytest.approx(blind.command(side, pose)[0])
+
+
+@pytest.mark.parametrize("direction", [None, choose_direction])
+def test_vfh_boxed_in_steers_into_the_thinnest_valley(direction):
+    dense = np.full(72, 5000.0)
+    dense[30:42] = 200.0  # blocked (threshold 150), but the thinnest: ahead
+    boxed = VFH((5.0, 0.0), histogram=lambda p, c, pose: dense, direction=direction)
+    boxed.reset()
+    v, _ = boxed.command(np.full(8, 5.0), np.zeros(3))
+    assert abs(boxed.steer) < math.radians(30) and v > 0
+    # nothing thinner anywhere (all above 8 x 150): it turns in place
+    walled = VFH(
+        (5.0, 0.0), histogram=lambda p, c, pose: np.full(72, 5000.0),
+        direction=direction,
+    )  # fmt: skip
+    walled.reset()
+    v, w = walled.command(np.full(8, 5.0), np.zeros(3))
+    assert math.isnan(walled.steer) and v == 0 and w != 0

@@ -36,7 +36,8 @@ LABS = sorted(p.stem for p in (ROOT / "solutions").glob("*.ipynb"))
 
 # lab -> wrong answers, each graded in the same run: the cells it replaces (cell
 # id -> source), the copy it starts from ("solution" or "released"), and for
-# each check the points expected and, where zero, a piece of the reason
+# each check the points expected and, where zero, a piece of the reason (a
+# cell's new source may also be a function of its solution source)
 LAB3_DEAD_RECKONING = """
 def paper_step(world, particles, odo_prev, odo_now, z, lam, floor, rng):
     particles = paper.predict(particles, odo_prev, odo_now, rng=rng)
@@ -69,6 +70,45 @@ LAB5_CONSTANTS = (
     "L_OCC, L_FREE, THICKNESS, HALF_CONE, MAX_RANGE = "
     "0.9, -0.35, 0.1, math.radians(15), 5.0\n\n\n"
 )
+LAB2_NOTHING = {  # no wiring, no force, an empty histogram, straight ahead
+    "l2-05": "FEAR = np.zeros((2, 8))\nEXPLORER = np.zeros((2, 8))",
+    "l2-11": "def potential_force(sonar, pose, goal, k_att=1.0, k_rep=0.5, d0=1.2):\n"
+    "    return np.zeros(2)",
+    "l2-21": "def polar_histogram(points, certainty, pose, n_sectors=72, window=1.8,"
+    " enlarge=0.3):\n    return np.zeros(n_sectors)",
+    "l2-24": "def choose_direction(hist, threshold, target, wide=16):\n    return 0.0",
+}
+LAB2_CONSTANT = {  # symmetric wiring, pull only, and straight at the goal
+    "l2-05": "FEAR = np.full((2, 8), 0.1)\nEXPLORER = np.full((2, 8), -0.1)",
+    "l2-11": "def potential_force(sonar, pose, goal, k_att=1.0, k_rep=0.5, d0=1.2):\n"
+    "    dx, dy = goal[0] - pose[0], goal[1] - pose[1]\n"
+    "    c, s = math.cos(pose[2]), math.sin(pose[2])\n"
+    "    return np.array([c * dx + s * dy, -s * dx + c * dy])",
+    "l2-21": LAB2_NOTHING["l2-21"],
+    "l2-24": "def choose_direction(hist, threshold, target, wide=16):\n"
+    "    return float(target)",
+}
+LAB4_NOTHING = {
+    "l4-03": "def inflate_grid(occupied, radius, resolution):\n"
+    "    return np.zeros_like(np.asarray(occupied, dtype=bool))\n",
+    "l4-08": "def wavefront(blocked, goal):\n"
+    "    return np.full(np.shape(blocked), -1)\n",
+    "l4-13": "import heapq\n\n\ndef astar_grid(blocked, start, goal, weight=1.0):\n"
+    "    return [], math.inf, 0\n",
+    "l4-18": "def extend(nodes, q, step):\n    return 0, np.asarray(nodes, float)[0]\n",
+    "l4-23": "def steer(pose, target, v, w_max):\n    return 0.0, 0.0\n",
+}
+
+
+def _steer_sign_error(source: str) -> str:
+    """Lab 4's steering law with the heading error's sign flipped."""
+    wrong = source.replace(
+        "pose[2], 2 * math.pi)", "pose[2], 2 * math.pi)\n    alpha = -alpha"
+    )
+    assert wrong != source, "the steering cell changed: update this wrong answer"
+    return wrong
+
+
 LAB0_NEVER_MOVED = """
 def drive_square(r, side):
     x, y, th = pose(r)
@@ -85,6 +125,32 @@ WRONG = {
             "solution",
             {"l0-05": LAB0_NEVER_MOVED},
             {"square": "did not drive"},
+        ),
+    },
+    "lab2_avoidance": {
+        # answers that do nothing, or drive at the goal regardless, fail every
+        # outcome check ("" below: zero, whatever the reason says)
+        "do_nothing": (
+            "released",
+            LAB2_NOTHING,
+            {"explorer": "", "pf": "", "vfh": ""},
+        ),
+        "constant": (
+            "released",
+            LAB2_CONSTANT,
+            {"explorer": "", "pf": "", "vfh": ""},
+        ),
+    },
+    "lab4_navigation": {
+        # every exercise answered with nothing: every check fails, the outcome
+        # checks (tracking, navigate) included
+        "do_nothing": ("released", LAB4_NOTHING, {}),
+        # a sign error in steer costs steer's own checks, not navigate's (which
+        # grades A* and drives with the solution's steering law)
+        "steer_sign": (
+            "solution",
+            {"l4-23": _steer_sign_error},
+            {"steer": "", "tracking": ""},
         ),
     },
     "lab3_mcl": {
@@ -224,7 +290,8 @@ def lab_graded(request, tmp_path_factory):
     for name, (base, cells, _) in WRONG.get(lab, {}).items():
         nb = copy.deepcopy(sol if base == "solution" else released)
         for cell in nb.cells:
-            cell.source = cells.get(cell.id, cell.source)
+            new = cells.get(cell.id, cell.source)
+            cell.source = new(cell.source) if callable(new) else new
         subs[name] = nb
     plan = cheats(sol)
     for i, (nb, _) in enumerate(plan):
@@ -271,6 +338,9 @@ def test_cheats_score_zero_for_their_exercise_only(lab_graded):
 def test_wrong_answers_fail_their_strict_checks(lab_graded):
     """Lab 3: dead reckoning fails tracking; identity and unsorted fail low-variance;
     a do-nothing table and one counting a run from its first good step fail table.
+    Lab 2: doing nothing, or driving at the goal regardless, fails every outcome
+    check. Lab 4: doing nothing fails every check; a sign error in steer only
+    steer's and tracking's.
 
     A wrong answer built on the solution keeps every other check; one built
     on the released lab passes only the checks named with no reason.
@@ -281,6 +351,7 @@ def test_wrong_answers_fail_their_strict_checks(lab_graded):
     auto = [c for c in items if not c.manual]
     for name, (base, _, expect) in WRONG[lab].items():
         r = rows[name]
+        assert r.status == "ok", (name, r.status)
         for c in auto:
             if c.grade_id in expect and expect[c.grade_id] is not None:
                 assert r.points[c.grade_id] == 0, (name, c.grade_id)

@@ -58,6 +58,11 @@ def test_release_replaces_solutions_and_hides_tests():
         c for c in lab.cells if "robotlib" in c.metadata and c.cell_type == "code"
     ]
     assert all(c.metadata["editable"] is False for c in checks)
+    # checks fail until solved: JupyterLab's Run All goes past them, not the rest
+    auto = [c for c in checks if not c.metadata["robotlib"].get("manual")]
+    assert all("raises-exception" in c.metadata["tags"] for c in auto)
+    stub = code[1]  # its stub raises inside a function: the cell itself runs
+    assert "tags" not in stub.metadata
     nbformat.validate(lab)
 
 
@@ -159,3 +164,59 @@ def test_marking_adds_header_and_tag_once_and_fixes_wrong_points():
     assert "tags" not in nb["cells"][2]["metadata"]  # written answers: not checks
     assert nb["cells"][3] == {"cell_type": "code", "metadata": {}, "source": "x = 1"}
     assert mark_checks(nb) == 0  # re-running changes nothing
+
+
+def _demo_block(node) -> bool:
+    """Whether a statement is ``with robotlib.notebook.demo():``."""
+    import ast
+
+    return isinstance(node, ast.With) and any(
+        ast.unparse(item.context_expr).endswith("demo()") for item in node.items
+    )
+
+
+def test_every_demonstration_of_student_code_is_a_demo_block():
+    """A cell that runs an exercise's code does it in ``with ...demo():``.
+
+    Else, in the released lab, the cell fails while the exercise is not done
+    (a traceback, and JupyterLab's Run All stops there). Names an exercise
+    writes taint the functions that use them; a top-level statement outside
+    a demo block that reads a tainted name is reported. Static, so a new lab
+    is checked in milliseconds.
+    """
+    import ast
+
+    from robotlib.course.notebooks import check_meta, exercises, setup_cell
+
+    found = []
+    for path in sorted((ROOT / "solutions").glob("*.ipynb")):
+        nb = read_notebook(path)
+        own = {e.index for e in exercises(nb, path.stem)}
+        tainted = {n for e in exercises(nb, path.stem) for n in e.names}
+        trees = {}
+        for i, cell in enumerate(nb.cells):
+            skip = i in own or i == setup_cell(nb) or check_meta(cell) is not None
+            if cell.cell_type == "code" and not skip:
+                trees[i] = ast.parse(cell.source)
+        grew = True
+        while grew:  # functions (and classes) that call tainted code are tainted
+            grew = False
+            for tree in trees.values():
+                for node in tree.body:
+                    defines = isinstance(node, ast.FunctionDef | ast.ClassDef)
+                    if defines and node.name not in tainted:
+                        used = {n.id for n in ast.walk(node) if isinstance(n, ast.Name)}
+                        if used & tainted:
+                            tainted.add(node.name)
+                            grew = True
+        for i, tree in trees.items():
+            for node in tree.body:
+                if _demo_block(node) or isinstance(
+                    node, ast.FunctionDef | ast.ClassDef
+                ):
+                    continue
+                used = {n.id for n in ast.walk(node) if isinstance(n, ast.Name)}
+                if used & tainted:
+                    names = sorted(used & tainted)
+                    found.append(f"{path.stem} cell {i} line {node.lineno}: {names}")
+    assert not found, "outside `with robotlib.notebook.demo():`\n" + "\n".join(found)

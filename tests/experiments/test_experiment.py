@@ -231,3 +231,14 @@ def test_bench_plain_pipeline_is_the_fast_beam_model():
          5.0, params.exponent)  # fmt: skip
     plain.beam_loglik(mm, z, model._hit_norm, model._short_norm, np.array(q), ll)
     np.testing.assert_allclose(ll, model.log_likelihood(particles, z), rtol=1e-12)
+
+
+@pytest.mark.slow  # one generated world, plain and localized (its cone table)
+def test_bench_worlds_rows_plain_and_localized():
+    from robotlib.experiments.bench_worlds import bench_rows
+
+    rows = bench_rows(["traps"], ["VFH"], n_worlds=1, n_pairs=2, localized=(0, 1))
+    assert [r["controller"] for r in rows] == ["VFH", "VFH+MCL"]
+    for r in rows:
+        assert r["episodes"] == 2 and r["collisions"] == 0
+        assert 0 <= r["true_success"] <= r["odometry_success"] <= 1

@@ -263,3 +263,54 @@ def test_interact_panel_says_it_runs_then_redraws_and_shows_errors():
         slider.value = 3.0
     assert panel.status.value == "running: k = 3 ..."
     assert "robotlib-stale" in panel.output._dom_classes  # the old figure stays grey
+
+
+def test_a_demonstration_of_unsolved_code_says_what_it_needs_and_goes_on(tmp_path):
+    book = _execute(
+        [
+            ("code", "%matplotlib inline\nimport matplotlib.pyplot as plt\n"
+                     "import robotlib.notebook\nrobotlib.notebook.explain_unsolved()"),
+            ("markdown", "### Exercise 2\nWrite `curve`, and the matrix `GAINS`."),
+            ("code", "def curve():\n    raise NotImplementedError()"),
+            ("code", "with robotlib.notebook.demo():\n    fig, ax = plt.subplots()\n"
+                     "    points = curve()\n    ax.plot(points)"),
+            ("code", "with robotlib.notebook.demo():\n    print(GAINS)"),
+            ("code", "with robotlib.notebook.demo():\n    print(len(points))"),
+            ("code", "GAINS * 2"),
+            ("code", "with robotlib.notebook.demo():\n    1 / 0"),
+        ],
+        tmp_path,
+    )  # fmt: skip
+    out = [c.outputs for c in book.cells if c.cell_type == "code"]
+    said = [[o.get("text", "") for o in cell] for cell in out[2:5]]
+    assert said[0] == [
+        "This demonstration needs your `curve` (Exercise 2): write it, run its"
+        " cell, then run this one again.\n"
+    ]  # one line, no error, and not the empty axes it opened
+    assert said[1] == [
+        "This demonstration needs your `GAINS` (Exercise 2): define it, run its"
+        " cell, then run this one again.\n"
+    ]
+    assert "`points`, which a cell above makes" in said[2][0]
+    (check,) = out[5]
+    assert check.output_type == "error" and check.ename == "NameError"
+    assert "Exercise 2 is not done yet: define `GAINS`" in check.traceback[0]
+    assert len(check.traceback) <= 4
+    (other,) = out[6]
+    assert other.ename == "ZeroDivisionError"  # not an unsolved exercise: it shows
+
+
+def test_a_demonstration_in_a_solved_notebook_shows_its_errors(tmp_path):
+    """With no exercise left to do (a solution), a demonstration's fault shows."""
+    book = _execute(
+        [
+            ("code", "import robotlib.notebook"),
+            ("markdown", "### Exercise 1\nWrite `GAINS`."),
+            ("code", "def helper():\n    raise NotImplementedError"),
+            ("code", "with robotlib.notebook.demo():\n    print(GAINS)"),
+            ("code", "with robotlib.notebook.demo():\n    helper()"),
+        ],
+        tmp_path,
+    )
+    errors = [o.ename for c in book.cells[-2:] for o in c.outputs]
+    assert errors == ["NameError", "NotImplementedError"]

@@ -1,7 +1,12 @@
-"""Every solution notebook executes headless under nbval (Agg, seeded) in CI.
+"""Every solution notebook executes headless under nbval (Agg, seeded).
 
 Each notebook runs in its own pytest process (as the grader does), so a
-notebook's kernel never shares state with the test session.
+notebook's kernel never shares state with the test session. Where the
+real-browser test can run (CI: ``ROBOTLIB_BROWSER_TEST=1``), it runs every
+solution and released lab in a kernel of its own and checks the same things
+(no error, nothing compiled after ``robotlib warmup``), so the nbval run is
+skipped there rather than run a second time; the sandboxed grading
+(tests/course/test_course_labs.py) runs each solution too.
 """
 
 from __future__ import annotations
@@ -14,6 +19,8 @@ from pathlib import Path
 
 import pytest
 
+from tests.browser import have_browser
+
 pytestmark = pytest.mark.slow  # every solution notebook run whole under nbval
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -21,15 +28,7 @@ SOLUTIONS = sorted((ROOT / "solutions").glob("*.ipynb"))
 LIMIT = 60.0  # seconds per notebook on 2 cores (the issue's budget)
 
 
-@pytest.fixture(scope="module")
-def warm():
-    """``robotlib warmup`` once (quick when the cache is warm, as in CI)."""
-    subprocess.run(
-        [sys.executable, "-m", "robotlib.cli", "warmup"],
-        check=True, capture_output=True, timeout=1200,
-    )  # fmt: skip
-
-
+@pytest.mark.skipif(have_browser(), reason="the real-browser test runs each solution")
 @pytest.mark.parametrize("notebook", SOLUTIONS, ids=[p.stem for p in SOLUTIONS])
 def test_solution_notebook_runs(notebook, tmp_path, warm):
     """It runs, and nothing compiles in it after ``robotlib warmup``."""

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
 
@@ -137,4 +139,25 @@ def test_teleop_panel_buttons():
     panel.distance.value = 0.5
     panel.buttons["back"].click()
     assert abs(panel.pose[0] - x0 - 0.5) < 0.08
+    r.disconnect()
+
+
+def test_teleop_panel_is_busy_while_the_robot_moves(monkeypatch):
+    r = robotlib.robot("sim:corridor", seed=0)
+    panel = teleop_widgets.TeleopPanel(r, distance=1.0)
+    assert panel.status.value.startswith("ready: odometry x")
+    seen = []
+
+    def watched(*args):
+        seen.append((panel.status.value, [b.disabled for b in panel.buttons.values()]))
+        return teleop(*args)
+
+    teleop = teleop_widgets.teleop
+    monkeypatch.setattr(teleop_widgets, "teleop", watched)
+    panel.buttons["left"].click()
+    assert seen == [("turning 45 deg left ...", [True] * 5)]
+    assert not any(b.disabled for b in panel.buttons.values())
+    assert panel.status.value.startswith("done (turning 45 deg left): odometry x")
+    heading = re.search(r"heading (-?\d+) deg; nearest echo", panel.status.value)
+    assert heading and abs(int(heading.group(1)) - 45) <= 4
     r.disconnect()

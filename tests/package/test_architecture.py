@@ -31,6 +31,7 @@ LAYERS = {
     "robotlib.planning": 4,
     "robotlib.mapping": 4,
     "robotlib.logs": 4,
+    "robotlib.exploration": 4,
     "robotlib.experiments": 5,
     "robotlib.plotting": 6,
     "robotlib.widgets": 7,
@@ -54,6 +55,9 @@ ALLOWED_SIDEWAYS = {
     ("robotlib.planning", "robotlib.avoidance"),
     # Grid FastSLAM resamples its map-carrying particles with MCL's resamplers.
     ("robotlib.mapping", "robotlib.localization"),
+    # Exploration maps (occupancy grids, FastSLAM) and plans (A*, pursuit).
+    ("robotlib.exploration", "robotlib.mapping"),
+    ("robotlib.exploration", "robotlib.planning"),
 }
 """Imports between packages of one layer that the design allows."""
 
