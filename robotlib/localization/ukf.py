@@ -247,8 +247,10 @@ def ukf_laser_update(
     The arguments and results are those of
     `robotlib.localization.ekf.laser_update`. A beam is used only if it and
     its expectation at every sigma point are echoes (below the maximum
-    range) and its innovation is within ``gate`` predicted standard
-    deviations.
+    range), its range is nearly linear across the sigma points (opposite
+    points' ranges average to the centre's within ``sigma``: no corner or
+    other wall in between), and its innovation is within ``gate`` predicted
+    standard deviations.
     """
     mu, P = _belief(mu, P)
     model = LaserModel() if model is None else model
@@ -262,7 +264,9 @@ def ukf_laser_update(
 
     def select(Z, zhat, nu, S):
         echo = (Z < model.max_range).all(axis=0) & (z[beams] < model.max_range)
-        return echo & (np.abs(nu) <= gate * np.sqrt(np.diag(S)))
+        n = (len(Z) - 1) // 2  # opposite points: a corner between bends the range
+        bend = np.abs(Z[1 : n + 1] + Z[n + 1 :] - 2 * Z[0]).max(axis=0)
+        return echo & (bend <= sigma) & (np.abs(nu) <= gate * np.sqrt(np.diag(S)))
 
     R = np.eye(len(beams)) * sigma**2
     return ukf_update(mu, P, measure, z[beams], R, (), select)
