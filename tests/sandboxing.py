@@ -4,13 +4,15 @@
 failure, so the grading tests can never pass by being skipped.
 
 The tests that look for processes a grading run left behind look only in
-their own process tree: the test process first becomes a child subreaper
-(`adopt_orphans`), so a process that escapes its parent (``setsid``, a double
-fork) is re-parented to the test, not to init, and `procs_with` searches
-only below the test. Another user's grading run on the same machine is
-never seen.
+their own process tree: the test process is a child subreaper while they run
+(`orphans_adopted`), so a process that escapes its parent (``setsid``, a
+double fork) is re-parented to the test, not to init, and `procs_with`
+searches only below the test. Another user's grading run on the same machine
+is never seen. Afterwards the test process stops adopting and reaps the
+adopted processes that have ended, so no zombies pile up in the session.
 """
 
+import contextlib
 import ctypes
 import os
 
@@ -34,16 +36,41 @@ _PR_SET_CHILD_SUBREAPER, _PR_GET_CHILD_SUBREAPER = 36, 37
 _libc = ctypes.CDLL(None, use_errno=True)
 
 
-def adopt_orphans() -> None:
-    """Make this process adopt the orphans of every process started below it.
+@contextlib.contextmanager
+def orphans_adopted():
+    """Within the block, adopt the orphans of every process started below.
 
     Linux re-parents an orphan to its nearest ancestor marked a child
     subreaper (``prctl(PR_SET_CHILD_SUBREAPER)``), else to init; with this
     process marked, whatever a grading run starts stays in this process's
-    tree, where `procs_with` looks. Call it before starting the processes.
+    tree, where `procs_with` looks. Start the processes inside the block. On
+    leaving it the mark is removed and every child that has ended but was
+    never waited for (adopted orphans: no ``Popen`` waits for them) is
+    reaped.
     """
     if _libc.prctl(_PR_SET_CHILD_SUBREAPER, 1, 0, 0, 0) != 0:
         raise OSError(ctypes.get_errno(), "prctl(PR_SET_CHILD_SUBREAPER) failed")
+    try:
+        yield
+    finally:
+        _libc.prctl(_PR_SET_CHILD_SUBREAPER, 0, 0, 0, 0)
+        _reap_ended_children()
+
+
+def _reap_ended_children() -> None:
+    me = os.getpid()
+    for entry in os.listdir("/proc"):
+        if not entry.isdigit():
+            continue
+        try:
+            with open(f"/proc/{entry}/stat", "rb") as f:
+                # pid (comm) state ppid ...: comm may hold spaces, so split after it
+                state, ppid = f.read().rpartition(b")")[2].split()[:2]
+        except (OSError, ValueError):
+            continue
+        if state == b"Z" and int(ppid) == me:
+            with contextlib.suppress(ChildProcessError):
+                os.waitpid(int(entry), os.WNOHANG)
 
 
 def _adopting() -> bool:
@@ -55,12 +82,12 @@ def _adopting() -> bool:
 def procs_with(needle: bytes, below: int | None = None) -> list[int]:
     """Pids of this test's processes whose command line contains ``needle``.
 
-    The processes below ``below`` (default: this process, which must have
-    called `adopt_orphans`, so that its escaped descendants count).
+    The processes below ``below`` (default: this process, which must be
+    inside `orphans_adopted`, so that escaped descendants count).
     """
     if below is None:
         if not _adopting():
-            raise RuntimeError("call adopt_orphans() before starting the processes")
+            raise RuntimeError("start the processes inside orphans_adopted()")
         below = os.getpid()
     out = []
     for entry in map(str, _descendants(below)):

@@ -288,6 +288,7 @@ class VFH(Controller):
         self._best = math.inf
         self._best_cycle = 0
         self._follow_from = math.inf
+        self._aim = None
 
     def update_grid(self, sonar: np.ndarray, pose: np.ndarray) -> None:
         """Add one scan to the certainty grid (centred on the first pose seen)."""
@@ -426,9 +427,14 @@ class VFH(Controller):
         When the distance to the goal has not shrunk by ``progress`` m for
         ``patience`` s (cycles of 0.1 s), follow the boundary on the side the
         histogram's choice leaned to, until the goal's sector is free and the
-        robot is nearer the goal than where following began.
+        robot is nearer the goal than where following began. A goal moved by
+        more than 0.5 m (the next waypoint) starts the count afresh.
         """
         self._cycle += 1
+        if self._aim is None or math.dist(self._aim, self.goal) > 0.5:
+            # a new goal (a waypoint): progress towards it counts afresh
+            self._aim = (float(self.goal[0]), float(self.goal[1]))
+            self._best, self._best_cycle, self.following = math.inf, self._cycle, 0
         if dist < self._best - self.progress:
             self._best, self._best_cycle = dist, self._cycle
         if self.following == 0:

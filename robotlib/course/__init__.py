@@ -1,4 +1,4 @@
-"""Course machinery: release labs from solutions, grade submissions with nbval.
+"""Course machinery: release labs from solutions, grade submissions in a sandbox.
 
 One source: ``solutions/NAME.ipynb`` holds each lab with its solutions
 between ``### BEGIN SOLUTION`` / ``### END SOLUTION`` markers and its graded

@@ -97,6 +97,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "waiting for a CPU (default: %(default)s)",
     )
     parser.add_argument(
+        "--slower",
+        type=float,
+        default=20.0,
+        help="a check may take this many times the solution's CPU time for it, "
+        "or --cell-timeout if more; the submission this many times the "
+        "solution's, or --timeout if more (default: %(default)s)",
+    )
+    parser.add_argument(
         "--timeout",
         type=float,
         default=600.0,
@@ -105,7 +113,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--backstop",
         type=float,
-        default=10.0,
+        default=30.0,
         help="wall-time limit, in multiples of the limits above: a submission "
         "that reaches it is reported 'machine overloaded: re-grade', never "
         "scored (default: %(default)s)",
@@ -170,6 +178,7 @@ def run(args: argparse.Namespace) -> int:
     limits = sb.Limits(memory=int(args.memory * (1 << 30)))
     opts = Options(
         cell_timeout=args.cell_timeout,
+        slower=args.slower,
         timeout=args.timeout,
         backstop=args.backstop,
         restarts=args.restarts,

@@ -31,6 +31,7 @@ submissions are kept, nothing keeps running.
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import os
 import signal
@@ -46,10 +47,17 @@ from .astlock import format_exc
 from .gradebook import Again, Records, Result, write_gradebook
 from .notebooks import META_KEY, notebook_text, read_notebook
 from .parallel import Bar, dask_map, raise_interrupt, thread_map
-from .plan import LabPlan, lab_plan, normalized, scan_submission, student_cells
+from .plan import (
+    LabPlan,
+    lab_plan,
+    normalized,
+    release_notes,
+    scan_submission,
+    student_cells,
+)
 from .release import project_dir
 from .session import JOB_ENV, Options, run_submission
-from .submissions import check_lab, copies, find_submissions, pick
+from .submissions import check_lab, copies, find_submissions, helpers, pick
 
 __all__ = [
     "GradeError",
@@ -59,6 +67,7 @@ __all__ = [
     "find_submissions",
     "grade",
     "grade_notebook",
+    "limits",
     "reference_run",
     "solution_path",
     "write_gradebook",
@@ -127,6 +136,7 @@ def grade_notebook(
     reference: dict | None,
     opts: Options,
     slot: int = 0,
+    modules: dict[str, str] | None = None,
 ) -> Result:
     """Grade one submission; never raises for anything the submission does.
 
@@ -145,7 +155,11 @@ def grade_notebook(
         Timeouts, limits, sandbox.
     slot : int
         Grading slot (chooses the sandbox's uids).
+    modules : dict, optional
+        The student's helper modules (file name to source), importable by
+        their cells and scanned like them (`submissions.helpers`).
     """
+    modules = modules or {}
     items = plan.checks + plan.manual
     result = Result(
         student, {c.grade_id: 0.0 for c in plan.checks}, {}, plan.max_points
@@ -172,11 +186,14 @@ def grade_notebook(
         result.reasons = {c.grade_id: "not a notebook" for c in items}
         return result
     result.answers = _answers(plan, nb)
+    result.flags += release_notes(plan, nb)
     cells = student_cells(plan, nb)
     result.code = {c["exercise"]: c["source"] for c in cells if c["exercise"]}
-    zero, flags = scan_submission(plan, cells)
+    scanned = [{"id": n, "source": m, "exercise": None} for n, m in modules.items()]
+    zero, flags = scan_submission(plan, cells + scanned)
     result.flags += flags
-    out = run_submission(plan, cells, opts, slot)
+    budgets, opts = limits(reference, opts)
+    out = run_submission(plan, cells, opts, slot, budgets, modules)
     result.passes = 1 + out.restarts
     result.flags += out.flags
     for function, ex, *via in out.tripwires:
@@ -202,6 +219,7 @@ def grade_notebook(
             result.check_lines[c.grade_id] = {
                 "lines": rec.get("lines", []),
                 "hidden": rec.get("hidden", []),
+                "cpu": rec.get("cpu", 0.0),
             }
             continue
         result.reasons[c.grade_id] = why[:300]
@@ -218,6 +236,23 @@ def grade_notebook(
         result.flags.insert(0, "answer reaches the library's own version")
     result.seconds = time.monotonic() - t0
     return result
+
+
+def limits(reference: dict | None, opts: Options) -> tuple[dict[str, float], Options]:
+    """Return each check's limit and the options, scaled from the solution's times.
+
+    A check may take ``opts.slower`` times the charged time (`cpu`) the
+    solution took for it, or ``opts.cell_timeout`` if more; the submission
+    ``opts.slower`` times the solution's checks in all, or ``opts.timeout``
+    if more. So a correct answer ten times slower than the solution passes
+    (the default is twenty), whatever the machine's load.
+    """
+    times = {g: float(r.get("cpu", 0.0)) for g, r in (reference or {}).items()}
+    budgets = {g: max(opts.cell_timeout, opts.slower * t) for g, t in times.items()}
+    total = max(opts.timeout, opts.slower * sum(times.values()))
+    cpu = max(opts.limits.cpu, int(total) + 60)  # each process's RLIMIT_CPU
+    limits = dataclasses.replace(opts.limits, cpu=cpu)
+    return budgets, Options(**{**vars(opts), "timeout": total, "limits": limits})
 
 
 def reference_run(plan: LabPlan, solution: dict, opts: Options) -> dict:
@@ -251,8 +286,10 @@ def solution_path(lab: str) -> Path:
     return path
 
 
-def _fingerprint(path: Path | None, solution_text: str) -> str:
+def _fingerprint(path: Path | None, solution_text: str, modules: dict) -> str:
     h = hashlib.sha256(solution_text.encode())
+    for name, source in sorted(modules.items()):
+        h.update(f"{name}\0{source}\0".encode())
     if path is not None:
         try:
             h.update(path.read_bytes())
@@ -271,10 +308,11 @@ def _plan(solution_text: str, lab: str) -> LabPlan:
     return _PLANS[key]
 
 
-def grade_task(student, data, solution_text, lab, reference, opts, slot=0):
+def grade_task(student, data, solution_text, lab, reference, opts, modules, slot=0):
     """One submission as a self-contained task (threads or Dask workers).
 
-    ``data`` is the notebook's bytes (or None); returns the result as JSON.
+    ``data`` is the notebook's bytes (or None), ``modules`` its helper
+    modules; returns the result as JSON.
     """
     plan = _plan(solution_text, lab)
     if data is None:
@@ -289,7 +327,8 @@ def grade_task(student, data, solution_text, lab, reference, opts, slot=0):
             res.reasons = {c.grade_id: why for c in plan.checks + plan.manual}
             return res.to_json()
     try:
-        return grade_notebook(student, sub, plan, reference, opts, slot).to_json()
+        res = grade_notebook(student, sub, plan, reference, opts, slot, modules)
+        return res.to_json()
     except Exception as exc:  # noqa: BLE001 - a grader bug must not stop the class
         res = Result(student, {}, {}, plan.max_points)
         res.status = f"grader error: {type(exc).__name__}: {exc}"[:200]
@@ -377,8 +416,10 @@ def grade(
     opts.stop = stop
     results: dict[str, Result] = {}
     todo = []
+    extra: dict[str, tuple[dict, list[str]]] = {}  # helper modules, notes
     for student, path, status in subs:
-        fp = _fingerprint(path, sol_text)
+        extra[student] = helpers(path, Path(submissions)) if path else ({}, [])
+        fp = _fingerprint(path, sol_text, extra[student][0])
         old = store.load(student) if store and student not in again else None
         if old is not None and old[1] == fp and old[0].status != OVERLOADED:
             results[student] = old[0]
@@ -419,6 +460,8 @@ def grade(
                 for s, p, _, _ in todo
                 if p is not None and (others := copies(p, lab))
             }  # fmt: skip
+            for s, (_, left_out) in extra.items():
+                notes.setdefault(s, []).extend(left_out)
 
             def done(data: dict) -> None:
                 r = Result.from_json(data)
@@ -438,10 +481,11 @@ def grade(
                     done(r.to_json())
                     continue
                 data = path.read_bytes() if path is not None else None
-                tasks.append((student, data, sol_text, lab, reference, opts))
+                modules = extra[student][0]
+                tasks.append((student, data, sol_text, lab, reference, opts, modules))
             if scheduler:
                 plain = Options(**{**vars(opts), "stop": None})
-                tasks = [(*t[:5], plain) for t in tasks]
+                tasks = [(*t[:5], plain, t[6]) for t in tasks]
 
                 def failed(student, exc):
                     r = Result(student, {}, {}, plan.max_points)

@@ -331,9 +331,10 @@ def export_manual(
 def read_manual(path: str | Path, manual: list[CheckCell]) -> dict:
     """Read the instructor's scores: ``{student: {grade_id: {"score", "comment"}}}``.
 
-    Accepts UTF-8 with or without a byte-order mark (Excel) and a comma or
-    semicolon as separator; rows with neither a score nor a comment are
-    skipped.
+    Accepts UTF-8 with or without a byte-order mark (Excel's "CSV UTF-8"),
+    else Windows-1252 (Excel's plain "CSV" on Windows: ``José`` stays José),
+    and a comma or semicolon as separator; rows with neither a score nor a
+    comment are skipped.
 
     Raises
     ------
@@ -343,8 +344,12 @@ def read_manual(path: str | Path, manual: list[CheckCell]) -> dict:
     """
     limits = {c.grade_id: float(c.points) for c in manual}
     out: dict[str, dict[str, dict]] = {}
-    with open(path, newline="", encoding="utf-8-sig") as f:
-        text = f.read()
+    raw = Path(path).read_bytes()
+    try:
+        text = raw.decode("utf-8-sig")
+    except UnicodeDecodeError:
+        text = raw.decode("cp1252", errors="replace")
+    text = text.replace("\r\n", "\n")
     first = text.split("\n", 1)[0]
     delimiter = ";" if first.count(";") > first.count(",") else ","
     reader = csv.DictReader(io.StringIO(text), delimiter=delimiter)

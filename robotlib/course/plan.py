@@ -46,7 +46,14 @@ from .notebooks import (
 )
 from .worker import HIDDEN_MARK
 
-__all__ = ["LabPlan", "lab_plan", "normalized", "student_cells", "scan_submission"]
+__all__ = [
+    "LabPlan",
+    "lab_plan",
+    "normalized",
+    "release_notes",
+    "student_cells",
+    "scan_submission",
+]
 
 
 @dataclass
@@ -69,6 +76,7 @@ class LabPlan:
     prompts: dict[str, str] = field(default_factory=dict)  # written answer -> question
     answers: list[str] = field(default_factory=list)  # the solution's exercise cells
     same: dict[str, list[str]] = field(default_factory=dict)  # listed -> equals
+    released: dict[str, str] = field(default_factory=dict)  # check -> `normalized`
 
     def listed_as(self, function: str, exercise: str | None) -> str:
         """Return the name ``exercise``'s ``writes`` gives ``function``'s object.
@@ -230,11 +238,48 @@ def lab_plan(solution: NotebookNode, name: str) -> LabPlan:
     plan.solution_ids = {c.get("id") for c in solution.cells}
     plan.lab_sources = _lab_sources(solution, exs)
     plan.answers = [solution.cells[e.index].source for e in exs]
+    for c in checks:  # as students have them: without the hidden tests
+        plan.released[c.grade_id] = normalized(
+            _without_hidden(solution.cells[c.index].source)
+        )
     for c in manual:  # the question, above the solution region
         source = solution.cells[c.index].source  # a released lab: the stub
         question = source.split(SOLUTION[0])[0].split(ANSWER_STUB[0])[0]
         plan.prompts[c.grade_id] = normalized(question)
     return plan
+
+
+def release_notes(plan: LabPlan, nb: dict) -> list[str]:
+    """Say whether ``nb`` was made from another release of the lab than ``plan``'s.
+
+    Students cannot edit check cells: a check cell (by its grade id) that
+    differs from the current release's, or a check one of them lacks, means
+    the notebook came from an older release (or was edited outside Jupyter),
+    and a renamed function can cost points. Without any check metadata (an
+    old nbformat, pasted cells) the checks are looked for by content.
+    Returns one note, or none.
+    """
+    cells = [c for c in nb.get("cells", []) if isinstance(c, dict)]
+    code = [c for c in cells if c.get("cell_type") == "code"]
+    theirs: dict[str, str] = {}
+    for cell in code:
+        meta = (cell.get("metadata") or {}).get(META_KEY) or {}
+        gid = meta.get("grade_id") if isinstance(meta, dict) else None
+        if isinstance(gid, str) and gid not in theirs:
+            theirs[gid] = normalized(_without_hidden(_source(cell)))
+    if theirs:
+        ids = list(dict.fromkeys([*plan.released, *theirs]))
+        differ = [g for g in ids if theirs.get(g) != plan.released.get(g)]
+    else:
+        present = {normalized(_without_hidden(_source(c))) for c in code}
+        differ = [g for g, src in plan.released.items() if src not in present]
+    if not differ:
+        return []
+    return [
+        f"made from an older release of {plan.name}? its check cells "
+        f"{', '.join(differ)} differ from the current release's (the current "
+        "checks were run; a renamed function may have cost points)"
+    ]
 
 
 def _bound_all(source: str) -> set[str]:

@@ -39,8 +39,9 @@ class Options:
     """How to run each submission (see ``robotlib grade --help``)."""
 
     cell_timeout: float = 60.0  # charged time (`cpu`) per student cell, call, check
+    slower: float = 20.0  # a check's limit: this times the solution's, if more
     timeout: float = 600.0  # CPU time of the whole submission
-    backstop: float = 10.0  # wall limit, in multiples of the above: overloaded
+    backstop: float = 30.0  # wall limit, in multiples of the above: overloaded
     restarts: int = 3
     keep: bool = False
     workroot: Path | None = None
@@ -169,6 +170,7 @@ class Proc:
 
     def __init__(self, role, spec, scratch, opts, uid, events, gen, log, share):
         self.role, self.gen, self.job = role, gen, secrets.token_hex(8)
+        self.started = time.monotonic()
         self.worker: int | None = None
         self.last = cpu.Usage()
         scratch.mkdir(parents=True, exist_ok=True)

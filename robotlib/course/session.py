@@ -10,8 +10,11 @@ through `run_submission`, which also keeps the time:
   killed: the check fails ("timed out"), the student process is restarted
   for the next checks; a student process that dies (``os._exit``, a crash,
   memory) fails the call in flight and is restarted, a few times at most;
-- a check running longer than the cell limit on its own is killed and the
-  check process restarted from the next check;
+- a check whose time (its own and its calls into the student's code)
+  passes its limit is killed and the check process restarted from the
+  next check; the limit is ``budgets[gid]``: `grade` scales it from the
+  solution's CPU time for that check, and records each check's time in
+  ``Outcome.checks[gid]["cpu"]``;
 - the submission's total CPU time (start-ups, restarts and checks) is
   bounded: what has not run by then fails with that reason.
 
@@ -62,12 +65,22 @@ class Outcome:
 
 
 def run_submission(
-    plan: LabPlan, cells: list[dict], opts: Options, slot: int = 0
+    plan: LabPlan,
+    cells: list[dict],
+    opts: Options,
+    slot: int = 0,
+    budgets: dict[str, float] | None = None,
+    modules: dict[str, str] | None = None,
 ) -> Outcome:
     """Run ``cells`` (the student's) against ``plan``'s checks.
 
-    Never raises for anything the submission does.
+    ``budgets`` maps a check's grade id to its limit in charged time, s
+    (its own time and its calls; default ``opts.cell_timeout``);
+    ``modules`` (file name to source) are written beside the student's
+    cells, where they can import them. Never raises for anything the
+    submission does.
     """
+    budgets = budgets or {}
     out = Outcome()
     t_start = time.monotonic()
     root = Path(__import__("tempfile").mkdtemp(prefix="rg-", dir=opts.workroot))
@@ -83,6 +96,7 @@ def run_submission(
     procs: dict[str, Proc | None] = {"student": None, "check": None}
     st = {"ready": False, "cell": None, "pending": None, "queued": None}
     ck = {"cur": None, "clock": None, "index": 0, "done": False, "restarts": 0}
+    ck["calls"] = 0.0  # charged time of the current check's finished calls
     gids = [c["gid"] for c in plan.check_specs]
     share = cpu.Share(slot, 2 * opts.limits.processes + 64, opts.sandbox)
     made: list[Proc] = []  # every process started, for the CPU time spent
@@ -97,6 +111,9 @@ def run_submission(
             "owner": plan.owner,
         }
         scratch = root / f"student{gen['student']}"
+        scratch.mkdir()
+        for name, source in (modules or {}).items():  # names checked: x.py
+            (scratch / name).write_text(source, encoding="utf-8")
         procs["student"] = Proc(
             "student", spec, scratch, opts, uid, events, gen["student"], logf, share
         )
@@ -129,6 +146,7 @@ def run_submission(
         if procs["student"] is None:
             return  # given up already: a late event of the last process
         procs["student"].kill()
+        watch_hogs(procs["student"], final=True)
         if not opts.keep:  # what it wrote goes now, not at the end
             shutil.rmtree(procs["student"].scratch, ignore_errors=True)
         out.restarts += 1
@@ -153,16 +171,34 @@ def run_submission(
                     }  # fmt: skip
                 )
 
+    def check_time(now: float) -> float:
+        """Charged time of the current check so far: its own and its calls."""
+        own = ck["clock"].charged(now) if ck["cur"] is not None else 0.0
+        return own + ck["calls"]
+
+    def budget() -> float:
+        return budgets.get(ck["cur"], opts.cell_timeout)
+
+    def timed_out(limit: float) -> str:
+        if limit <= opts.cell_timeout:
+            return f"timed out after {limit:g} s"
+        slower = f"{opts.slower:g} times the solution's"
+        return f"timed out after {limit:.0f} s of CPU time ({slower})"
+
     def forward(item):
         header, payload, _ = item
-        st["pending"] = (header, payload, Clock.start(procs["student"]))
+        base = check_time(time.monotonic())  # the check's time before this call
+        st["pending"] = (header, payload, base, Clock.start(procs["student"]))
         if not procs["student"].post(header, payload):
             student_died("the process of your code had ended")
 
-    def verdict(clock: Clock, limit: float) -> str | None:
-        """Return "over" past the limit, "overloaded" past the backstop, else None."""
+    def verdict(clock: Clock, limit: float, base: float = 0.0) -> str | None:
+        """Return "over" past the limit, "overloaded" past the backstop, else None.
+
+        ``base``: time already charged against the same limit.
+        """
         now = time.monotonic()
-        if clock.charged(now) > limit:
+        if base + clock.charged(now) > limit:
             return "over"
         return "overloaded" if clock.elapsed(now) > limit * opts.backstop else None
 
@@ -171,18 +207,28 @@ def run_submission(
         for gid in gids:
             out.checks.setdefault(gid, {"status": "failed", "error": _OVERLOADED})
 
-    def watch_hogs(proc: Proc | None):
-        """Flag (once) and slow down a student process running CPU hogs."""
-        if proc is None or not proc.alive or proc.popen is None:
+    def watch_hogs(proc: Proc | None, final: bool = False):
+        """Flag (once) and slow down a student process running CPU hogs.
+
+        Seen in two samples after its first second (the sandbox's wrappers
+        start it), or still running when the process is ended (``final``:
+        an honest one is idle then).
+        """
+        if proc is None or proc.popen is None or proc.last.running <= cpu.HOGS:
             return
-        hog["seen"] = hog["seen"] + 1 if proc.last.running > cpu.HOGS else 0
-        if hog["seen"] >= 3:  # three samples in a row: not a passing burst
-            cpu.Share.tame(proc.popen.pid)
+        if not final and time.monotonic() - proc.started < 1.0:
+            return
+        if not (proc.alive or final):
+            return  # its last sample, counted already
+        hog["seen"] += 2 if final else 1
+        if hog["seen"] >= 2:
+            if proc.alive:
+                cpu.Share.tame(proc.popen.pid)
             if not hog["flagged"]:
                 hog["flagged"] = True
                 out.flags.append(
                     f"ran {proc.last.running} busy processes at once "
-                    "(CPU hogs): slowed down, its own CPU time charged"
+                    "(CPU hogs): slowed down, their CPU time charged to it"
                 )
 
     sampled = weighed = 0.0
@@ -224,18 +270,22 @@ def run_submission(
                         gid, {"status": "failed", "error": f"not run: {why}"}
                     )
                 break
-            running = [st["cell"], st["pending"]]
-            clocks = [c[-1] for c in running if c is not None]
-            verdicts = [verdict(c, opts.cell_timeout) for c in clocks]
+            verdicts = []
+            if st["cell"] is not None:
+                verdicts.append(verdict(st["cell"][1], opts.cell_timeout))
+            if st["pending"] is not None:
+                limit = budget()
+                verdicts.append(verdict(st["pending"][3], limit, st["pending"][2]))
             if "overloaded" in verdicts:
                 overloaded()
                 break
             if "over" in verdicts:
-                student_died(f"timed out after {opts.cell_timeout:g} s")
+                why = timed_out(budget() if st["cell"] is None else opts.cell_timeout)
+                student_died(why)
                 continue
             busy = st["pending"] is not None or st["queued"] is not None
-            limit = opts.cell_timeout * (3 if ck["cur"] is None else 1)
-            late = None if busy else verdict(ck["clock"], limit)
+            limit = budget() if ck["cur"] is not None else 3 * opts.cell_timeout
+            late = None if busy else verdict(ck["clock"], limit, ck["calls"])
             if late == "overloaded":
                 overloaded()
                 break
@@ -243,10 +293,7 @@ def run_submission(
                 gid = ck["cur"] or gids[min(ck["index"], len(gids) - 1)]
                 out.checks.setdefault(
                     gid,
-                    {
-                        "status": "failed",
-                        "error": f"timed out after {opts.cell_timeout:g} s",
-                    },  # fmt: skip
+                    {"status": "failed", "error": timed_out(limit)},
                 )
                 procs["check"].kill()
                 nxt = gids.index(gid) + 1 if gid in gids else len(gids)
@@ -274,8 +321,9 @@ def run_submission(
                     st.update(ready=True, cell=None)
                     if st["queued"] is not None:
                         item, st["queued"] = st["queued"], None
-                        forward(item)
+                        # the wait for the restart is not the check's time
                         ck["clock"] = Clock.start(procs["check"])
+                        forward(item)
                 elif op == "tripwire":
                     hit = (
                         str(header.get("function")),
@@ -285,7 +333,9 @@ def run_submission(
                     if hit not in out.tripwires:
                         out.tripwires.append(hit)
                 elif op == "result" and st["pending"] is not None:
-                    ck["clock"].paused += time.monotonic() - st["pending"][2].wall
+                    call = st["pending"][3]
+                    ck["clock"].paused += time.monotonic() - call.wall
+                    ck["calls"] += call.charged(time.monotonic())
                     st["pending"] = None
                     procs["check"].post(
                         {
@@ -303,9 +353,12 @@ def run_submission(
                 elif op == "begin":
                     ck["cur"] = header.get("gid")
                     ck["clock"] = Clock.start(procs["check"])
+                    ck["calls"] = 0.0
                 elif op == "end":
+                    header["cpu"] = round(check_time(time.monotonic()), 3)
                     out.checks.setdefault(str(header.get("gid")), header)
                     ck["cur"], ck["clock"] = None, Clock.start(procs["check"])
+                    ck["calls"] = 0.0
                 elif op in ("call", "get"):
                     item = (header, payload, time.monotonic())
                     if procs["student"] is None:
@@ -319,7 +372,8 @@ def run_submission(
                         )
                     elif st["ready"]:
                         forward(item)
-                    else:
+                    else:  # its time so far kept; the wait not charged
+                        ck["calls"] = check_time(time.monotonic())
                         st["queued"] = item
                 elif op == "done":
                     ck["done"] = True
@@ -347,6 +401,7 @@ def run_submission(
         for p in procs.values():
             if p is not None:
                 p.kill()
+        watch_hogs(procs["student"], final=True)
         share.close()
         out.cpu = sum(p.last.cpu for p in made)
         logf.close()

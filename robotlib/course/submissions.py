@@ -16,7 +16,19 @@ import os
 import re
 from pathlib import Path
 
-__all__ = ["check_lab", "copies", "find_submissions", "is_copy_of", "pick"]
+__all__ = [
+    "check_lab",
+    "copies",
+    "find_submissions",
+    "helpers",
+    "is_copy_of",
+    "pick",
+]
+
+HELPERS = 20
+"""Most helper modules taken from beside one notebook."""
+HELPER_BYTES = 256 << 10
+"""Largest helper module taken, bytes."""
 
 
 def _name(p: Path) -> str:
@@ -119,6 +131,49 @@ def find_submissions(
         name = student if seen[student] == 1 else f"{student}#{seen[student]}"
         unique.append((name, path, status))
     return unique
+
+
+def helpers(notebook: Path, folder: Path) -> tuple[dict[str, str], list[str]]:
+    """Return the student's modules beside ``notebook`` and notes on those left.
+
+    ``from helpers import f`` works in a notebook beside ``helpers.py``: so
+    the ``*.py`` files in the student's own folder (not the submissions
+    folder itself, whose files are nobody's) are graded with it, at most
+    `HELPERS` of at most `HELPER_BYTES` each. A module that would hide an
+    installed one (``numpy.py``) or is not a module name is left out.
+
+    Returns
+    -------
+    modules : dict
+        File name to source text.
+    notes : list of str
+        What was left out, and why.
+    """
+    import importlib.util
+
+    modules: dict[str, str] = {}
+    notes: list[str] = []
+    if notebook.parent.resolve() == Path(folder).resolve():
+        return modules, notes
+    for p in sorted(notebook.parent.glob("*.py")):
+        name = _name(p)
+        why = None
+        if p.is_symlink() or not p.is_file() or name.startswith("."):
+            why = "not a plain file"
+        elif not name[:-3].isidentifier():
+            why = "not a module name"
+        elif importlib.util.find_spec(name[:-3]) is not None:
+            why = f"would hide the installed module {name[:-3]}"
+        elif p.stat().st_size > HELPER_BYTES or len(modules) >= HELPERS:
+            why = "too large or too many"
+        else:
+            try:
+                modules[name] = p.read_bytes().decode("utf-8")
+            except (OSError, UnicodeDecodeError):
+                why = "unreadable or not UTF-8"
+        if why:
+            notes.append(f"{name}: {why}, not graded")
+    return modules, notes
 
 
 def pick(subs: list[tuple], students: list[str]) -> list[tuple]:

@@ -1,7 +1,7 @@
 """The two sandboxed processes that grade a submission, and their wire format.
 
 ``python -m robotlib.course.worker student IN OUT`` (the student process)
-runs the lab's canonical set-up cell, arms the tripwires (`answers.arm`),
+runs the lab's canonical set-up cell, arms the tripwires (`tripwires.arm`),
 then runs the student's exercise cells (and cells the student added), and
 serves calls: ``call NAME`` runs the student's function on the pickled
 arguments and answers with the result and the arguments as they are after
@@ -19,7 +19,7 @@ pipe only this process holds.
 
 Frames: a 12-byte header (4-byte JSON length, 8-byte payload length, big
 endian), the JSON header, the payload. Imports only the standard library at
-module level; the student process imports `answers`.
+module level; the student process imports `tripwires`.
 """
 
 from __future__ import annotations
@@ -159,7 +159,7 @@ def _no_warm_up(spec: dict) -> None:
 def _student(fin: int, fout: int) -> None:
     from IPython.core.interactiveshell import InteractiveShell
 
-    from . import answers
+    from . import tripwires
 
     spec, _ = recv(fin)
     shell = InteractiveShell.instance()
@@ -183,7 +183,7 @@ def _student(fin: int, fout: int) -> None:
     sources["setup"] = spec["setup"]
     _no_warm_up(spec)
     run("setup", spec["setup"])
-    answers.arm(spec["writes"], report, [ns])
+    tripwires.arm(spec["writes"], report, [ns])
     for cell in spec["cells"]:
         send(fout, {"op": "cell", "id": cell["id"], "status": "start"})
         active["exercise"] = cell.get("exercise")

@@ -136,8 +136,8 @@ def every_wall_entries(world, table, rows, cols) -> np.ndarray:
 
     Each direction bin's ray from the cell's centre (the table's own
     arithmetic: ``origin + (index + 0.5) * resolution``) is cast by the
-    simulator's sonar kernel against every wall, as a one-ray sonar pointing
-    along the bin, and each cone takes the nearest of its rays
+    simulator's sonar kernel against every wall and end face, as a one-ray
+    sonar pointing along the bin, and each cone takes the nearest of its rays
     (`robotlib.localization.cones.ray_offsets`). No strips, no sharing.
 
     Returns
@@ -163,7 +163,7 @@ def every_wall_entries(world, table, rows, cols) -> np.ndarray:
         table.origin[1] + (np.asarray(rows) + 0.5) * table.resolution,
         np.zeros(len(rows)),
     ])  # fmt: skip
-    rays = expected_ranges(world, poses, one_ray)  # (K, n_bins), clipped
+    rays = expected_ranges(world.sensed_obstacles, poses, one_ray)  # (K, n_bins)
     offsets = ray_offsets(s, n_bins)
     cone = np.min([np.roll(rays, -o, axis=1) for o in offsets], axis=0)
     return np.round(cone * 1000.0).astype(np.uint16)

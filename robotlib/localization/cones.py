@@ -1,7 +1,8 @@
 """Expected sonar readings for many particles: exact cone casts, or a `ConeTable`.
 
 - exact: every particle casts its sonar cones against the walls, as the
-  simulator does (`robotlib.sensing.expected_ranges`);
+  simulator does (`robotlib.sensing.expected_ranges`), walls' end faces
+  included (`robotlib.world.World.sensed_obstacles`);
 - fast: a `ConeTable` built once per world holds, per grid cell and per
   direction bin, the cone's range from the cell's centre in millimetres; a
   particle's reading is looked up at its sensor's cell and nearest
@@ -137,7 +138,7 @@ class ConeTable:
         self.origin = (xmin, ymin)
         _check_size(world, ny, nx, self.resolution, self.n_bins, max_bytes)
         offsets = ray_offsets(sonar, self.n_bins)
-        segments = np.ascontiguousarray(world.obstacles, dtype=np.float64)
+        segments = np.ascontiguousarray(world.sensed_obstacles, dtype=np.float64)
         model = (
             float(sonar.max_range),
             float(sonar.min_range),
@@ -365,4 +366,4 @@ def expected_readings(
     """
     if table is not None:
         return table.lookup(particles)
-    return expected_ranges(world, _particles(particles), sonar)
+    return expected_ranges(world.sensed_obstacles, _particles(particles), sonar)

@@ -12,11 +12,16 @@ around the first pose) gives the map pose, hence the rigid transform from
 the map to the odometry frame, and the goal (given in the map) is handed to
 the controller in the odometry frame.
 
+With ``plan=True`` it hands the controller waypoints along an A* path on
+the map's configuration space instead of the goal, so that a local method
+finds the door of a room or the shorter way round a building; the
+controller still avoids whatever it senses, mapped or not.
+
 The robot's odometry must start in the map frame (the simulator's does: the
 odometry pose starts at the true start pose).
 
-Imports: `robotlib.avoidance`'s controller base and `robotlib.localization`;
-never plotting.
+Imports: `robotlib.avoidance`'s controller base, `robotlib.localization`
+and the planners here; never plotting.
 """
 
 from __future__ import annotations
@@ -29,6 +34,8 @@ from ..avoidance import Controller
 from ..avoidance.base import OK, REACHED
 from ..localization import MCL
 from ..world import World
+from .cspace import configuration_space
+from .grid import astar
 
 __all__ = ["Localized"]
 
@@ -66,6 +73,14 @@ class Localized(Controller):
         theta)``, m and rad.
     rng : numpy.random.Generator, int or None
         The filter's randomness.
+    plan : bool
+        Hand the controller waypoints instead of the goal: the points
+        ``step`` m apart along an A* path on the map (planned from the
+        estimate, again every ``replan`` s), each until the estimate is
+        within ``step / 2`` of it; the controller still avoids what it
+        senses. Without a path, the goal itself.
+    step, replan : float
+        Waypoint spacing, m (2.0), and re-planning period, s (10).
 
     Attributes
     ----------
@@ -83,6 +98,9 @@ class Localized(Controller):
         n: int = 1000,
         init_std=(0.05, 0.05, 0.02),
         rng: np.random.Generator | int | None = None,
+        plan: bool = False,
+        step: float = 2.0,
+        replan: float = 10.0,
     ):
         if not isinstance(controller, Controller):
             raise TypeError(f"controller must be a Controller, got {controller!r}")
@@ -93,6 +111,8 @@ class Localized(Controller):
         self.n_particles = int(n)
         self.init_std = tuple(float(s) for s in init_std)
         self._seed = rng
+        self.step, self.replan = float(step), float(replan)
+        self.cspace = configuration_space(world, resolution=0.1) if plan else None
         self.name = f"{controller.name}+MCL"
         super().__init__(
             goal, controller.tolerance, controller.max_speed, controller.max_turn
@@ -113,6 +133,8 @@ class Localized(Controller):
         self.mcl = None
         self.estimate = np.full(3, np.nan)
         self._odometry = None
+        self.waypoints = None
+        self._cycle = 0
 
     def command(self, sonar, pose, goal=None) -> tuple[float, float]:
         """Step the filter, move the goal into the odometry frame, ask the controller.
@@ -138,10 +160,46 @@ class Localized(Controller):
         else:
             # map -> odometry: odometry pose * inverse(map pose)
             to_odometry = _compose(pose, _inverse(self.estimate))
-            goal = _compose(to_odometry, np.array([*self.goal, 0.0]))[:2]
+            aim = self.goal if self.cspace is None else self._waypoint()
+            goal = _compose(to_odometry, np.array([*aim, 0.0]))[:2]
             self.inner.goal = goal
             if self.inner.status == REACHED:
                 self.inner.status = OK
         v, w = self.inner.command(sonar, pose)
         self.status = self.inner.status
+        if (
+            self.status == REACHED
+            and self.waypoints is not None
+            and len(self.waypoints) > 1
+        ):
+            self.status = OK  # a waypoint, not the goal
+        self._cycle += 1
         return v, w
+
+    def _waypoint(self) -> np.ndarray:
+        """Return the waypoint to aim at (map frame), re-planning when due."""
+        due = self._cycle % max(int(round(self.replan / 0.1)), 1) == 0
+        if self.waypoints is None or due:
+            self.waypoints = self._plan()
+        here = self.estimate[:2]
+        while (
+            len(self.waypoints) > 1
+            and math.dist(here, self.waypoints[0]) < 0.5 * self.step
+        ):
+            self.waypoints = self.waypoints[1:]
+        return self.waypoints[0]
+
+    def _plan(self) -> np.ndarray:
+        """Plan waypoints ``step`` m apart along A* from the estimate to the goal."""
+        goal = np.asarray(self.goal, dtype=float)
+        start = self.cspace.nearest_free(self.estimate[:2], 0.6)
+        plan = None if start is None else astar(self.cspace, start, goal)
+        if plan is None or not plan.found or len(plan.path) < 2:
+            return goal[None, :]
+        path = np.asarray(plan.path, dtype=float).reshape(-1, 2)
+        along = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(path, axis=0).T))])
+        marks = np.arange(self.step, along[-1], self.step)
+        points = np.column_stack(
+            [np.interp(marks, along, path[:, 0]), np.interp(marks, along, path[:, 1])]
+        )
+        return np.vstack([points, goal])

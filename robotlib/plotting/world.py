@@ -290,7 +290,8 @@ def animate(
         return anim
     from IPython.display import HTML
 
-    fig.canvas.draw()  # the layout, once: every frame keeps it (and does not jump)
+    draw(values[0])  # the layout, once, with what a frame draws (titles, labels):
+    fig.canvas.draw()  # every frame keeps it (and does not jump)
     fig.set_layout_engine("none")
     fig.canvas.draw_idle = _no_redraw  # saving a frame draws it: once, not twice
     page = HTML(offline_player(anim.to_jshtml(default_mode="once")))

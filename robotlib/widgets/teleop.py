@@ -91,8 +91,8 @@ class TeleopPanel:
             value=angle_deg, min=5.0, max=180.0, step=5.0, description="turn [deg]",
             continuous_update=False,
         )  # fmt: skip
-        self.distance.observe(lambda _c: self.draw(), names="value")
-        self.angle.observe(lambda _c: self.draw(), names="value")
+        self.distance.observe(lambda _c: self._preview(), names="value")
+        self.angle.observe(lambda _c: self._preview(), names="value")
         self.buttons = {c: w.Button(description=c) for c in self.COMMANDS}
         for c, b in self.buttons.items():
             b.on_click(lambda _b, c=c: self.send(c))
@@ -143,6 +143,13 @@ class TeleopPanel:
         self.status.value = self._report(f"done ({doing})")
         self.draw()
         return self.pose, self.sonar
+
+    def _preview(self) -> None:
+        """Say at once that a slider moved, then redraw where a step would go."""
+        said = self.status.value
+        self.status.value = "drawing the next step and turns ..."
+        self.draw()
+        self.status.value = said
 
     def _report(self, head: str) -> str:
         x, y, th = (float(v) + 0.0 for v in self.pose)

@@ -12,6 +12,8 @@ from __future__ import annotations
 
 import copy
 import json
+import subprocess
+import sys
 import uuid
 import warnings
 from pathlib import Path
@@ -144,3 +146,27 @@ def test_listed_functions_are_known_by_identity_not_a_recycled_id():
     gc.collect()
     made = [(lambda i=i: i) for i in range(2000)]
     assert [m for m in made if targets.get(m) is not None] == []
+
+
+def test_a_listed_table_trips_when_read():
+    """Lab 2 lists the ``BRAITENBERG`` table (a value, not a function): the
+    vehicle read through the library's class is reported, not a library error."""
+    listed = "robotlib.avoidance.reactive.BRAITENBERG"
+    code = (
+        "from robotlib.avoidance import Braitenberg\n"
+        "import robotlib.avoidance.reactive as r\n"
+        "from robotlib.course import tripwires\n"
+        "hits = []\n"
+        f"tripwires.arm([{listed!r}], lambda f, via: hits.append((f, via)))\n"
+        "for read in (lambda: Braitenberg('fear').weights,\n"
+        "             lambda: r.BRAITENBERG.keys(), lambda: list(r.BRAITENBERG)):\n"
+        "    try:\n        read()\n    except tripwires.Tripwire:\n        pass\n"
+        "repr(r.BRAITENBERG), hasattr(r.BRAITENBERG, '__len_hint__')  # not reads\n"
+        "print(hits)\n"
+    )
+    proc = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, timeout=120
+    )
+    assert proc.returncode == 0, proc.stderr
+    hits = eval(proc.stdout.strip().splitlines()[-1])  # noqa: S307 - our own output
+    assert hits == [(listed, listed)] * 3

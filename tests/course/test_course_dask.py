@@ -18,7 +18,7 @@ from pathlib import Path
 import pytest
 
 from robotlib.course.notebooks import read_notebook, release_notebook, write_notebook
-from tests.sandboxing import adopt_orphans, need_sandbox, procs_with
+from tests.sandboxing import need_sandbox, procs_with
 
 pytestmark = pytest.mark.slow  # a class graded on a Dask cluster
 
@@ -31,13 +31,12 @@ def _cell(nb, cid, source):
     return nb
 
 
-def test_grade_on_a_local_dask_cluster(tmp_path):
+def test_grade_on_a_local_dask_cluster(tmp_path, adopting):
     try:
         import dask.distributed  # noqa: F401
     except ImportError:
         pytest.skip("dask.distributed is not installed (extra grade-dask)")
     need_sandbox()
-    adopt_orphans()
     sol = read_notebook(TINY)
     subs = {
         "solution_a": sol,

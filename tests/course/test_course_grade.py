@@ -27,7 +27,7 @@ import pytest
 
 from robotlib.course import grade as g
 from robotlib.course.notebooks import read_notebook, release_notebook, write_notebook
-from tests.sandboxing import adopt_orphans, need_sandbox, procs_with
+from tests.sandboxing import need_sandbox, orphans_adopted, procs_with
 
 ROOT = Path(__file__).resolve().parents[2]
 DATA = Path(__file__).parents[1] / "data" / "course"
@@ -233,20 +233,20 @@ def _cli(folder, out, *extra):
 @pytest.fixture(scope="module")
 def graded(tmp_path_factory):
     need_sandbox()
-    adopt_orphans()  # escaped processes stay below this test (procs_with)
     root = tmp_path_factory.mktemp("grade")
     folder, outside = root / "subs", root / "outside"
     folder.mkdir()
     outside.mkdir()
     expected = make_submissions(folder, outside)
     out = root / "gradebook.csv"
-    t0 = time.monotonic()
-    proc = _cli(folder, out)
-    elapsed = time.monotonic() - t0
-    assert proc.returncode == 0, proc.stderr
-    with open(out, newline="") as f:
-        rows = {r["student"]: r for r in csv.DictReader(f)}
-    return rows, expected, out, elapsed, root, folder
+    with orphans_adopted():  # escaped processes stay below this test (procs_with)
+        t0 = time.monotonic()
+        proc = _cli(folder, out)
+        elapsed = time.monotonic() - t0
+        assert proc.returncode == 0, proc.stderr
+        with open(out, newline="") as f:
+            rows = {r["student"]: r for r in csv.DictReader(f)}
+        yield rows, expected, out, elapsed, root, folder
 
 
 @pytest.mark.slow
@@ -387,12 +387,11 @@ def test_gradebook_reports_each_submissions_time(graded):
 
 @pytest.mark.slow
 @pytest.mark.parametrize("sig", ["SIGINT", "SIGTERM"])
-def test_interrupt_leaves_no_process(tmp_path, sig):
+def test_interrupt_leaves_no_process(tmp_path, sig, adopting):
     """Ctrl-C (SIGINT) or SIGTERM in the middle of a class: no process is left."""
     import signal
 
     need_sandbox()
-    adopt_orphans()
     folder = tmp_path / "subs"
     for i in range(3):
         d = folder / f"s{i}"
@@ -528,11 +527,11 @@ def test_notes_name_the_function_the_exercise_lists_and_the_alias():
     # the run-time tripwire reports the listed name and the place it was reached
     code = (
         "import robotlib.mapping, robotlib.mapping.occupancy as o\n"
-        "from robotlib.course import answers\n"
+        "from robotlib.course import tripwires\n"
         "hits = []\n"
-        f"answers.arm({[occ, pkg]!r}, lambda f, via: hits.append((f, via)))\n"
+        f"tripwires.arm({[occ, pkg]!r}, lambda f, via: hits.append((f, via)))\n"
         "for fn in (robotlib.mapping.inverse_sonar_model, o.inverse_sonar_model):\n"
-        "    try:\n        fn()\n    except answers.Tripwire:\n        pass\n"
+        "    try:\n        fn()\n    except tripwires.Tripwire:\n        pass\n"
         "print(hits)\n"
     )
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)  # fmt: skip

@@ -21,6 +21,7 @@ import pytest
 from robotlib.course import cpu
 from robotlib.course import grade as g
 from robotlib.course.notebooks import write_notebook
+from robotlib.course.plan import lab_plan
 from tests.course.test_course_grade import (
     ADD,
     FULL,
@@ -97,8 +98,45 @@ def test_same_grade_alone_beside_a_hog_and_under_load(tmp_path):
     again = rows["slow"]
     assert again.points == first.points, again.reasons
     assert again.status == "ok", (again.status, again.reasons)
-    # the hog's own flag is sampled (running processes, 3 samples in a row)
-    # and was missed in 1 of 3 runs at load 9-10: not asserted here
+    assert any("CPU hogs" in f for f in rows["hog"].flags), rows["hog"].flags
+    assert not any("CPU hogs" in f for f in first.flags + again.flags)
+
+
+def test_limits_scale_with_the_solution_s_time():
+    """A check may take 20 times the solution's time, never less than the floor."""
+    ref = {"a": {"cpu": 0.01}, "b": {"cpu": 3.0}, "c": {}}
+    opts = g.Options(cell_timeout=5, timeout=60, slower=20)
+    budgets, scaled = g.limits(ref, opts)
+    assert budgets == {"a": 5, "b": 60.0, "c": 5}
+    assert scaled.timeout == pytest.approx(60.2) and opts.timeout == 60  # 20 x 3.01
+    assert g.limits(None, opts)[0] == {}
+    big = g.limits({"a": {"cpu": 100.0}}, opts)[1]  # no process killed before
+    assert big.limits.cpu >= big.timeout == 2000
+
+
+@pytest.mark.slow
+def test_ten_times_slower_than_the_solution_passes():
+    """The check's limit comes from the solution's CPU time for it, not the floor.
+
+    The slow ``mean`` burns 0.75 s of CPU per call (two calls in its check),
+    ten times what the solution is said to take: it passes with the default
+    factor (20) and times out when the factor (5) brings the limit down to
+    the 1 s floor.
+    """
+    need_sandbox()
+    sol = solution()
+    plan = lab_plan(sol, "tiny")
+    opts = g.Options(cell_timeout=1, timeout=60, backstop=30)
+    reference = g.reference_run(plan, sol, opts)
+    assert all(r["cpu"] >= 0 for r in reference.values())
+    reference["mean"]["cpu"] = 0.15  # the slow answer's 1.5 s: ten times that
+    slow = with_cell(sol, MEAN, _slow_mean(_loop_count(0.75)))
+    passed = g.grade_notebook("slow", slow, plan, reference, opts)
+    assert passed.points["mean"] == 2, passed.reasons
+    strict = g.Options(**{**vars(opts), "slower": 5})
+    failed = g.grade_notebook("slow", slow, plan, reference, strict)
+    assert failed.points["mean"] == 0
+    assert "timed out after 1 s" in failed.reasons["mean"], failed.reasons
 
 
 def test_cpu_time_counts_the_whole_tree_and_not_sleep():

@@ -98,6 +98,13 @@ def test_bad_sheets_say_what_is_wrong(tmp_path):
         read_manual(sheet, [WHY])
     sheet.write_text('\ufeffstudent,grade_id,score\nann,why,"1,5"\n', encoding="utf-8")
     assert read_manual(sheet, [WHY]) == {"ann": {"why": {"score": 1.5}}}
+    # Excel's plain "CSV" on Windows: Windows-1252, CRLF
+    sheet.write_bytes(
+        "student;grade_id;score;comment\r\nJosé;why;2;très bien\r\n".encode("cp1252")
+    )
+    assert read_manual(sheet, [WHY]) == {
+        "José": {"why": {"score": 2.0, "comment": "très bien"}}
+    }
 
 
 @pytest.mark.slow

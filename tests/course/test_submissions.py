@@ -2,9 +2,25 @@
 
 from __future__ import annotations
 
+import copy
 import os
 
-from robotlib.course.submissions import copies, find_submissions
+import pytest
+
+from robotlib.course import grade as g
+from robotlib.course.notebooks import release_notebook, write_notebook
+from robotlib.course.plan import lab_plan, release_notes
+from robotlib.course.submissions import copies, find_submissions, helpers
+from tests.course.test_course_grade import (
+    ADD,
+    ADD_CHECK,
+    FULL,
+    MEAN,
+    TINY,
+    solution,
+    with_cell,
+)
+from tests.sandboxing import need_sandbox
 
 
 def _nb(path, mtime=None):
@@ -40,3 +56,70 @@ def test_the_newest_copy_untitled_sections_outputs_links_and_names(tmp_path):
     assert found["José"][0] is not None
     assert "gb-records" not in found and "gb" not in found
     assert set(found) == {"ann", "bob", "section2/cy", "section2/dee", "x", "José"}
+
+
+def test_helper_modules_beside_the_notebook(tmp_path):
+    """A student's own ``*.py`` files go with their notebook; nobody's do not."""
+    subs = tmp_path / "subs"
+    nb = _nb(subs / "ann" / "tiny.ipynb")
+    (subs / "ann" / "helpers.py").write_text("def average(xs): ...\n")
+    (subs / "ann" / "numpy.py").write_text("")  # would hide numpy
+    (subs / "ann" / "my-notes.py").write_text("")  # not importable
+    (subs / "ann" / "link.py").symlink_to(subs / "ann" / "helpers.py")
+    flat = _nb(subs / "bob.ipynb")
+    (subs / "shared.py").write_text("")  # beside every flat notebook: nobody's
+    modules, notes = helpers(nb, subs)
+    assert modules == {"helpers.py": "def average(xs): ...\n"}
+    assert sorted(n.split(":")[0] for n in notes) == [
+        "link.py",
+        "my-notes.py",
+        "numpy.py",
+    ]
+    assert helpers(flat, subs) == ({}, [])
+
+
+@pytest.mark.slow
+def test_a_helper_module_is_graded_with_its_notebook(tmp_path):
+    """``from helpers import average`` works in the sandbox (6 -> 4 before),
+    and a helper reaching the library's own version is zeroed like a cell."""
+    need_sandbox()
+    uses = with_cell(solution(), MEAN, "from helpers import average as mean\n")
+    subs = tmp_path / "subs"
+    for name, helper in (
+        ("honest", "def average(xs):\n    return sum(xs) / len(xs)\n"),
+        ("cheat", "import numpy\naverage = numpy.mean\n"),
+    ):
+        (subs / name).mkdir(parents=True)
+        write_notebook(uses, subs / name / "tiny.ipynb")
+        (subs / name / "helpers.py").write_text(helper)
+    opts = g.Options(cell_timeout=20, timeout=120)
+    results, _ = g.grade(subs, "tiny", TINY, jobs=2, opts=opts, progress=False)
+    rows = {r.student: r for r in results}
+    assert rows["honest"].points == {k: float(v) for k, v in FULL.items()}
+    assert rows["honest"].flags == [], rows["honest"].flags
+    assert rows["cheat"].points["mean"] == 0
+    assert any("numpy.mean" in f for f in rows["cheat"].flags), rows["cheat"].flags
+
+
+def test_a_notebook_from_an_older_release_is_noted():
+    """An older release renamed ``add`` (``plus``): its check cell differs."""
+    sol = solution()
+    plan = lab_plan(sol, "tiny")
+    older = with_cell(sol, ADD, "def plus(a, b):\n    return a + b\n")
+    older = with_cell(older, ADD_CHECK, 'print("CHECK add", plus(2, 3))\n')
+    for nb in (release_notebook(older, "tiny"), _bare(release_notebook(older, "tiny"))):
+        notes = release_notes(plan, nb)
+        assert len(notes) == 1 and "older release" in notes[0], notes
+        assert "cells add differ" in notes[0]
+    released = release_notebook(sol, "tiny")
+    for nb in (sol, _bare(sol), released, _bare(released)):
+        assert release_notes(plan, nb) == []  # the solution, as released, no ids
+
+
+def _bare(nb):
+    """The notebook as an old nbformat leaves it: no cell metadata or ids."""
+    nb = copy.deepcopy(nb)
+    for cell in nb.cells:
+        cell.metadata = {}
+        cell.pop("id", None)
+    return nb

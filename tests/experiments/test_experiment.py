@@ -233,12 +233,13 @@ def test_bench_plain_pipeline_is_the_fast_beam_model():
     np.testing.assert_allclose(ll, model.log_likelihood(particles, z), rtol=1e-12)
 
 
-@pytest.mark.slow  # one generated world, plain and localized (its cone table)
-def test_bench_worlds_rows_plain_and_localized():
+@pytest.mark.slow  # one generated world, three ways (its cone table)
+def test_bench_worlds_rows_plain_localized_and_planned():
     from robotlib.experiments.bench_worlds import bench_rows
 
-    rows = bench_rows(["traps"], ["VFH"], n_worlds=1, n_pairs=2, localized=(0, 1))
-    assert [r["controller"] for r in rows] == ["VFH", "VFH+MCL"]
+    aims = ("", "+MCL", "+MCL+A*")
+    rows = bench_rows(["traps"], ["VFH"], n_worlds=1, n_pairs=2, aims=aims)
+    assert [r["controller"] for r in rows] == ["VFH", "VFH+MCL", "VFH+MCL+A*"]
     for r in rows:
         assert r["episodes"] == 2 and r["collisions"] == 0
         assert 0 <= r["true_success"] <= r["odometry_success"] <= 1

@@ -41,7 +41,7 @@ def reference(world, table, cells=None):
         cx = table.origin[0] + (j + 0.5) * table.resolution
         cy = table.origin[1] + (i + 0.5) * table.resolution
         out[i, j] = naive.cone_table_cell(
-            world.obstacles, cx, cy, n_bins, offsets, s.max_range, s.min_range,
+            world.sensed_obstacles, cx, cy, n_bins, offsets, s.max_range, s.min_range,
             s.cos_specular,
         )  # fmt: skip
     return out
@@ -95,7 +95,7 @@ def test_the_point_grid_tells_a_cells_last_bits_apart(grid_map):
     for k in range(0, 60, 3):
         cx, cy = x0 + k * res + 0.5 * res, y0 + k * res + 0.5 * res
         ref = naive.cone_table_cell(
-            world.obstacles, cx, cy, 72, offsets, s.max_range, s.min_range,
+            world.sensed_obstacles, cx, cy, 72, offsets, s.max_range, s.min_range,
             s.cos_specular,
         )  # fmt: skip
         differ += np.count_nonzero(ref != table.table[k, k])
@@ -202,7 +202,7 @@ def test_cones_off_the_bins_take_each_ray_to_its_nearest_bin():
     poses = np.array([(x, y, b * 2 * math.pi / 72) for x, y in centres
                       for b in range(0, 72, 5)])  # fmt: skip
     one = SonarModel(sensors=[[0.0, 0.0, 0.0]])
-    exact = expected_ranges(world, poses, one)
+    exact = expected_ranges(world.sensed_obstacles, poses, one)
     looked = ConeTable(world, one, 0.25).lookup(poses)
     np.testing.assert_allclose(looked, exact, atol=0.0006)
 
@@ -228,10 +228,11 @@ def test_lookup_equals_the_numpy_reference_serial_and_threaded():
 
 
 def test_exact_path_is_the_simulators_cast():
+    """What the filter expects is what the simulator casts: end faces included."""
     world = load_world("corridor")
     poses = world.sample_free_poses(200, rng=3)
     np.testing.assert_array_equal(
-        expected_readings(world, poses), expected_ranges(world, poses)
+        expected_readings(world, poses), expected_ranges(world.sensed_obstacles, poses)
     )
     with pytest.raises(ValueError, match="shape"):
         expected_readings(world, poses[:, :2])

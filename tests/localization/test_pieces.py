@@ -71,7 +71,7 @@ def test_expected_exact_matches_sonar_module(world):
     sonar = SonarModel()
     np.testing.assert_allclose(
         expected_readings(world, poses, sonar),
-        expected_ranges(world, poses, sonar),
+        expected_ranges(world.sensed_obstacles, poses, sonar),
         atol=1e-12,
     )
 

@@ -158,6 +158,10 @@ def test_teleop_panel_is_busy_while_the_robot_moves(monkeypatch):
     assert seen == [("turning 45 deg left ...", [True] * 5)]
     assert not any(b.disabled for b in panel.buttons.values())
     assert panel.status.value.startswith("done (turning 45 deg left): odometry x")
+    said, shown = panel.status.value, []
+    panel.status.observe(lambda c: shown.append(c["new"]), names="value")
+    panel.angle.value = 90.0  # a slider: "drawing" at once, then the same report
+    assert shown == ["drawing the next step and turns ...", said]
     heading = re.search(r"heading (-?\d+) deg; nearest echo", panel.status.value)
     assert heading and abs(int(heading.group(1)) - 45) <= 4
     r.disconnect()

@@ -7,7 +7,7 @@ import pytest
 
 from robotlib.avoidance import VFH, run_episode, start_goal_pairs
 from robotlib.planning import Localized
-from robotlib.world import load_world
+from robotlib.world import World, load_world
 
 
 class _Fixed:
@@ -65,3 +65,21 @@ def test_tolerance_is_the_wrapped_controllers():
     c = Localized(VFH(), load_world("clutter"))
     c.tolerance = 0.2
     assert c.inner.tolerance == 0.2 == c.tolerance
+
+
+def test_waypoints_lead_through_the_door_of_a_room():
+    walls = [[0, 0, 9, 0], [9, 0, 9, 6], [9, 6, 0, 6], [0, 6, 0, 0]]
+    walls += [[4.5, 0, 4.5, 4.8]]  # a partition, the way round it by the top
+    world = World(segments=walls, start=(2.0, 1.0, 0.0), name="partition")
+    runs = {
+        plan: run_episode(
+            world, Localized(VFH(), world, rng=2, plan=plan), goal=(7.0, 1.0),
+            start=(2.0, 1.0, 0.0), seed=4,
+        )
+        for plan in (False, True)
+    }  # fmt: skip
+    e = runs[True]
+    assert e.true_success and e.collisions == 0 and e.duration < 40.0
+    # VFH alone first follows the partition the wrong way (20-30 m driven)
+    assert e.path_length < 0.6 * runs[False].path_length
+    assert e.truth[:, 1].max() > 4.8  # it went round the partition's end

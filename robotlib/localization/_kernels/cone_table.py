@@ -61,6 +61,29 @@ offset); 0.015-0.035 m about the same, 0.01 m more.
 
 
 @nb.njit(**JIT, inline="always")
+def _try_wall(q, ox, oy, dx, dy, entries, ids, best, best_m, limit):
+    """Intersect the ray ``o + t d`` with strip entry ``q``; keep the nearer hit.
+
+    Returns the new ``(best, best_m, limit)``: the entry's ``t`` and wall
+    code if the ray hits it nearer than ``best`` (or as near, with a lower
+    code, so that ties go as in a cast against every wall), else the old.
+    """
+    ex = entries[q, _EX]
+    ey = entries[q, _EY]
+    denom = dx * ey - dy * ex  # `ray_segments`, step for step
+    if abs(denom) >= _EPS:
+        wx = entries[q, _PX] - ox
+        wy = entries[q, _PY] - oy
+        t = (wx * ey - wy * ex) / denom
+        m = ids[q]
+        if t >= 0.0 and (t < best or (t == best and m < best_m)):
+            sp = (wx * dy - wy * dx) / denom
+            if 0.0 <= sp <= 1.0:
+                return t, m, min(limit, t)
+    return best, best_m, limit
+
+
+@nb.njit(**JIT, inline="always")
 def strip_ray(
     ox, oy, dx, dy, u0, inv_w, start, firsts, entries, ids, reach, finger, limit
 ):  # fmt: skip
@@ -98,20 +121,9 @@ def strip_ray(
         if entries[q, _VMAX] < vo or entries[q, _ULO] > uo or entries[q, _UHI] < uo:
             q += 1
             continue
-        ex = entries[q, _EX]
-        ey = entries[q, _EY]
-        denom = dx * ey - dy * ex  # `ray_segments`, step for step
-        if abs(denom) >= _EPS:
-            wx = entries[q, _PX] - ox
-            wy = entries[q, _PY] - oy
-            t = (wx * ey - wy * ex) / denom
-            m = ids[q]
-            if t >= 0.0 and (t < best or (t == best and m < best_m)):
-                sp = (wx * dy - wy * dx) / denom
-                if 0.0 <= sp <= 1.0:
-                    best = t
-                    best_m = m
-                    limit = min(limit, t)
+        best, best_m, limit = _try_wall(
+            q, ox, oy, dx, dy, entries, ids, best, best_m, limit
+        )
         q += 1
     return best, best_m
 
@@ -159,20 +171,9 @@ def strip_ray_back(
             or entries[q, _UHI] < uo
         ):
             continue
-        ex = entries[q, _EX]
-        ey = entries[q, _EY]
-        denom = dx * ey - dy * ex  # `ray_segments`, step for step
-        if abs(denom) >= _EPS:
-            wx = entries[q, _PX] - ox
-            wy = entries[q, _PY] - oy
-            t = (wx * ey - wy * ex) / denom
-            m = ids[q]
-            if t >= 0.0 and (t < best or (t == best and m < best_m)):
-                sp = (wx * dy - wy * dx) / denom
-                if 0.0 <= sp <= 1.0:
-                    best = t
-                    best_m = m
-                    limit = min(limit, t)
+        best, best_m, limit = _try_wall(
+            q, ox, oy, dx, dy, entries, ids, best, best_m, limit
+        )
     return best, best_m
 
 

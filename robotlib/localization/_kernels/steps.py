@@ -52,6 +52,30 @@ def beam_log_prob(z, e_short, zhat_mm, hit_norm, short_norm, inv_sigma, p_max, p
 
 
 @nb.njit(**JIT, inline="always")
+def _move_and_look(j, particles, normals, rot1, trans, rot2, sd1, sd2, sd3,
+                   sensors, table, x0, y0, inv_res, out_p, cs, zhat):  # fmt: skip
+    """Move particle ``j`` into ``out_p[j]`` and look up its sensors' ranges.
+
+    Writes the moved pose, its heading's cosine and sine into ``cs[j]`` and
+    what each sensor should read (mm) into ``zhat[j]``; the arguments are
+    the step's (`_beam_step`).
+    """
+    x, y, th = move(particles[j, 0], particles[j, 1], particles[j, 2],
+                    rot1, trans, rot2, sd1, sd2, sd3,
+                    normals[j, 0], normals[j, 1], normals[j, 2])  # fmt: skip
+    c = math.cos(th)
+    s = math.sin(th)
+    for i in range(sensors.shape[0]):
+        sx, sy, sth = sensor_pose(x, y, th, c, s, sensors, i)
+        zhat[j, i] = table_mm(table, x0, y0, inv_res, sx, sy, sth)
+    out_p[j, 0] = x
+    out_p[j, 1] = y
+    out_p[j, 2] = th
+    cs[j, 0] = c
+    cs[j, 1] = s
+
+
+@nb.njit(**JIT, inline="always")
 def _largest(ll):
     """Return the largest entry of ``ll`` (``-inf`` when no particle fits the scan)."""
     top = -np.inf
@@ -90,6 +114,20 @@ def _normalise(weights, moved, cs, out_w, est):
     return total / prior, 1.0 / squares
 
 
+@nb.njit(**JIT, inline="always")
+def _weigh(weights, ll, moved, cs, out_w, est):
+    """Weigh the particles by ``exp(ll)``, normalise, estimate (steps 2 and 3).
+
+    ``ll`` (N,) holds the particles' log-likelihoods; the other arguments
+    are `_normalise`'s. Returns ``(log_mean, ess)`` as the steps do.
+    """
+    top = _largest(ll)
+    for j in nb.prange(ll.shape[0]):  # no particle fits: the weights stay as they were
+        out_w[j] = weights[j] * math.exp(ll[j] - top) if top > -np.inf else weights[j]
+    ratio, ess = _normalise(weights, moved, cs, out_w, est)
+    return (top + math.log(ratio) if top > -np.inf else top), ess
+
+
 def _beam_step(particles, weights, normals, rot1, trans, rot2, sd1, sd2, sd3,
                sensors, table, x0, y0, inv_res, z, e_short, hit_norm, short_norm,
                inv_sigma, p_max, p_rand, max_range, exponent,
@@ -112,29 +150,14 @@ def _beam_step(particles, weights, normals, rot1, trans, rot2, sd1, sd2, sd3,
     cs = np.empty((n, 2))
     zhat = np.empty((n, n_sensors), dtype=np.uint16)
     for j in nb.prange(n):
-        x, y, th = move(particles[j, 0], particles[j, 1], particles[j, 2],
-                        rot1, trans, rot2, sd1, sd2, sd3,
-                        normals[j, 0], normals[j, 1], normals[j, 2])  # fmt: skip
-        c = math.cos(th)
-        s = math.sin(th)
-        for i in range(n_sensors):  # what each sensor should read, mm
-            sx, sy, sth = sensor_pose(x, y, th, c, s, sensors, i)
-            zhat[j, i] = table_mm(table, x0, y0, inv_res, sx, sy, sth)
+        _move_and_look(j, particles, normals, rot1, trans, rot2, sd1, sd2, sd3,
+                       sensors, table, x0, y0, inv_res, out_p, cs, zhat)  # fmt: skip
         total = 0.0
         for i in range(n_sensors):  # how well the scan agrees
             total += beam_log_prob(z[i], e_short[i], zhat[j, i], hit_norm, short_norm,
                                    inv_sigma, p_max, p_rand, max_range)  # fmt: skip
-        out_p[j, 0] = x
-        out_p[j, 1] = y
-        out_p[j, 2] = th
-        cs[j, 0] = c
-        cs[j, 1] = s
         ll[j] = exponent * total
-    top = _largest(ll)
-    for j in nb.prange(n):  # no particle fits the scan: the weights stay as they were
-        out_w[j] = weights[j] * math.exp(ll[j] - top) if top > -np.inf else weights[j]
-    ratio, ess = _normalise(weights, out_p, cs, out_w, est)
-    return (top + math.log(ratio) if top > -np.inf else top), ess
+    return _weigh(weights, ll, out_p, cs, out_w, est)
 
 
 def _paper_step(particles, weights, normals, rot1, trans, rot2, sd1, sd2, sd3,
@@ -151,28 +174,13 @@ def _paper_step(particles, weights, normals, rot1, trans, rot2, sd1, sd2, sd3,
     cs = np.empty((n, 2))
     zhat = np.empty((n, n_sensors), dtype=np.uint16)
     for j in nb.prange(n):
-        x, y, th = move(particles[j, 0], particles[j, 1], particles[j, 2],
-                        rot1, trans, rot2, sd1, sd2, sd3,
-                        normals[j, 0], normals[j, 1], normals[j, 2])  # fmt: skip
-        c = math.cos(th)
-        s = math.sin(th)
-        for i in range(n_sensors):  # what each sensor should read, mm
-            sx, sy, sth = sensor_pose(x, y, th, c, s, sensors, i)
-            zhat[j, i] = table_mm(table, x0, y0, inv_res, sx, sy, sth)
+        _move_and_look(j, particles, normals, rot1, trans, rot2, sd1, sd2, sd3,
+                       sensors, table, x0, y0, inv_res, out_p, cs, zhat)  # fmt: skip
         d = 0.0
         for i in range(n_sensors):  # the mean relative innovation
             d += abs((z[i] - zhat[j, i] * 0.001) / z[i])
-        out_p[j, 0] = x
-        out_p[j, 1] = y
-        out_p[j, 2] = th
-        cs[j, 0] = c
-        cs[j, 1] = s
         ll[j] = math.log(math.exp(-d / n_sensors) + 1.0 / n)
-    top = _largest(ll)
-    for j in nb.prange(n):  # no particle fits the scan: the weights stay as they were
-        out_w[j] = weights[j] * math.exp(ll[j] - top) if top > -np.inf else weights[j]
-    ratio, ess = _normalise(weights, out_p, cs, out_w, est)
-    return (top + math.log(ratio) if top > -np.inf else top), ess
+    return _weigh(weights, ll, out_p, cs, out_w, est)
 
 
 beam_step, beam_step_parallel = serial_and_parallel(_beam_step)
