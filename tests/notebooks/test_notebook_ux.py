@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import os
 import threading
 import time
 
@@ -55,6 +56,26 @@ def test_warmup_command_lists_and_warms(capsys):
     assert main(["warmup", "sim"]) == 0
     assert "sim" in capsys.readouterr().out
     assert "sim" in nb.warmed_parts()  # setup(warm=("sim",)) now only loads
+
+
+def test_warmup_builds_a_cone_table_even_when_tables_are_on_disk(tmp_path, monkeypatch):
+    """A table on disk (another clone's) must not stand in for its builder's kernels."""
+    from robotlib.localization import cones
+    from robotlib.localization._kernels import cone_table as kernels
+    from robotlib.warmups import _warm_cone_table
+
+    built = []
+    real = kernels.build_cone_table
+    monkeypatch.setattr(
+        kernels, "build_cone_table", lambda *a: built.append(1) or real(*a)
+    )
+    monkeypatch.setenv("ROBOTLIB_TABLE_CACHE", str(tmp_path))
+    monkeypatch.setattr(cones, "DISK_MIN_SECONDS", 0.0)  # any table would be kept
+    for _ in range(2):
+        _warm_cone_table()
+    assert len(built) == 2  # built both times, nothing read from the disk
+    assert not list(tmp_path.iterdir())  # nor kept there
+    assert os.environ["ROBOTLIB_TABLE_CACHE"] == str(tmp_path)  # as it was
 
 
 def _run(cells, tmp_path):
