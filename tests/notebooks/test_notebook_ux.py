@@ -44,6 +44,28 @@ def test_compile_watch_names_a_kernel_that_compiles_and_progress_shows_it(capsys
     assert "compiling" not in capsys.readouterr().err
 
 
+def test_a_notebook_bar_redraws_every_tick_until_it_closes():
+    """A long step still moves the bar (its elapsed time); a closed bar stops."""
+
+    class Bar:
+        disable, drawn = False, 0
+
+        def refresh(self):
+            self.drawn += 1
+
+    bar = Bar()
+    before = {t.name for t in threading.enumerate()}
+    nb._tick(bar, every=0.01)
+    (ticker,) = [t for t in threading.enumerate() if t.name not in before]
+    waited = time.monotonic()
+    while bar.drawn < 3 and time.monotonic() - waited < 30:
+        time.sleep(0.01)
+    assert bar.drawn >= 3
+    bar.disable = True  # what tqdm's close() sets
+    ticker.join(30)
+    assert not ticker.is_alive()
+
+
 def test_warm_up_rejects_unknown_parts():
     with pytest.raises(ValueError, match="unknown warm-up"):
         nb.warm_up(["nope"])
