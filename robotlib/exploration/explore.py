@@ -279,11 +279,21 @@ class Exploration:
             targets.append(np.array([f.target for f in regions]).reshape(-1, 2))
             if start is not None and regions:
                 costs[n], targets[n] = frontier_costs(c, start, regions)
-        pick = np.asarray(
-            self.chooser(
-                costs, gains, centroids, s.strategy, s.beta, s.discount_radius, taken
+        pick = (
+            np.asarray(
+                self.chooser(
+                    costs,
+                    gains,
+                    centroids,
+                    s.strategy,
+                    s.beta,
+                    s.discount_radius,
+                    taken,
+                )
             )
-        ).reshape(-1).astype(np.int64)
+            .reshape(-1)
+            .astype(np.int64)
+        )
         if len(pick) != len(needy):
             raise ValueError(
                 f"the chooser gave {len(pick)} targets for {len(needy)} robots"
