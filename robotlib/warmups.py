@@ -170,6 +170,18 @@ def _warm_models() -> None:
     _warm_ring_many()
 
 
+def _warm_landmarks() -> None:
+    from .localization.ekf import ekf_predict, landmark_update
+    from .mapping.ekfslam import observe_landmarks, world_landmarks
+    from .world import load_world
+
+    world = load_world("corridor")
+    corners, pose = world_landmarks(world), np.asarray(world.start, dtype=float)
+    ids, z = observe_landmarks(corners, pose, walls=world, rng=0)
+    mu, P = ekf_predict(pose, np.eye(3) * 0.01, pose, pose + [0.1, 0.0, 0.1])
+    landmark_update(mu, P, z, corners[ids], 0.05, 0.03)
+
+
 def _paper(world):
     from .localization import MCL
 
@@ -223,6 +235,10 @@ WARMUPS: dict[str, Callable[[], None] | list[tuple[str, Callable[[], None]]]] = 
     "avoidance": _warm_avoidance,
     "models": _warm_models,
     "plan": _warm_plan,
+    "ekf": [  # Lab 1's EKF and its comparison with MCL
+        ("landmarks", _warm_landmarks),
+        ("MCL.best (threads)", _warm_filter(_best)),
+    ],
 }
 """What `warm_up` can compile: a name to a function that runs its kernels
 once, or to a list of ``(label, function)`` steps (the progress bar counts

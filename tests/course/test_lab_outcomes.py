@@ -26,6 +26,8 @@ LAZY = {
             "def hist_update(b, lk):\n    return np.asarray(b, float)\n"
         ),
         "beam_fit": "def fit_beam(*a, **k):\n    return BeamParameters()\n",
+        "ekf_update": "def ekf_landmark_update(mu, P, *a):\n    return mu, P\n",
+        "ekf_run": "def ekf_landmark_update(mu, P, *a):\n    return mu, P\n",
     },
     "lab6_real_robot": {
         "replay": "def localize(world, odo, z, seed):\n    return np.array(odo)\n",

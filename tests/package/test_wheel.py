@@ -1,8 +1,9 @@
 """The package as a student installs it: a wheel in a fresh virtual environment.
 
-The wheel is built (``pip wheel --no-deps``) from a copy of the files the
-build reads, in a temporary folder, so the build writes nothing into the
-repository. It is installed into a fresh venv in another temporary folder,
+The wheel is built as ``robotlib release --bundle`` builds it
+(`robotlib.course.bundle.build_wheel`: ``pip wheel --no-deps`` on a copy of
+the files the build reads, in a temporary folder, so the build writes nothing
+into the repository). It is installed into a fresh venv in another temporary folder,
 far from any checkout. The venv sees the test environment's installed
 packages (numpy, numba, Jupyter, pytest, ...) through a ``.pth`` file, which
 is what ``--system-site-packages`` gives when the base interpreter carries
@@ -17,7 +18,6 @@ from __future__ import annotations
 import json
 import os
 import re
-import shutil
 import subprocess
 import sys
 import sysconfig
@@ -26,8 +26,9 @@ from pathlib import Path
 
 import pytest
 
+from robotlib.course.bundle import build_wheel
+
 ROOT = Path(__file__).resolve().parents[2]
-BUILD_INPUTS = ["pyproject.toml", "README.md", "robotlib", "worlds", "labs", "course"]
 LAB0 = "lab0_getting_started.ipynb"
 
 pytestmark = pytest.mark.slow
@@ -48,20 +49,7 @@ def _run(cmd, cwd, env, timeout=600):
 
 @pytest.fixture(scope="module")
 def wheel(tmp_path_factory):
-    src = tmp_path_factory.mktemp("src")
-    ignore = shutil.ignore_patterns("__pycache__", "*.nbi", "*.nbc", "*.pyc")
-    for name in BUILD_INPUTS:
-        path = ROOT / name
-        if path.is_dir():
-            shutil.copytree(path, src / name, ignore=ignore)
-        else:
-            shutil.copy2(path, src / name)
-    out = tmp_path_factory.mktemp("wheel")
-    env = {**os.environ, "PIP_DISABLE_PIP_VERSION_CHECK": "1"}
-    cmd = [sys.executable, "-m", "pip", "wheel", "--no-deps", "-q", "-w", out, src]
-    _run(cmd, cwd=out, env=env)
-    (whl,) = out.glob("robotlib-*.whl")
-    return whl
+    return build_wheel(ROOT, tmp_path_factory.mktemp("wheel"))
 
 
 @pytest.fixture(scope="module")
