@@ -5,8 +5,8 @@ mostly wait for a long subprocess (the documentation build, a cold compile
 in a fresh venv). A test module with a ``background_work(folder)`` function
 gets it called in a thread as soon as the session's tests are collected
 (if any of its tests were selected), with a temporary folder of its own;
-it and the processes it starts run at the lowest priority (nice 19), so
-they take only CPU time the tests leave over. The module's tests run last,
+it and the processes it starts run at a lower priority (`NICER`), so
+they take mostly CPU time the tests leave over. The module's tests run last,
 and get what ``background_work`` returned (or raised) from `result`.
 Processes started with `run` are killed if the session ends before them.
 """
@@ -22,6 +22,10 @@ from concurrent.futures import Future, ThreadPoolExecutor
 from pathlib import Path
 
 HOOK = "background_work"
+NICER = 5
+"""Nice levels below the tests: a core the tests leave idle goes to the background
+work, a busy one mostly to the tests (weight 1 to 3), and on a loaded machine the
+background work still moves."""
 
 _pool: ThreadPoolExecutor | None = None
 _jobs: dict[str, Future] = {}
@@ -54,10 +58,12 @@ def run(cmd, timeout: float, **kwargs) -> subprocess.CompletedProcess:
     return subprocess.CompletedProcess(proc.args, proc.returncode, out, err)
 
 
-def _lowest(work, folder: Path):
-    """Run ``work(folder)`` at nice 19 (the thread's; its processes inherit it)."""
+def _lower(work, folder: Path):
+    """Run ``work(folder)`` `NICER` levels nicer (its processes inherit it)."""
     if hasattr(os, "setpriority") and hasattr(threading, "get_native_id"):
-        os.setpriority(os.PRIO_PROCESS, threading.get_native_id(), 19)
+        tid = threading.get_native_id()
+        nice = os.getpriority(os.PRIO_PROCESS, tid)
+        os.setpriority(os.PRIO_PROCESS, tid, min(19, nice + NICER))
     return work(folder)
 
 
@@ -71,7 +77,7 @@ def start(modules) -> None:
             _pool = ThreadPoolExecutor(max_workers=2, thread_name_prefix="background")
         folder = Path(tempfile.mkdtemp(prefix="robotlib-bg-"))
         _folders.append(folder)
-        _jobs[module.__name__] = _pool.submit(_lowest, getattr(module, HOOK), folder)
+        _jobs[module.__name__] = _pool.submit(_lower, getattr(module, HOOK), folder)
 
 
 def result(module: str, timeout: float = 1800.0):
