@@ -153,7 +153,9 @@ def _flat(text: str) -> str:
     return "".join(text.split())
 
 
-def leaks(wheel: str | Path, solutions: str | Path) -> list[str]:
+def leaks(
+    wheel: str | Path, solutions: str | Path, released: dict[str, str]
+) -> list[str]:
     """List what in ``wheel`` gives away an answer of ``solutions/*.ipynb``.
 
     Parameters
@@ -162,6 +164,9 @@ def leaks(wheel: str | Path, solutions: str | Path) -> list[str]:
         A built wheel (any zip file).
     solutions : str or pathlib.Path
         The solution notebooks' folder.
+    released : dict
+        Lab file name to the text of its fresh release
+        (`robotlib.course.release.release`).
 
     Returns
     -------
@@ -173,10 +178,7 @@ def leaks(wheel: str | Path, solutions: str | Path) -> list[str]:
         than the modules its exercise lists as the library's own versions.
         Empty when the wheel is clean.
     """
-    from .release import release
-
     solutions = Path(solutions)
-    released = release(solutions, solutions.parent / "labs")
     regions = {}  # (lab, number): the region flattened, the files allowed it
     for path in sorted(solutions.glob("*.ipynb")):
         declared = _declared_files(path)
@@ -308,7 +310,11 @@ def _where() -> str:
 
 
 def make_bundle(
-    root: str | Path, dest: str | Path, warmup: float | None = None, say=print
+    root: str | Path,
+    dest: str | Path,
+    released: dict[str, str],
+    warmup: float | None = None,
+    say=print,
 ) -> Path:
     """Write the student bundle of the repository ``root`` into ``dest``.
 
@@ -316,9 +322,12 @@ def make_bundle(
     ----------
     root : str or pathlib.Path
         The repository; its ``labs/`` must be a fresh release of
-        ``solutions/``.
+        ``solutions/`` (the wheel is built from them).
     dest : str or pathlib.Path
         Bundle folder (created; must be empty or absent).
+    released : dict
+        Lab file name to the text of its fresh release
+        (`robotlib.course.release.release`).
     warmup : float, optional
         Seconds ``robotlib warmup`` takes, for ``INSTALL.md``; measured here
         (`warmup_seconds`) when None.
@@ -333,27 +342,22 @@ def make_bundle(
     Raises
     ------
     ValueError
-        When ``labs/`` is stale, ``dest`` holds files, or the wheel leaks
-        (the leaks listed; the wheel is deleted).
+        When ``dest`` holds files, or the wheel leaks or its labs are not
+        ``released`` (the problems listed; the wheel is deleted).
     """
-    from .release import stale_labs
-
     root, dest = Path(root), Path(dest)
-    stale = stale_labs(root / "solutions", root / "labs")
-    if stale:
-        raise ValueError(f"labs/ is stale ({', '.join(stale)}): run robotlib release")
     if dest.exists() and any(dest.iterdir()):
         raise ValueError(f"{dest} is not empty")
     say("building the wheel (from a copy without solutions/) ...")
     wheel = build_wheel(root, dest)
-    problems = leaks(wheel, root / "solutions")
+    problems = leaks(wheel, root / "solutions", released)
     if problems:
         wheel.unlink()
         raise ValueError("the wheel gives answers away:\n  " + "\n  ".join(problems))
     say(f"checked {wheel.name}: no solution, every lab as released")
     (dest / "labs").mkdir()
-    for lab in sorted((root / "labs").glob("*.ipynb")):
-        shutil.copy2(lab, dest / "labs" / lab.name)
+    for name, text in sorted(released.items()):
+        (dest / "labs" / name).write_text(text, encoding="utf-8")
     if warmup is None:
         say("timing `robotlib warmup` on an empty kernel cache ...")
         where = f"when this bundle was made, {_where()} before the run"

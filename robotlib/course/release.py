@@ -149,8 +149,14 @@ def _bundle(root: Path, args: argparse.Namespace) -> int:
     if args.names or args.solutions or args.labs or args.check:
         _say("robotlib release: --bundle takes every lab of the repository, alone")
         return 2
+    solutions, labs = root / "solutions", root / "labs"
     try:
-        make_bundle(root, args.bundle, warmup=args.warmup_seconds, say=_say)
+        stale = stale_labs(solutions, labs)
+        if stale:
+            _say(f"stale: {', '.join(stale)} (run `robotlib release` first)")
+            return 1
+        released = release(solutions, labs)
+        make_bundle(root, args.bundle, released, args.warmup_seconds, say=_say)
     except (ValueError, RuntimeError, NotebookError) as exc:
         _say(f"robotlib release --bundle: {exc}")
         return 1

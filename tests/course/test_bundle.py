@@ -32,12 +32,15 @@ def _zip(path: Path, files: dict[str, str]) -> Path:
     return path
 
 
+RELEASED = release(SOLUTIONS, ROOT / "labs")
+
+
 def _released_labs() -> dict[str, str]:
-    return {DIST + name: text for name, text in release(SOLUTIONS, ROOT).items()}
+    return {DIST + name: text for name, text in RELEASED.items()}
 
 
 def test_a_clean_wheel_has_no_leaks(tmp_path):
-    assert leaks(_zip(tmp_path / "w.whl", _released_labs()), SOLUTIONS) == []
+    assert leaks(_zip(tmp_path / "w.whl", _released_labs()), SOLUTIONS, RELEASED) == []
 
 
 def test_every_way_an_answer_can_leak_is_reported(tmp_path):
@@ -49,7 +52,7 @@ def test_every_way_an_answer_can_leak_is_reported(tmp_path):
     files["robotlib/solutions/lab1.ipynb"] = "{}"
     files["robotlib/notes.md"] = "### BEGIN HIDDEN TESTS\nassert x\n"
     files["robotlib/planning/answers.py"] = "def f():\n" + region.replace("\n", "\n ")
-    found = "\n".join(leaks(_zip(tmp_path / "w.whl", files), SOLUTIONS))
+    found = "\n".join(leaks(_zip(tmp_path / "w.whl", files), SOLUTIONS, RELEASED))
     assert f"{DIST}{LAB4}: differs from a fresh release" in found
     assert f"{DIST}{LAB4}: holds '### BEGIN SOLUTION'" in found
     assert "lab0_getting_started.ipynb: not in the wheel" in found
@@ -73,28 +76,28 @@ def test_the_library_s_own_listed_version_is_no_leak(tmp_path):
     (line,) = [t for t in regions if "math.exp" in t]  # the paper's resize
     files = _released_labs()
     files["robotlib/localization/paper.py"] = f"def resize():\n    {line}\n"
-    assert leaks(_zip(tmp_path / "ok.whl", files), SOLUTIONS) == []
+    assert leaks(_zip(tmp_path / "ok.whl", files), SOLUTIONS, RELEASED) == []
     files["robotlib/localization/mcl.py"] = f"def other():\n    {line}\n"
-    found = leaks(_zip(tmp_path / "bad.whl", files), SOLUTIONS)
+    found = leaks(_zip(tmp_path / "bad.whl", files), SOLUTIONS, RELEASED)
     where = "robotlib/localization/mcl.py"
     assert found == [f"{where}: holds solution region 5 of lab3_mcl"]
 
 
-def test_a_stale_release_or_a_used_folder_is_refused(tmp_path):
+def test_a_stale_release_or_a_used_folder_is_refused(tmp_path, monkeypatch, capsys):
     root = tmp_path / "course"
     (root / "solutions").mkdir(parents=True)
     (root / "labs").mkdir()
     shutil.copy2(ROOT / "tests" / "data" / "course" / "tiny.ipynb", root / "solutions")
-    with pytest.raises(ValueError, match=r"labs/ is stale \(tiny.ipynb\)"):
-        make_bundle(root, tmp_path / "bundle", warmup=1.0)
-    assert main(["release", "--solutions", str(root / "solutions"),
-                 "--labs", str(root / "labs")]) == 0  # fmt: skip
-    (tmp_path / "bundle").mkdir()
-    (tmp_path / "bundle" / "old.whl").write_text("")
+    monkeypatch.chdir(root)  # the course folder: the one holding solutions/
+    assert main(["release", "--bundle", "out", "--warmup-seconds", "1"]) == 1
+    assert "stale: tiny.ipynb (run `robotlib release` first)" in capsys.readouterr().err
+    assert not (root / "out").exists()
+    (root / "out").mkdir()
+    (root / "out" / "old.whl").write_text("")
     with pytest.raises(ValueError, match="is not empty"):
-        make_bundle(root, tmp_path / "bundle", warmup=1.0)
+        make_bundle(root, root / "out", {}, warmup=1.0)
     assert main(["release", "--warmup-seconds", "3"]) == 2
-    assert main(["release", "lab0_getting_started", "--bundle", "x"]) == 2
+    assert main(["release", "tiny", "--bundle", "x"]) == 2
 
 
 @pytest.mark.slow
@@ -104,7 +107,7 @@ def test_the_bundle_holds_no_solution_code(tmp_path, monkeypatch):
     assert main(["release", "--bundle", str(out), "--warmup-seconds", "150"]) == 0
     (wheel,) = out.glob("robotlib-*.whl")
     assert sorted(p.name for p in out.iterdir()) == ["INSTALL.md", "labs", wheel.name]
-    assert leaks(wheel, SOLUTIONS) == []
+    assert leaks(wheel, SOLUTIONS, RELEASED) == []
     with zipfile.ZipFile(wheel) as zf:
         names = zf.namelist()
         assert not [n for n in names if "solution" in n.lower()]
@@ -112,7 +115,7 @@ def test_the_bundle_holds_no_solution_code(tmp_path, monkeypatch):
                    if "/share/robotlib/labs/" in n}  # fmt: skip
     assert any(n.startswith("robotlib/course/grade") for n in names)  # the library
     bundled = {p.name: p.read_text() for p in (out / "labs").glob("*.ipynb")}
-    assert shipped == bundled == release(SOLUTIONS, ROOT)
+    assert shipped == bundled == RELEASED
     for name, text in bundled.items():
         lab = json.loads(text)
         solution = read_notebook(SOLUTIONS / name)
