@@ -129,6 +129,16 @@ def _warm_mapping() -> None:
     expected_laser(world, np.tile(world.start, (8, 1)))  # the threaded caster (K >= 8)
 
 
+def _warm_explore() -> None:
+    """Two robots exploring a small hall briefly, with the laser and the sonar."""
+    from .exploration import ExploreSettings, explore_team
+    from .world import generate_world
+
+    world = generate_world("hall", 0)
+    for sensor in ("laser", "sonar"):
+        explore_team(world, 2, ExploreSettings(sensor=sensor, max_time=4.0), rng=0)
+
+
 def _warm_ring_many() -> None:
     """Run the sonar ring's threaded kernels (more than 64 poses at once)."""
     from .sensing import SonarModel, expected_ranges, simulate_ranges
@@ -235,6 +245,7 @@ WARMUPS: dict[str, Callable[[], None] | list[tuple[str, Callable[[], None]]]] = 
     "avoidance": _warm_avoidance,
     "models": _warm_models,
     "plan": _warm_plan,
+    "explore": _warm_explore,
     "ekf": [  # Lab 1's EKF and its comparison with MCL
         ("landmarks", _warm_landmarks),
         ("MCL.best (threads)", _warm_filter(_best)),

@@ -111,6 +111,18 @@ LAB4_NOTHING = {
 }
 
 
+LAB7_NOTHING = {  # no frontiers, no target, no discount
+    "l7-03": "def frontier_cells(state):\n"
+    "    return np.zeros(np.shape(state), dtype=bool)\n",
+    "l7-08": "def utility(gain, cost, beta):\n"
+    "    return np.asarray(gain, dtype=float)\n\n\n"
+    "def choose_target(costs, gains, beta):\n"
+    "    return np.full(len(np.atleast_2d(costs)), -1)\n",
+    "l7-13": "def discount(gain, targets, chosen, radius):\n"
+    "    return np.asarray(gain, dtype=float)\n",
+}
+
+
 def _steer_sign_error(source: str) -> str:
     """Lab 4's steering law with the heading error's sign flipped."""
     wrong = source.replace(
@@ -163,6 +175,11 @@ WRONG = {
             {"l4-23": _steer_sign_error},
             {"steer": "", "tracking": ""},
         ),
+    },
+    "lab7_exploration": {
+        # no frontiers, no choice and no discount: every check fails, the
+        # outcome checks (one robot's coverage, the team's spread) included
+        "do_nothing": ("released", LAB7_NOTHING, {}),
     },
     "lab3_mcl": {
         # ignores the sonar (dead reckoning), never resamples (identity) and
