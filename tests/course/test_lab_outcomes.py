@@ -9,6 +9,7 @@ grader gives them) and a do-nothing version of the exercise's functions
 
 from __future__ import annotations
 
+import tempfile
 from pathlib import Path
 
 import pytest
@@ -52,6 +53,7 @@ SLOW = {"lab7_exploration"}
 def _run(lab: str, grade_id: str, lazy: str, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     monkeypatch.setenv("MPLBACKEND", "Agg")
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))  # Lab 6's mkdtemp
     sol = read_notebook(ROOT / "solutions" / f"{lab}.ipynb")
     plan = lab_plan(sol, lab)
     check = next(c for c in plan.checks if c.grade_id == grade_id)
