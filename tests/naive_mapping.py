@@ -328,7 +328,9 @@ def fit_curvature(L, origin, res, pose, mount, angles, ranges, max_range, h):
         ly = y + math.sin(th) * mount[0] + math.cos(th) * mount[1]
         return sum(
             bilinear_evidence(
-                L, origin, res,
+                L,
+                origin,
+                res,
                 lx + z * math.cos(th + mount[2] + a),
                 ly + z * math.sin(th + mount[2] + a),
             )  # fmt: skip
