@@ -14,6 +14,7 @@ functions, so that importing it stays cheap.
 
 from __future__ import annotations
 
+import os
 from collections.abc import Callable
 
 import numpy as np
@@ -129,6 +130,16 @@ def _warm_mapping() -> None:
     expected_laser(world, np.tile(world.start, (8, 1)))  # the threaded caster (K >= 8)
 
 
+def _warm_explore() -> None:
+    """Two robots exploring a small hall briefly, with the laser and the sonar."""
+    from .exploration import ExploreSettings, explore_team
+    from .world import generate_world
+
+    world = generate_world("hall", 0)
+    for sensor in ("laser", "sonar"):
+        explore_team(world, 2, ExploreSettings(sensor=sensor, max_time=4.0), rng=0)
+
+
 def _warm_ring_many() -> None:
     """Run the sonar ring's threaded kernels (more than 64 poses at once)."""
     from .sensing import SonarModel, expected_ranges, simulate_ranges
@@ -153,6 +164,29 @@ def _warm_large_map() -> None:
     world.free_space(0.5)
 
 
+def _warm_cone_table() -> None:
+    """Build a small cone table, never read from the tables' disk cache.
+
+    A table found on disk (one the same source built before, maybe in
+    another clone sharing ``~/.cache``) skips the builder's kernels, which
+    would then compile in the first lab that builds a table for another
+    world.
+    """
+    from .localization import ConeTable
+    from .world import World
+
+    box = World(segments=[[0, 0, 1, 0], [1, 0, 1, 1], [1, 1, 0, 1], [0, 1, 0, 0]])
+    saved = os.environ.get("ROBOTLIB_TABLE_CACHE")
+    os.environ["ROBOTLIB_TABLE_CACHE"] = "off"
+    try:
+        ConeTable(box, resolution=0.25)
+    finally:
+        if saved is None:
+            del os.environ["ROBOTLIB_TABLE_CACHE"]
+        else:
+            os.environ["ROBOTLIB_TABLE_CACHE"] = saved
+
+
 def _warm_models() -> None:
     from .localization import BeamParameters, BeamSensorModel
     from .sensing import SonarModel, simulate_ranges
@@ -167,7 +201,20 @@ def _warm_models() -> None:
     fast = BeamSensorModel(world, fast=True, params=BeamParameters(exponent=0.2))
     fast.log_likelihood(np.tile(poses, (100, 1)), z)  # the table, looked up
     fast.table.lookup(np.tile(poses, (2000, 1)))  # over threads (4,096 poses and up)
+    _warm_cone_table()
     _warm_ring_many()
+
+
+def _warm_landmarks() -> None:
+    from .localization.ekf import ekf_predict, landmark_update
+    from .mapping.ekfslam import observe_landmarks, world_landmarks
+    from .world import load_world
+
+    world = load_world("corridor")
+    corners, pose = world_landmarks(world), np.asarray(world.start, dtype=float)
+    ids, z = observe_landmarks(corners, pose, walls=world, rng=0)
+    mu, P = ekf_predict(pose, np.eye(3) * 0.01, pose, pose + [0.1, 0.0, 0.1])
+    landmark_update(mu, P, z, corners[ids], 0.05, 0.03)
 
 
 def _paper(world):
@@ -216,6 +263,7 @@ WARMUPS: dict[str, Callable[[], None] | list[tuple[str, Callable[[], None]]]] = 
         ("MCL.paper (fast, threads)", _warm_filter(_paper_fast_many)),
         ("beam + KLD", _warm_filter(_beam_kld)),
         ("beam (fast)", _warm_filter(_beam_fast)),
+        ("a cone table's builder", _warm_cone_table),
         ("MCL.best (threads)", _warm_filter(_best)),
         ("a large map", _warm_large_map),
     ],
@@ -223,6 +271,11 @@ WARMUPS: dict[str, Callable[[], None] | list[tuple[str, Callable[[], None]]]] = 
     "avoidance": _warm_avoidance,
     "models": _warm_models,
     "plan": _warm_plan,
+    "explore": _warm_explore,
+    "ekf": [  # Lab 1's EKF and its comparison with MCL
+        ("landmarks", _warm_landmarks),
+        ("MCL.best (threads)", _warm_filter(_best)),
+    ],
 }
 """What `warm_up` can compile: a name to a function that runs its kernels
 once, or to a list of ``(label, function)`` steps (the progress bar counts

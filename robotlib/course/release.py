@@ -5,6 +5,7 @@ Usage::
     robotlib release                 # every solutions/*.ipynb -> labs/
     robotlib release lab3_mcl        # one lab
     robotlib release --check         # exit 1 if labs/ is stale (CI)
+    robotlib release --bundle DIR    # the students' wheel, labs/, INSTALL.md
 """
 
 from __future__ import annotations
@@ -88,11 +89,30 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--check", action="store_true", help="write nothing; exit 1 if labs/ is stale"
     )
+    parser.add_argument(
+        "--bundle",
+        type=Path,
+        metavar="DIR",
+        help="write what students get into DIR (new or empty): a wheel without "
+        "solutions, the labs, INSTALL.md; labs/ must be released first",
+    )
+    parser.add_argument(
+        "--warmup-seconds",
+        type=float,
+        metavar="S",
+        help="with --bundle: the time `robotlib warmup` takes, for INSTALL.md "
+        "(default: measured, on an empty kernel cache)",
+    )
 
 
 def run(args: argparse.Namespace) -> int:
     """Run ``robotlib release``; return the exit status."""
     root = project_dir()
+    if args.bundle is not None:
+        return _bundle(root, args)
+    if args.warmup_seconds is not None:
+        _say("robotlib release: --warmup-seconds goes with --bundle")
+        return 2
     solutions = args.solutions or root / "solutions"
     labs = args.labs or root / "labs"
     try:
@@ -120,4 +140,24 @@ def run(args: argparse.Namespace) -> int:
     }
     for fname in sorted(orphans):
         _say(f"warning: {labs / fname} has no source in {solutions}")
+    return 0
+
+
+def _bundle(root: Path, args: argparse.Namespace) -> int:
+    from .bundle import make_bundle
+
+    if args.names or args.solutions or args.labs or args.check:
+        _say("robotlib release: --bundle takes every lab of the repository, alone")
+        return 2
+    solutions, labs = root / "solutions", root / "labs"
+    try:
+        stale = stale_labs(solutions, labs)
+        if stale:
+            _say(f"stale: {', '.join(stale)} (run `robotlib release` first)")
+            return 1
+        released = release(solutions, labs)
+        make_bundle(root, args.bundle, released, args.warmup_seconds, say=_say)
+    except (ValueError, RuntimeError, NotebookError) as exc:
+        _say(f"robotlib release --bundle: {exc}")
+        return 1
     return 0

@@ -29,27 +29,14 @@ import json
 import os
 import sys
 import time
-import zlib
 from dataclasses import asdict, replace
 
 import numpy as np
 
-__all__ = ["add_arguments", "run", "bench_world", "bench_rows"]
+__all__ = ["add_arguments", "run", "bench_rows"]
 
 SAMPLE_TIMES = (60.0, 120.0, 240.0)
 """Simulated times at which the coverage is reported, s."""
-
-
-def bench_world(name: str, seed: int):
-    """Return the world ``name``: a shipped one, or ``gen-KIND`` drawn from ``seed``."""
-    from ..world import generate_world, load_world
-
-    if name.startswith("gen-"):
-        kind = name[4:]
-        return generate_world(
-            kind, np.random.default_rng([seed, zlib.crc32(kind.encode())])
-        )
-    return load_world(name)
 
 
 def _coverage_at(times, coverage, t: float) -> float:
@@ -60,8 +47,9 @@ def _coverage_at(times, coverage, t: float) -> float:
 
 def _one(name: str, seed: int, n: int, settings) -> dict:
     from ..exploration import explore_team
+    from ..world import seeded_world
 
-    world = bench_world(name, seed)
+    world = seeded_world(name, seed)
     t0 = time.perf_counter()
     res = explore_team(world, n, settings, rng=seed)
     out = {"world": name, "seed": seed, **res.summary()}

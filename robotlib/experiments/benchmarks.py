@@ -21,6 +21,7 @@ BENCHES = {
     "graphslam": "robotlib.experiments.bench_graphslam",
     "logs": "robotlib.experiments.bench_logs",
     "histogram": "robotlib.experiments.bench_histogram",
+    "kalman": "robotlib.experiments.bench_kalman",
     "plan": "robotlib.experiments.bench_plan",
     "nav": "robotlib.experiments.bench_nav",
     "large-map": "robotlib.experiments.bench_large_map",

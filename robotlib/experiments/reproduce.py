@@ -12,7 +12,9 @@ true start pose.
 ``robotlib reproduce [--world W] --seeds 20 --json FILE`` runs the paper's
 configuration and the best one this project offers over many seeds. A
 bundled corridor drives `drive_route`; any other world (a file, a real
-building) a seeded tour (`robotlib.experiments.tours.drive_tour`).
+building) a seeded tour (`robotlib.experiments.tours.drive_tour`);
+``--world gen-KIND`` tours a world generated afresh for each seed
+(`robotlib.world.seeded_world`), so nothing is tuned to one map.
 
 ``--kidnap STEP`` adds a run per seed and filter on the same tour with the
 robot moved to a random free pose just before step ``STEP`` (the filter is
@@ -23,8 +25,10 @@ steps ``STEP + r`` to ``STEP + r + 4`` (`recovery_steps`).
 from __future__ import annotations
 
 import argparse
+import functools
 import json
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -32,7 +36,7 @@ import numpy as np
 
 from ..localization import BEST, MCL, History
 from ..localization.paper import RESIZE_FLOOR
-from ..world import World, load_world
+from ..world import World, load_world, seeded_world
 from .routes import MAX_STEPS, RouteLog, drive_route
 from .tours import drive_tour
 
@@ -297,7 +301,7 @@ def make_route(world: World, seed: int, n_steps: int, route: str = "auto", kidna
 
 
 def reproduce(
-    world: World,
+    world: World | Callable[[int], World],
     seeds,
     configs: dict[str, FilterConfig] | None = None,
     n_steps: int = MAX_STEPS,
@@ -309,8 +313,9 @@ def reproduce(
 
     Parameters
     ----------
-    world : World
-        The world.
+    world : World or callable
+        The world, or a function of the seed returning each seed's own world
+        (a generated one, `robotlib.world.seeded_world`).
     seeds : iterable of int
         One route and one filter seed each.
     configs : dict of str to FilterConfig, optional
@@ -335,8 +340,9 @@ def reproduce(
     seeds = list(seeds)
     runs = {name: ([], [], []) for name in configs}
     for seed in seeds:
-        log = make_route(world, seed, n_steps, route)
-        taken = make_route(world, seed, n_steps, "tour", kidnap) if kidnap else None
+        w = world(seed) if callable(world) else world
+        log = make_route(w, seed, n_steps, route)
+        taken = make_route(w, seed, n_steps, "tour", kidnap) if kidnap else None
         for name, config in configs.items():
             runs[name][0].append(run_filter(log, config, seed))
             if tracking:
@@ -348,7 +354,10 @@ def reproduce(
         out[name] = summarize(runs[name][0], runs[name][1], config)
         if kidnap:
             out[name]["kidnap"] = summarize_kidnap(runs[name][2], kidnap)
-    out["world"] = world.name or str(world.source)
+    if isinstance(world, World):
+        out["world"] = world.name or str(world.source)
+    else:
+        out["world"] = "a world per seed"
     out["seeds"] = seeds
     return out
 
@@ -400,7 +409,11 @@ def format_table(result: dict) -> str:
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Options of ``robotlib reproduce``."""
     parser.description = "Run the paper's MCL experiment and the best configuration."
-    parser.add_argument("--world", default="corridor", help="world name or path")
+    parser.add_argument(
+        "--world",
+        default="corridor",
+        help="world name or path, or gen-KIND: a world generated afresh per seed",
+    )
     parser.add_argument("--seeds", type=int, default=20, help="number of seeds")
     parser.add_argument("--first-seed", type=int, default=0)
     parser.add_argument("--steps", type=int, default=MAX_STEPS, help="steps per run")
@@ -430,7 +443,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Run ``robotlib reproduce``; return the exit status."""
-    world = load_world(args.world)
+    route = args.route
+    if args.world.startswith("gen-"):  # a fresh generated world per seed, toured
+        world = functools.partial(seeded_world, args.world)
+        route = "tour" if route == "auto" else route
+    else:
+        world = load_world(args.world)
     paper = FilterConfig(
         "paper", "paper", {"n": args.particles, "lam": args.lam, "floor": args.floor}
     )
@@ -447,8 +465,9 @@ def run(args: argparse.Namespace) -> int:
         configs,
         args.steps,
         kidnap=args.kidnap,
-        route=args.route,
+        route=route,
     )
+    result["world"] = args.world
     result["seconds"] = time.perf_counter() - t0
     print(format_table(result))  # noqa: T201
     if args.json is not None:

@@ -154,6 +154,11 @@ class Exploration:
         The knobs.
     rng : numpy.random.Generator, int or None
         Seeds the simulator (slip, sonar and laser noise) and SLAM.
+    frontiers : callable, optional
+        ``frontiers(state) -> mask``, bool ``(ny, nx)`` from the cell states:
+        replaces `frontier_cells` (Lab 7 plugs a student's in).
+    chooser : callable, optional
+        Replaces `choose`, same arguments and result.
     """
 
     def __init__(
@@ -162,7 +167,11 @@ class Exploration:
         starts,
         settings: ExploreSettings | None = None,
         rng: np.random.Generator | int | None = None,
+        frontiers=None,
+        chooser=None,
     ):
+        self.frontiers = frontier_cells if frontiers is None else frontiers
+        self.chooser = choose if chooser is None else chooser
         self.settings = s = ExploreSettings() if settings is None else settings
         starts = np.asarray(starts, dtype=float).reshape(-1, 3)
         if len(starts) < 1:
@@ -219,7 +228,12 @@ class Exploration:
         s = self.settings
         g = self.grid
         state = classify(g, s.free_level, s.occupied_level)
-        frontier = frontier_cells(state)
+        frontier = np.asarray(self.frontiers(state))
+        if frontier.shape != state.shape:
+            raise ValueError(
+                f"frontiers(state) gave shape {frontier.shape}, not {state.shape}"
+            )
+        frontier = frontier.astype(bool)
         regions = frontier_regions(frontier, g.origin, g.resolution, s.min_frontier)
         robots_xy = self._positions()
         echoes = self.echoes >= 2
@@ -265,9 +279,25 @@ class Exploration:
             targets.append(np.array([f.target for f in regions]).reshape(-1, 2))
             if start is not None and regions:
                 costs[n], targets[n] = frontier_costs(c, start, regions)
-        pick = choose(
-            costs, gains, centroids, s.strategy, s.beta, s.discount_radius, taken
+        pick = (
+            np.asarray(
+                self.chooser(
+                    costs,
+                    gains,
+                    centroids,
+                    s.strategy,
+                    s.beta,
+                    s.discount_radius,
+                    taken,
+                )
+            )
+            .reshape(-1)
+            .astype(np.int64)
         )
+        if len(pick) != len(needy):
+            raise ValueError(
+                f"the chooser gave {len(pick)} targets for {len(needy)} robots"
+            )
         for n, r in enumerate(needy):
             if pick[n] >= 0 and self._plan(r, spaces[n], targets[n][pick[n]]):
                 r.mode = EXPLORE
@@ -507,10 +537,14 @@ def explore(
     start=None,
     settings: ExploreSettings | None = None,
     rng: np.random.Generator | int | None = None,
+    frontiers=None,
+    chooser=None,
 ) -> ExplorationResult:
     """Explore ``world`` with one robot from ``start`` (default ``world.start``).
 
-    See `Exploration`; ``robotlib.exploration.explore_team`` runs a team.
+    See `Exploration` (``frontiers`` and ``chooser`` replace the library's
+    `frontier_cells` and `choose`); ``robotlib.exploration.explore_team``
+    runs a team.
     """
     start = world.start if start is None else start
-    return Exploration(world, [start], settings, rng).run()
+    return Exploration(world, [start], settings, rng, frontiers, chooser).run()

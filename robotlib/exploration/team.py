@@ -77,6 +77,8 @@ def explore_team(
     settings: ExploreSettings | None = None,
     rng: np.random.Generator | int | None = None,
     starts=None,
+    frontiers=None,
+    chooser=None,
 ) -> ExplorationResult:
     """Explore ``world`` with a team of ``n_robots`` sharing one map.
 
@@ -92,6 +94,9 @@ def explore_team(
         Seeds the simulator and SLAM.
     starts : array_like, shape (n_robots, 3), optional
         Start poses (default `team_starts`).
+    frontiers, chooser : callable, optional
+        Replace the library's `frontier_cells` and `choose` (see
+        `Exploration`).
 
     Returns
     -------
@@ -100,4 +105,4 @@ def explore_team(
     starts = team_starts(world, n_robots) if starts is None else np.asarray(starts)
     if len(starts) != n_robots:
         raise ValueError(f"need {n_robots} start poses, got {len(starts)}")
-    return Exploration(world, starts, settings, rng).run()
+    return Exploration(world, starts, settings, rng, frontiers, chooser).run()

@@ -159,16 +159,28 @@ def laser_jacobian(walls, pose, model: LaserModel, beams, step: float = 1e-4):
     H : numpy.ndarray, shape (B, 3)
         ``d zhat / d (x, y, theta)``.
     """
+    zhat, H, _ = _slopes(walls, pose, model, beams, step)
+    return zhat, H
+
+
+def _slopes(walls, pose, model, beams, step=1e-4, kink=1e-6):
+    """`laser_jacobian`, and which beams are smooth within ``step`` of ``pose``.
+
+    A beam whose forward and backward differences disagree by more than
+    ``kink`` (m) on some axis passes an edge there: a corner where its
+    range jumps, where a central difference gives a huge, meaningless slope
+    that would collapse ``P`` along it.
+    """
     pose = np.asarray(pose, dtype=float).reshape(3)
     poses = np.repeat(pose[None], 7, axis=0)
     for k in range(3):
         poses[1 + 2 * k, k] += step
         poses[2 + 2 * k, k] -= step
-    ranges = expected_laser(walls, poses, model)[:, beams]
-    H = np.column_stack(
-        [(ranges[1 + 2 * k] - ranges[2 + 2 * k]) / (2 * step) for k in range(3)]
-    )
-    return ranges[0], H
+    r = expected_laser(walls, poses, model)[:, beams]
+    fwd = np.column_stack([r[1 + 2 * k] - r[0] for k in range(3)])
+    bwd = np.column_stack([r[0] - r[2 + 2 * k] for k in range(3)])
+    smooth = (np.abs(fwd - bwd) <= kink).all(axis=1) & (r < model.max_range).all(axis=0)
+    return r[0], (fwd + bwd) / (2 * step), smooth
 
 
 def laser_update(
@@ -196,12 +208,17 @@ def laser_update(
     beams : array_like of int, optional
         Beams used (default: every tenth).
     sigma : float
-        Range noise assumed per beam, m: well above the sensor's own, since
-        beams near a corner or grazing a wall break the linearisation.
+        Range noise assumed per beam, m: well above the sensor's own (about
+        6 mm with its 1 cm rounding). Office drives, 3 seeds: at 6 mm the
+        NEES is above its 97.5 % point on about a fifth of the steps
+        (overconfident), at 2 cm on 7 %, at 5 cm on 3 % (but below its
+        2.5 % point on two thirds: underconfident). A conservative default.
     gate : float
         A beam is used only if its innovation is within ``gate`` standard
-        deviations of the predicted ``sqrt(H P H^T + sigma^2)``, and it and
-        its expectation are both echoes (below the maximum range).
+        deviations of the predicted ``sqrt(H P H^T + sigma^2)``, it and its
+        expectation are both echoes (below the maximum range), and its
+        expected range is smooth about ``mu`` (no corner within the
+        difference step: there the slope is a jump's, not a wall's).
 
     Returns
     -------
@@ -217,15 +234,10 @@ def laser_update(
     if z.shape != (model.n_beams,):
         raise ValueError(f"scan must have {model.n_beams} ranges, got {z.shape}")
     beams = np.arange(0, model.n_beams, 10) if beams is None else np.asarray(beams)
-    zhat, H = laser_jacobian(walls, mu, model, beams)
+    zhat, H, smooth = _slopes(walls, mu, model, beams)
     nu = z[beams] - zhat
     spread = np.sqrt(np.einsum("bi,ij,bj->b", H, P, H) + sigma**2)
-    ok = (
-        (z[beams] < model.max_range)
-        & (zhat < model.max_range)
-        & np.isfinite(H).all(axis=1)
-        & (np.abs(nu) <= gate * spread)
-    )
+    ok = (z[beams] < model.max_range) & smooth & (np.abs(nu) <= gate * spread)
     if not ok.any():
         return mu, P, 0.0, 0
     R = np.eye(int(ok.sum())) * sigma**2

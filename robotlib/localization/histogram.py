@@ -346,6 +346,10 @@ class GridFilter:
         k, i, j = np.unravel_index(int(np.argmax(self.belief)), self.belief.shape)
         return np.array([*self.xy[i, j], self.headings[k]])
 
+    def weighted_poses(self) -> tuple[np.ndarray, np.ndarray]:
+        """Return the admissible poses (N, 3) and their probabilities (N,)."""
+        return self._poses, self.belief[self._index]
+
     def position_belief(self) -> np.ndarray:
         """Return the belief summed over headings, shape ``(ny, nx)``."""
         return self.belief.sum(axis=0)

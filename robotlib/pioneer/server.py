@@ -182,21 +182,21 @@ class SimServer:
         self._thread: threading.Thread | None = None
         self._sel = selectors.DefaultSelector()
         self.endpoints: list[_Endpoint] = []
+        bodies = [_add_body(sim, i) for i in range(robots + ptys)]
+        if created:  # compile the simulator's kernels before any client can connect
+            sim.step()
+            sim.reset()
         try:
-            for i in range(robots + ptys):
-                body = _add_body(sim, i)
+            for i, body in enumerate(bodies):
                 ep = _Endpoint(self, body, "tcp" if i < robots else "pty")
+                self.endpoints.append(ep)
                 if ep.kind == "tcp":
                     self._listen(ep, port + i if port else 0)
                 else:
                     self._open_pty(ep)
-                self.endpoints.append(ep)
         except BaseException:
             self._close_all()
             raise
-        if created:  # compile the simulator's kernels now, not on a client's clock
-            sim.step()
-            sim.reset()
 
     # -- setup ------------------------------------------------------------
     def _listen(self, ep: _Endpoint, port: int) -> None:

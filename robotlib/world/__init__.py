@@ -9,10 +9,11 @@ options and `robotlib._random`).
 - `wrap_angle`, `compose`, `relative` (`geometry`)
 - ``.wld`` (`wld`) and MobileSim ``.map`` (`mapfile`) files; `WorldFileError`
   and the formats' shared rules (`fileformat`)
-- `load_world`, `world_names`, `read_world`, `WORLDS_DIR` (`catalog`)
+- `load_world`, `world_names`, `read_world`, `WORLDS_DIR`, and `seeded_world`
+  (a bench's world per seed, ``gen-KIND`` drawn afresh) (`catalog`)
 """
 
-from .catalog import WORLDS_DIR, load_world, read_world, world_names
+from .catalog import WORLDS_DIR, load_world, read_world, seeded_world, world_names
 from .fileformat import MAP_MAGICS, MAX_EXTENT, WorldFileError
 from .generate import KINDS, generate_world, reachable_pairs
 from .geometry import compose, relative, wrap_angle
@@ -43,6 +44,7 @@ __all__ = [
     "reachable_pairs",
     "read_world",
     "relative",
+    "seeded_world",
     "world_names",
     "wrap_angle",
     "write_map",

@@ -1,20 +1,24 @@
-"""The shipped worlds, and any world file: `load_world`, `world_names`, `read_world`.
+"""The shipped worlds, any world file, and generated worlds by name.
 
-Imports the world's file readers and model; nothing above the world layer.
+`load_world`, `world_names`, `read_world`; `seeded_world` also names a world
+`generate_world` draws (``"gen-office"``). Imports the world's file readers,
+generator and model; nothing above the world layer.
 """
 
 from __future__ import annotations
 
 import os
+import zlib
 from pathlib import Path
 
 from .._shipped import shipped_dir
 from .fileformat import WorldFileError
+from .generate import generate_world
 from .mapfile import read_map
 from .model import World
 from .wld import read_wld
 
-__all__ = ["WORLDS_DIR", "load_world", "read_world", "world_names"]
+__all__ = ["WORLDS_DIR", "load_world", "read_world", "seeded_world", "world_names"]
 
 
 WORLDS_DIR = shipped_dir("worlds")
@@ -81,3 +85,29 @@ def load_world(name_or_path: str | Path) -> World:
                 f"shipped worlds: {', '.join(world_names())}"
             )
     return read_world(path)
+
+
+def seeded_world(name: str, seed: int) -> World:
+    """Return a bench's world for one seed: shipped, a file, or ``gen-KIND``.
+
+    ``"gen-KIND"`` draws a fresh world of that kind (`generate_world`) from
+    ``[seed, crc32(KIND)]``, so each seed of a bench runs on its own map and
+    two kinds never share a stream; any other name goes to `load_world`
+    (the same map for every seed).
+
+    Parameters
+    ----------
+    name : str
+        A shipped world's name, a file path, or ``"gen-"`` and one of
+        `robotlib.world.KINDS`.
+    seed : int
+        The run's seed.
+
+    Returns
+    -------
+    World
+    """
+    if name.startswith("gen-"):
+        kind = name[4:]
+        return generate_world(kind, [seed, zlib.crc32(kind.encode())])
+    return load_world(name)

@@ -62,7 +62,8 @@ def _duplicated_demo(nb, demo_source: str) -> nbformat.NotebookNode:
 
 @pytest.mark.slow
 @pytest.mark.parametrize(
-    "lab", ["lab2_avoidance", "lab3_mcl", "lab4_navigation", "lab5_slam"]
+    "lab",
+    ["lab2_avoidance", "lab3_mcl", "lab4_navigation", "lab5_slam", "lab7_exploration"],
 )
 def test_real_labs_without_ids_reach_nothing(lab):
     """The case of the report: Lab 4's demonstrations zeroed honest students."""

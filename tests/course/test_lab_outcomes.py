@@ -1,13 +1,15 @@
-"""Lab 1 and Lab 6: answers that do nothing fail the outcome checks.
+"""Labs 1, 6 and 7: answers that do nothing fail the outcome checks.
 
 Each case runs a check cell (hidden tests included) in-process, with the
 lab's set-up cell, the instructor's definitions the check needs
-(`robotlib.course.plan.lab_plan`) and a do-nothing version of the exercise's
-functions (plausible types, no work): the check must fail on its assertions.
+(`robotlib.course.plan.lab_plan`), the other exercises' solutions (as the
+grader gives them) and a do-nothing version of the exercise's functions
+(plausible types, no work): the check must fail on its assertions.
 """
 
 from __future__ import annotations
 
+import tempfile
 from pathlib import Path
 
 import pytest
@@ -26,22 +28,40 @@ LAZY = {
             "def hist_update(b, lk):\n    return np.asarray(b, float)\n"
         ),
         "beam_fit": "def fit_beam(*a, **k):\n    return BeamParameters()\n",
+        "ekf_update": "def ekf_landmark_update(mu, P, *a):\n    return mu, P\n",
+        "ekf_run": "def ekf_landmark_update(mu, P, *a):\n    return mu, P\n",
     },
     "lab6_real_robot": {
         "replay": "def localize(world, odo, z, seed):\n    return np.array(odo)\n",
     },
+    "lab7_exploration": {  # runs the simulator: a few seconds each
+        "explore_outcome": (
+            "def frontier_cells(state):\n"
+            "    return np.zeros(np.shape(state), dtype=bool)\n"
+            "def choose_target(costs, gains, beta):\n"
+            "    return np.full(len(np.atleast_2d(costs)), -1)\n"
+        ),
+        "team_outcome": (
+            "def discount(gain, targets, chosen, radius):\n"
+            "    return np.asarray(gain, dtype=float)\n"
+        ),
+    },
 }
+SLOW = {"lab7_exploration"}
 
 
 def _run(lab: str, grade_id: str, lazy: str, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     monkeypatch.setenv("MPLBACKEND", "Agg")
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))  # Lab 6's mkdtemp
     sol = read_notebook(ROOT / "solutions" / f"{lab}.ipynb")
     plan = lab_plan(sol, lab)
     check = next(c for c in plan.checks if c.grade_id == grade_id)
     source = sol.cells[check.index].source
     scope: dict = {}
     exec(compile(plan.setup, "setup", "exec"), scope)
+    for answer in plan.answers:  # the other exercises' solutions, as at grading
+        exec(compile(answer, "solution", "exec"), scope)
     exec(compile(lazy, "lazy answer", "exec"), scope)
     for d in plan.defs:
         exec(compile(d, "definitions", "exec"), scope)
@@ -51,7 +71,12 @@ def _run(lab: str, grade_id: str, lazy: str, tmp_path, monkeypatch):
 
 
 @pytest.mark.parametrize(
-    ("lab", "grade_id"), [(lab, g) for lab, d in LAZY.items() for g in d]
+    ("lab", "grade_id"),
+    [
+        pytest.param(lab, g, marks=[pytest.mark.slow] if lab in SLOW else [])
+        for lab, d in LAZY.items()
+        for g in d
+    ],
 )
 def test_a_do_nothing_answer_fails(lab, grade_id, tmp_path, monkeypatch):
     _run(lab, grade_id, LAZY[lab][grade_id], tmp_path, monkeypatch)

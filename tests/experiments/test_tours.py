@@ -10,7 +10,7 @@ from robotlib.cli import main
 from robotlib.experiments.tours import drive_tour, tour_space
 from robotlib.localization import History
 from robotlib.p3dx import ROBOT_RADIUS
-from robotlib.world import World, load_world, write_map
+from robotlib.world import World, load_world, seeded_world, write_map
 
 rep = importlib.import_module("robotlib.experiments.reproduce")  # the module
 
@@ -182,3 +182,24 @@ def test_mcl_panel_kidnap_button(office):
     assert "kidnapped before step 4" in panel.status.value
     panel.kidnap.value = 0  # off again: the plain route
     np.testing.assert_array_equal(np.array(panel.history.true_pose), route.truth)
+
+
+def test_reproduce_tours_a_fresh_generated_map_per_seed(tmp_path, monkeypatch):
+    small = rep.FilterConfig("best", "best", {"n": 500, "kld": {"n_max": 500}})
+    monkeypatch.setattr(rep, "BEST_CONFIG", small)
+    seen = []
+    real = rep.make_route
+
+    def make_route(world, seed, n_steps, route="auto", kidnap=None):
+        seen.append((world, seed, route))
+        return real(world, seed, n_steps, route, kidnap)
+
+    monkeypatch.setattr(rep, "make_route", make_route)
+    out = tmp_path / "r.json"
+    args = ["reproduce", "--world", "gen-hall", "--seeds", "2", "--steps", "4"]
+    assert main([*args, "--json", str(out)]) == 0
+    (w0, s0, r0), (w1, s1, r1) = seen
+    assert (s0, s1) == (0, 1) and r0 == r1 == "tour"  # not the corridor drive
+    assert w0 == seeded_world("gen-hall", 0) and w1 != w0
+    result = json.loads(out.read_text())
+    assert result["world"] == "gen-hall" and result["seeds"] == [0, 1]

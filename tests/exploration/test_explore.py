@@ -8,6 +8,7 @@ from robotlib.exploration import (
     ExploreSettings,
     explore,
     explore_team,
+    frontier_cells,
     reachable_area,
     team_starts,
 )
@@ -40,6 +41,28 @@ def test_reachable_area_is_free_and_holds_the_start():
     i = int((w.start[1] - g.origin[1]) // 0.1)
     j = int((w.start[0] - g.origin[0]) // 0.1)
     assert r[i, j]
+
+
+def test_the_loop_uses_the_frontiers_and_chooser_it_is_given():
+    """Lab 7 plugs a student's functions in: they are called, and checked."""
+    w = load_world("office")
+    short = ExploreSettings(max_time=12.0)
+    calls = []
+
+    def spy(state):
+        calls.append(np.shape(state))
+        return frontier_cells(state)
+
+    def stay(costs, *rest):  # never a target: the robot looks round, then is done
+        return np.full(len(np.atleast_2d(costs)), -1)
+
+    res = explore(w, settings=short, rng=0, frontiers=spy, chooser=stay)
+    assert calls and all(c == res.map.shape for c in calls)
+    assert res.outcome != "timeout" and res.path_lengths[0] < 0.5
+    with pytest.raises(ValueError, match="shape"):
+        explore(w, settings=short, rng=0, frontiers=lambda s: np.zeros((3, 3), bool))
+    with pytest.raises(ValueError, match="targets for 2 robots"):
+        explore_team(w, 2, short, rng=0, chooser=lambda c, *rest: np.array([0]))
 
 
 @pytest.mark.slow

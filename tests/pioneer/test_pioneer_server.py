@@ -177,6 +177,27 @@ def test_several_robots_on_consecutive_ports():
             b.disconnect()
 
 
+def test_the_port_opens_only_after_the_kernels_are_warm(monkeypatch):
+    # an ARIA client that connects while kernels compile gets no replies and
+    # fails its handshake: the simulator steps once before any port listens
+    order = []
+    real_step, real_listen = Simulator.step, SimServer._listen
+
+    def step(sim, *args, **kwargs):
+        order.append("step")
+        return real_step(sim, *args, **kwargs)
+
+    def listen(srv, ep, port):
+        order.append("listen")
+        return real_listen(srv, ep, port)
+
+    monkeypatch.setattr(Simulator, "step", step)
+    monkeypatch.setattr(SimServer, "_listen", listen)
+    with SimServer("corridor", robots=2, port=0, seed=0):
+        pass
+    assert order == ["step", "listen", "listen"]
+
+
 def test_cli_serves_for_a_duration():
     assert cli_main(["sim-server", "--port", "0", "--duration", "0.3"]) == 0
 

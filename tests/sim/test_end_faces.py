@@ -5,6 +5,7 @@ import math
 import numpy as np
 import pytest
 
+from robotlib.p3dx import ROBOT_RADIUS
 from robotlib.sensing import SonarModel
 from robotlib.sim import Simulator
 from robotlib.world import END_FACE, World
@@ -62,7 +63,28 @@ def test_laser_sees_a_wall_end():
         assert math.isfinite(scan[ahead])
 
 
+def _distance(point, segments) -> float:
+    """Least distance from a point to segments (x1, y1, x2, y2), in NumPy."""
+    seg = np.asarray(segments, dtype=float)
+    a, d = seg[:, :2], seg[:, 2:] - seg[:, :2]
+    t = np.clip(((point - a) * d).sum(axis=1) / (d * d).sum(axis=1), 0.0, 1.0)
+    return float(np.hypot(*(a + t[:, None] * d - point).T).min())
+
+
 def test_collisions_ignore_the_faces():
-    # the robot may stand right at a free end's side: faces are for sensing
+    # a robot may stand where only the partition's end face would touch it
+    # (faces are for sensing): nearer the face than its radius, clear of walls
+    side = math.sqrt(ROBOT_RADIUS**2 - (END_FACE / 2) ** 2) + 0.0005
+    pose = np.array([5.0 - side, 3.0 + END_FACE / 2, math.pi / 2])
+    faces = ROOM.sensed_obstacles[len(ROOM.obstacles) :]
+    assert (
+        _distance(pose[:2], faces) < ROBOT_RADIUS < _distance(pose[:2], ROOM.obstacles)
+    )
     sim = Simulator(ROOM, seed=0)
-    sim.add_robot((5.0 - 0.26, 3.0, 0.0))
+    body = sim.add_robot(pose)
+    body.command("MOVE", 0.3)  # and drives on, north past the face
+    for _ in range(40):
+        sim.step()
+    assert body.true_pose[1] - pose[1] == pytest.approx(0.3, abs=0.03)
+    with pytest.raises(ValueError, match="overlap a wall"):  # walls still count
+        sim.add_robot((5.0 - ROBOT_RADIUS / 2, 3.0, 0.0))

@@ -1,0 +1,153 @@
+"""Grade the class cases and the adversarial set three times: is every grade its worth?
+
+python bench/bench_grade_cases.py [--lab lab2_avoidance] [--runs alone hog load]
+                                  [--jobs 2] [--busy 2] [--cell-timeout 10]
+                                  [--out bench/results/grade_cases_LAB.md]
+
+The submissions are built by ``tests/class_cases.py`` from the lab's
+solution and release (honest layouts and mistakes, cheats, hangs, hogs, fork
+bombs...), each with its expected points, status and flag. Runs: ``alone``
+(the set as built), ``hog`` (one more classmate whose notebook forks four
+busy loops), ``load`` (``--busy`` busy processes of this script's own beside
+the run, ended after it); the reference run is saved by the first run and
+reused. Writes a Markdown table: one line per run (wall time, 1-minute load
+average sampled every 5 s, the cases graded as expected), then one row per
+case (its points in each run, ``same`` when every run gave the same points
+and status).
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+from pathlib import Path
+
+import nbformat
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))  # tests/class_cases.py
+
+from robotlib.course import grade as g  # noqa: E402
+from robotlib.course.notebooks import write_notebook  # noqa: E402
+from tests.class_cases import Case, build, compare  # noqa: E402
+
+HOG = (
+    "import os\n"
+    "for _ in range(4):  # busy loops that never end\n"
+    "    if os.fork() == 0:\n        while True:\n            pass\n"
+)
+
+
+def _run(subs, lab, args, records, busy):
+    procs = [
+        subprocess.Popen([sys.executable, "-c", "while True:\n    pass"])
+        for _ in range(busy)
+    ]
+    loads, stop = [], threading.Event()
+
+    def sample() -> None:
+        while not stop.wait(5.0):
+            loads.append(os.getloadavg()[0])
+
+    threading.Thread(target=sample, daemon=True).start()
+    t0 = time.monotonic()
+    opts = g.Options(cell_timeout=args.cell_timeout)
+    try:
+        results, _ = g.grade(
+            subs,
+            lab,
+            jobs=args.jobs,
+            opts=opts,
+            progress=False,
+            records=records,
+            regrade=True,
+        )
+    finally:
+        stop.set()
+        for p in procs:
+            p.kill()
+            p.wait()
+    return results, time.monotonic() - t0, loads
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--lab", default="lab2_avoidance")
+    parser.add_argument("--runs", nargs="+", default=["alone", "hog", "load"])
+    parser.add_argument("--jobs", type=int, default=os.cpu_count())
+    parser.add_argument("--busy", type=int, default=2)
+    parser.add_argument("--cell-timeout", type=float, default=10.0)
+    parser.add_argument("--out", type=Path)
+    args = parser.parse_args()
+    out = args.out or ROOT / "bench" / "results" / f"grade_cases_{args.lab}.md"
+    lines = [
+        f"# {args.lab}: class cases and adversarial set, graded {len(args.runs)} times",
+        "",
+    ]
+    lines += [
+        f"`{' '.join(sys.argv)}`, jobs {args.jobs}, cell limit floor "
+        f"{args.cell_timeout:g} s, {os.cpu_count()} cores",
+        "",
+    ]
+    lines += ["| run | wall | load (1 min) | as expected |", "|---|---|---|---|"]
+    rows: dict[str, list] = {}
+    diffs: list[str] = []
+    with tempfile.TemporaryDirectory() as tmp:
+        subs = Path(tmp) / "submissions"
+        cases = build(args.lab, subs)
+        for run in args.runs:
+            here = dict(cases)
+            if run == "hog" and not (subs / "zz_hog").exists():
+                nb = nbformat.read(subs / "answered" / f"{args.lab}.ipynb", 4)
+                nb.cells.insert(2, nbformat.v4.new_code_cell(HOG))
+                (subs / "zz_hog").mkdir()
+                write_notebook(nb, subs / "zz_hog" / f"{args.lab}.ipynb")
+            if (subs / "zz_hog").exists():
+                here["zz_hog"] = Case(
+                    "zz_hog", "bench", "the hog beside", None, None, True
+                )
+            busy = args.busy if run == "load" else 0
+            results, wall, loads = _run(
+                subs, args.lab, args, Path(tmp) / "records", busy
+            )
+            wrong = compare(here, results)
+            lo, hi = (min(loads), max(loads)) if loads else (0, 0)
+            ok = f"{len(here) - len({w.split(':')[0] for w in wrong})} of {len(here)}"
+            lines.append(f"| {run} | {wall:.0f} s | {lo:.1f}-{hi:.1f} | {ok} |")
+            print(lines[-1], *wrong, sep="\n  ", flush=True)
+            diffs += [f"{run}: {w}" for w in wrong]
+            for r in results:
+                rows.setdefault(r.student, []).append(r)
+        lines += ["", "Differences from the expected worth:", ""]
+        lines += [f"- {d}" for d in diffs] or ["- none"]
+        head = " | ".join(args.runs)
+        lines += [
+            "",
+            f"| case | kind | expected | {head} | same |",
+            "|---|---|---|" + "---|" * len(args.runs) + "---|",
+        ]
+        for name, results in sorted(rows.items()):
+            case = cases.get(name) or Case(name, "bench", "", None)
+            want = "-" if case.points is None else f"{sum(case.points.values()):g}"
+            got = []
+            for r in results:
+                flag = ", flagged" if r.flags else ""
+                got.append(f"{r.total:g} ({r.status}{flag})")
+            same = len({(str(r.points), r.status) for r in results}) == 1
+            lines.append(
+                f"| {name} | {case.kind} | {want} | {' | '.join(got)} | "
+                f"{'same' if same else 'DIFFERENT'} |"
+            )
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.write_text("\n".join(lines) + "\n")
+    print("\n".join(lines))
+    print(f"wrote {out}")
+
+
+if __name__ == "__main__":
+    main()
