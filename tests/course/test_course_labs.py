@@ -225,11 +225,15 @@ WRONG = {
                 "l5-12": "def weigh_and_resample(maps, particles, logw, loglik, "
                 "temperature, rng):\n    return maps, particles, logw\n",
                 "l5-20": "def ekf_update(mu, P, z, j, R):\n    return mu, P\n",
+                "l5-26": "def icp_step(reference, scan, pose, gate):\n"
+                "    return np.asarray(pose, dtype=float)\n",
             },
             {
                 "sonar_map": "wrong result",
                 "fastslam_outcome": "wrong result",
                 "ekf_outcome": "wrong result",
+                "icp_step": "",
+                "icp_graph": "half of odometry's RMS",
             },
         ),
     },
