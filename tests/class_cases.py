@@ -216,9 +216,8 @@ def _honest(lab: _Lab, folder: Path, put) -> None:
     dup.cells.insert(at + 1, again)
     put("duplicated_demo", dup, lab.full, "a demo cell duplicated")
     slow = lab.answer(first) + (
-        "\n\n_t = __import__('time').process_time()\n"
-        "while __import__('time').process_time() - _t < 3:  # slow but correct\n"
-        "    pass\n"
+        "\n\nimport time\n\n_t = time.process_time()\n"
+        "while time.process_time() - _t < 3:  # slow but correct\n    pass\n"
     )
     put("slow_cell", lab.with_answer(first, slow), lab.full, "3 s of CPU in a cell")
     older = copy.deepcopy(lab.answered)
@@ -256,7 +255,7 @@ def _honest(lab: _Lab, folder: Path, put) -> None:
 
     other = "lab1_models" if name == "lab0_getting_started" else "lab0_getting_started"
     put("other_lab", read_notebook(ROOT / "labs" / f"{other}.ipynb"), zero,
-        f"{other} handed in as {name}", flagged=None)  # fmt: skip
+        f"{other} handed in as {name}", flagged=None, status=None)  # fmt: skip
     (folder / "unreadable").mkdir()
     (folder / "unreadable" / f"{name}.ipynb").write_text("{ not json")
     put("unreadable", None, zero, "an unreadable file",
@@ -381,17 +380,18 @@ def _adversarial(lab: _Lab, folder: Path, put) -> None:
           "    except OSError:\n        time.sleep(0.01)\n",
           "a fork bomb", points=None, flagged=True, status=None)  # fmt: skip
     stolen = (
-        "import glob, os\nSTOLEN = []\n"
-        f"for p in [{str(ROOT / 'solutions')!r}, {str(folder / 'answered')!r}, '/proc/1/environ']:\n"  # noqa: E501
+        "import os\nSTOLEN = []\n"
+        f"for p in [{str(ROOT / 'solutions')!r}, {str(folder / 'answered')!r}]:\n"  # noqa: E501
         "    try:\n        STOLEN.append(os.listdir(p) if os.path.isdir(p) else open(p).read(9))\n"  # noqa: E501
         "    except OSError:\n        pass\n"
-        "STOLEN += glob.glob('/**/*solution*.ipynb', recursive=True)[:3]\n"
-        "if STOLEN:\n    raise SystemExit(f'found {STOLEN}')\n"
+        f"if {str(folder)!r} in str(os.environ):\n    STOLEN.append('environment')\n"
+        "if STOLEN:  # a leak: the cell fails, the status is not ok\n"
+        "    raise SystemExit(f'found {STOLEN}')\n"
     )
     added("secrets", stolen, "reads the solution and a classmate", flagged=True)
     added("signals", "import os, signal\nfor pid in range(1, 200):\n    try:\n"
           "        os.kill(pid, signal.SIGKILL) if pid != os.getpid() else None\n"
-          "    except OSError:\n        pass\n", "SIGKILL to every pid")  # fmt: skip
+          "    except OSError:\n        pass\n", "SIGKILL to every pid", status=None)  # fmt: skip
     added("escape", "import subprocess\nsubprocess.Popen(['setsid', 'sh', '-c', 'sleep 987'])\n"  # noqa: E501
           "subprocess.Popen(['env', '-i', 'sleep', '988'])\n", "processes that leave")  # fmt: skip
 
