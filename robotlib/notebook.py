@@ -102,6 +102,9 @@ class _CompileWatch:
 def progress(iterable=None, desc: str = "", total: int | None = None, **kw):
     """Return a progress bar for a long cell: tqdm's notebook bar, text headless.
 
+    In a notebook the bar's elapsed time moves every second (`_tick`), so
+    a cell whose steps take long still shows that it runs.
+
     Parameters
     ----------
     iterable : iterable, optional
@@ -117,12 +120,35 @@ def progress(iterable=None, desc: str = "", total: int | None = None, **kw):
     -------
     tqdm.tqdm
     """
-    if in_kernel():
-        from tqdm.notebook import tqdm
-    else:
-        from tqdm import tqdm
     kw.setdefault("leave", True)
-    return tqdm(iterable, desc=desc, total=total, **kw)
+    if not in_kernel():
+        from tqdm import tqdm
+
+        return tqdm(iterable, desc=desc, total=total, **kw)
+    from tqdm.notebook import tqdm
+
+    bar = tqdm(iterable, desc=desc, total=total, **kw)
+    _tick(bar)
+    return bar
+
+
+def _tick(bar, every: float = 1.0) -> None:
+    """Redraw ``bar`` every ``every`` s (its elapsed time) from a thread.
+
+    The thread ends when the bar closes, or when the cell that made it has
+    finished (a bar left open by an error).
+    """
+    shell = ipython_shell()
+    cell = getattr(shell, "execution_count", None)
+
+    def run() -> None:
+        while not bar.disable:
+            time.sleep(every)
+            if bar.disable or getattr(shell, "execution_count", None) != cell:
+                return
+            bar.refresh()
+
+    threading.Thread(target=run, name="progress-tick", daemon=True).start()
 
 
 _BAR = "{desc}: {n}/{total} steps |{bar}| {elapsed}{postfix}"

@@ -14,6 +14,7 @@ functions, so that importing it stays cheap.
 
 from __future__ import annotations
 
+import os
 from collections.abc import Callable
 
 import numpy as np
@@ -163,6 +164,29 @@ def _warm_large_map() -> None:
     world.free_space(0.5)
 
 
+def _warm_cone_table() -> None:
+    """Build a small cone table, never read from the tables' disk cache.
+
+    A table found on disk (one the same source built before, maybe in
+    another clone sharing ``~/.cache``) skips the builder's kernels, which
+    would then compile in the first lab that builds a table for another
+    world.
+    """
+    from .localization import ConeTable
+    from .world import World
+
+    box = World(segments=[[0, 0, 1, 0], [1, 0, 1, 1], [1, 1, 0, 1], [0, 1, 0, 0]])
+    saved = os.environ.get("ROBOTLIB_TABLE_CACHE")
+    os.environ["ROBOTLIB_TABLE_CACHE"] = "off"
+    try:
+        ConeTable(box, resolution=0.25)
+    finally:
+        if saved is None:
+            del os.environ["ROBOTLIB_TABLE_CACHE"]
+        else:
+            os.environ["ROBOTLIB_TABLE_CACHE"] = saved
+
+
 def _warm_models() -> None:
     from .localization import BeamParameters, BeamSensorModel
     from .sensing import SonarModel, simulate_ranges
@@ -177,6 +201,7 @@ def _warm_models() -> None:
     fast = BeamSensorModel(world, fast=True, params=BeamParameters(exponent=0.2))
     fast.log_likelihood(np.tile(poses, (100, 1)), z)  # the table, looked up
     fast.table.lookup(np.tile(poses, (2000, 1)))  # over threads (4,096 poses and up)
+    _warm_cone_table()
     _warm_ring_many()
 
 
@@ -238,6 +263,7 @@ WARMUPS: dict[str, Callable[[], None] | list[tuple[str, Callable[[], None]]]] = 
         ("MCL.paper (fast, threads)", _warm_filter(_paper_fast_many)),
         ("beam + KLD", _warm_filter(_beam_kld)),
         ("beam (fast)", _warm_filter(_beam_fast)),
+        ("a cone table's builder", _warm_cone_table),
         ("MCL.best (threads)", _warm_filter(_best)),
         ("a large map", _warm_large_map),
     ],

@@ -4,9 +4,34 @@ CI must be deterministic: hypothesis derives its examples from each test's
 own name instead of a fresh random seed, so a run passes or fails the same
 way on every machine. An example that once failed stays in its test as an
 ``@example``.
+
+Modules with slow subprocess work start it when the session starts, beside
+the tests, and run their tests last (`tests.background`).
 """
 
+import pytest
 from hypothesis import settings
+
+from tests import background
 
 settings.register_profile("robotlib", derandomize=True, print_blob=True)
 settings.load_profile("robotlib")
+
+
+@pytest.hookimpl(trylast=True)  # after the selection by -m and -k
+def pytest_collection_modifyitems(session, config, items):
+    """The tests of modules with background work run last (`tests.background`)."""
+    items.sort(key=lambda item: hasattr(getattr(item, "module", None), background.HOOK))
+
+
+def pytest_collection_finish(session):
+    if session.config.option.collectonly:
+        return
+    modules = {getattr(item, "module", None) for item in session.items}
+    background.start(
+        sorted((m for m in modules if hasattr(m, background.HOOK)), key=str)
+    )
+
+
+def pytest_sessionfinish(session, exitstatus):
+    background.end()

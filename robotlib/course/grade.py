@@ -47,6 +47,7 @@ from .astlock import format_exc
 from .gradebook import Again, Records, Result, write_gradebook
 from .notebooks import META_KEY, notebook_text, read_notebook
 from .parallel import Bar, dask_map, raise_interrupt, thread_map
+from .parallel import slot as hold_slot
 from .plan import (
     LabPlan,
     lab_plan,
@@ -255,8 +256,13 @@ def limits(reference: dict | None, opts: Options) -> tuple[dict[str, float], Opt
     return budgets, Options(**{**vars(opts), "timeout": total, "limits": limits})
 
 
-def reference_run(plan: LabPlan, solution: dict, opts: Options) -> dict:
+def reference_run(
+    plan: LabPlan, solution: dict, opts: Options, slot: int | None = None
+) -> dict:
     """Grade the solution itself (warming the numba cache); return its lines.
+
+    ``slot``: the grading slot it runs in (held by the caller); None: it
+    holds a free one meanwhile (`parallel.slot`), as each submission does.
 
     Raises
     ------
@@ -264,10 +270,13 @@ def reference_run(plan: LabPlan, solution: dict, opts: Options) -> dict:
         If the solution does not score full marks on its checks, or reaches
         a function its exercises list.
     """
+    if slot is None:
+        with hold_slot() as k:  # its uids: no other grading's at once
+            return reference_run(plan, solution, opts, k)
     warm = Options(**{**vars(opts), "warm": True})
     warm.cell_timeout = max(opts.cell_timeout * 10, 300.0)
     warm.timeout = max(opts.timeout * 3, 1800.0)
-    res = grade_notebook("(solution)", solution, plan, None, warm)
+    res = grade_notebook("(solution)", solution, plan, None, warm, slot)
     auto = {c.grade_id for c in plan.checks}
     failed = {k: v for k, v in res.reasons.items() if k in auto}
     if failed or any("exercise's own work" in f for f in res.flags):

@@ -250,6 +250,7 @@ def animate(
     interval: float = 100.0,
     max_frames: int = 150,
     html: bool = True,
+    progress: Callable | None = None,
 ):
     """Animate a figure by calling ``draw(frame)`` for each frame.
 
@@ -274,6 +275,10 @@ def animate(
     html : bool
         Return ``IPython.display.HTML``; False returns the
         `matplotlib.animation.FuncAnimation`.
+    progress : callable, optional
+        A progress bar to show while the frames are drawn for the HTML,
+        made as ``progress(total=n, desc=...)`` (``robotlib.notebook.progress``
+        in a notebook); it counts the frames.
 
     Returns
     -------
@@ -285,7 +290,16 @@ def animate(
             np.linspace(0, len(values) - 1, max_frames).round().astype(int)
         )
         values = [values[i] for i in keep]
-    anim = FuncAnimation(fig, draw, frames=values, interval=interval, blit=False)
+    bar = None
+    if html and progress is not None:
+        bar = progress(total=len(values), desc="drawing the frames")
+
+    def frame(value):
+        if bar is not None and bar.n < bar.total:
+            bar.update()
+        return draw(value)
+
+    anim = FuncAnimation(fig, frame, frames=values, interval=interval, blit=False)
     if not html:
         return anim
     from IPython.display import HTML
@@ -296,6 +310,9 @@ def animate(
     fig.canvas.draw_idle = _no_redraw  # saving a frame draws it: once, not twice
     page = HTML(offline_player(anim.to_jshtml(default_mode="once")))
     plt.close(fig)
+    if bar is not None:
+        bar.update(bar.total - bar.n)  # (saving also draws a frame first)
+        bar.close()
     return page
 
 

@@ -1,4 +1,4 @@
-"""Labs 1, 6 and 7: answers that do nothing fail the outcome checks.
+"""Labs 1, 5, 6 and 7: answers that do nothing fail the outcome checks.
 
 Each case runs a check cell (hidden tests included) in-process, with the
 lab's set-up cell, the instructor's definitions the check needs
@@ -9,6 +9,7 @@ grader gives them) and a do-nothing version of the exercise's functions
 
 from __future__ import annotations
 
+import tempfile
 from pathlib import Path
 
 import pytest
@@ -17,6 +18,7 @@ from robotlib.course.notebooks import read_notebook
 from robotlib.course.plan import lab_plan
 
 ROOT = Path(__file__).resolve().parents[2]
+ICP_STAYS = "def icp_step(reference, scan, pose, gate):\n    return np.array(pose)\n"
 
 LAZY = {
     "lab1_models": {
@@ -30,6 +32,7 @@ LAZY = {
         "ekf_update": "def ekf_landmark_update(mu, P, *a):\n    return mu, P\n",
         "ekf_run": "def ekf_landmark_update(mu, P, *a):\n    return mu, P\n",
     },
+    "lab5_slam": {"icp_step": ICP_STAYS, "icp_graph": ICP_STAYS},
     "lab6_real_robot": {
         "replay": "def localize(world, odo, z, seed):\n    return np.array(odo)\n",
     },
@@ -46,12 +49,13 @@ LAZY = {
         ),
     },
 }
-SLOW = {"lab7_exploration"}
+SLOW = {"lab5_slam", "lab7_exploration"}  # 5-30 s each (warm-ups, drives)
 
 
 def _run(lab: str, grade_id: str, lazy: str, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     monkeypatch.setenv("MPLBACKEND", "Agg")
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))  # Lab 6's mkdtemp
     sol = read_notebook(ROOT / "solutions" / f"{lab}.ipynb")
     plan = lab_plan(sol, lab)
     check = next(c for c in plan.checks if c.grade_id == grade_id)

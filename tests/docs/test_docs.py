@@ -2,8 +2,10 @@
 
 The build runs in a temporary copy of the files it reads (``docs/``,
 ``course/``, ``CONTRIBUTING.md``, ``CHANGELOG.md``), so that the gallery's
-generated pages land there and not in the repository. The site must open
-from disk: no page loads a script or a style sheet from the network.
+generated pages land there and not in the repository; it starts with the
+session, beside the other tests (`tests.background`), which run first. The
+site must open from disk: no page loads a script or a style sheet from the
+network.
 """
 
 from __future__ import annotations
@@ -11,11 +13,12 @@ from __future__ import annotations
 import os
 import re
 import shutil
-import subprocess
 import sys
 from pathlib import Path
 
 import pytest
+
+from tests import background
 
 ROOT = Path(__file__).resolve().parents[2]
 EXAMPLES = sorted(p.stem for p in (ROOT / "docs" / "examples").glob("plot_*.py"))
@@ -23,23 +26,25 @@ EXAMPLES = sorted(p.stem for p in (ROOT / "docs" / "examples").glob("plot_*.py")
 pytestmark = pytest.mark.slow
 
 
-@pytest.fixture(scope="module")
-def site(tmp_path_factory):
-    src = tmp_path_factory.mktemp("src")
+def background_work(folder: Path):
+    """Build the site in ``folder`` (`tests.background`: beside the other tests)."""
+    src, html = folder / "src", folder / "html"
     ignore = shutil.ignore_patterns("_build", "gallery", "sg_execution_times.rst")
     shutil.copytree(ROOT / "docs", src / "docs", ignore=ignore)
     shutil.copytree(ROOT / "course", src / "course")
     for name in ("CONTRIBUTING.md", "CHANGELOG.md"):
         shutil.copy2(ROOT / name, src / name)
-    html = tmp_path_factory.mktemp("html")
     env = {**os.environ, "MPLBACKEND": "Agg", "ROBOTLIB_TABLE_CACHE": "off"}
     cmd = [
         sys.executable, "-m", "sphinx", "-W", "--keep-going", "-q", "-b", "html",
-        "-d", str(src / "doctrees"), str(src / "docs"), str(html),
+        "-d", src / "doctrees", src / "docs", html,
     ]  # fmt: skip
-    proc = subprocess.run(
-        cmd, cwd=src, env=env, capture_output=True, text=True, timeout=1200
-    )
+    return background.run(cmd, cwd=src, env=env, timeout=1200), html
+
+
+@pytest.fixture(scope="module")
+def site():
+    proc, html = background.result(__name__)
     assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-6000:]
     return html
 

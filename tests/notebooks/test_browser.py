@@ -3,16 +3,16 @@
 Starts JupyterLab on a copy of ``solutions/`` and ``labs/`` (found by glob,
 so new labs are covered as they land), opens each notebook in Debian's
 chromium (driven by playwright, no browser download), runs all cells from
-the menu and checks what a student would see: no error output in a
-solution; in a released lab, only "Exercise N is not done yet" messages of
-a few lines, and Run All reaches its last cell (every demonstration runs);
-no browser console errors but those of the external requests the test
-blocks; every panel's image redraws after its first slider moves, and shows
-feedback first; every animation's player shows a frame after Run All and
-advances; after ``robotlib warmup`` no kernel compiles anything
-(``ROBOTLIB_COMPILE_LOG``). This is the run of every solution in a plain
-kernel (`tests.notebooks.test_notebooks` runs them under nbval only where
-there is no browser). Screenshots and
+the menu and checks what a student would see: no error output in a solution;
+in a released lab, only "Exercise N is not done yet" messages of a few
+lines, and Run All reaches its last cell (every demonstration runs); no
+request off the machine (the test blocks them: a course must work offline)
+and no browser console error; every panel's image redraws after its first
+slider moves, and shows feedback first; every animation's player shows a
+frame after Run All and advances; after ``robotlib warmup`` no kernel
+compiles anything (``ROBOTLIB_COMPILE_LOG``). This is the run of every
+solution in a plain kernel (`tests.notebooks.test_notebooks` runs them under
+nbval only where there is no browser). Screenshots and
 ``timings.json`` go to ``artifacts/browser/`` (git-ignored; CI keeps it).
 
 Skipped where chromium or playwright is missing, unless
@@ -90,6 +90,7 @@ def problems(run, solution: bool, races: set[str] = frozenset()) -> list[str]:
     if not run.finished:
         out.append(f"Run All did not finish within {run.run_all_s:.0f} s")
     out += [f"console: {text}" for text in unexplained_console_errors(run, races)]
+    out += [f"asked the network for {url}" for url in sorted(set(run.blocked))]
     for cell, ename, text in run.errors if solution else ():  # a lab's: below
         lines = text.splitlines()
         out.append(f"code cell {cell}: {ename} ({len(lines)} lines): {lines[:1]}")
@@ -138,7 +139,8 @@ def _record(run) -> None:
         "run_all_s": run.run_all_s,
         "panels": run.panels,
         "animations": run.animations,
-        "errors": len(run.errors),
+        "errors": [(i, ename, text.splitlines()[-1:]) for i, ename, text in run.errors],
+        "blocked": run.blocked,
         "figures": run.figures,
         "cells_s": run.cells_s,
         "open_s": run.open_s,

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import os
 import threading
 import time
 
@@ -43,6 +44,28 @@ def test_compile_watch_names_a_kernel_that_compiles_and_progress_shows_it(capsys
     assert "compiling" not in capsys.readouterr().err
 
 
+def test_a_notebook_bar_redraws_every_tick_until_it_closes():
+    """A long step still moves the bar (its elapsed time); a closed bar stops."""
+
+    class Bar:
+        disable, drawn = False, 0
+
+        def refresh(self):
+            self.drawn += 1
+
+    bar = Bar()
+    before = {t.name for t in threading.enumerate()}
+    nb._tick(bar, every=0.01)
+    (ticker,) = [t for t in threading.enumerate() if t.name not in before]
+    waited = time.monotonic()
+    while bar.drawn < 3 and time.monotonic() - waited < 30:
+        time.sleep(0.01)
+    assert bar.drawn >= 3
+    bar.disable = True  # what tqdm's close() sets
+    ticker.join(30)
+    assert not ticker.is_alive()
+
+
 def test_warm_up_rejects_unknown_parts():
     with pytest.raises(ValueError, match="unknown warm-up"):
         nb.warm_up(["nope"])
@@ -55,6 +78,26 @@ def test_warmup_command_lists_and_warms(capsys):
     assert main(["warmup", "sim"]) == 0
     assert "sim" in capsys.readouterr().out
     assert "sim" in nb.warmed_parts()  # setup(warm=("sim",)) now only loads
+
+
+def test_warmup_builds_a_cone_table_even_when_tables_are_on_disk(tmp_path, monkeypatch):
+    """A table on disk (another clone's) must not stand in for its builder's kernels."""
+    from robotlib.localization import cones
+    from robotlib.localization._kernels import cone_table as kernels
+    from robotlib.warmups import _warm_cone_table
+
+    built = []
+    real = kernels.build_cone_table
+    monkeypatch.setattr(
+        kernels, "build_cone_table", lambda *a: built.append(1) or real(*a)
+    )
+    monkeypatch.setenv("ROBOTLIB_TABLE_CACHE", str(tmp_path))
+    monkeypatch.setattr(cones, "DISK_MIN_SECONDS", 0.0)  # any table would be kept
+    for _ in range(2):
+        _warm_cone_table()
+    assert len(built) == 2  # built both times, nothing read from the disk
+    assert not list(tmp_path.iterdir())  # nor kept there
+    assert os.environ["ROBOTLIB_TABLE_CACHE"] == str(tmp_path)  # as it was
 
 
 def _run(cells, tmp_path):

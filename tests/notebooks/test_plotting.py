@@ -83,6 +83,28 @@ def test_animation_is_html_with_a_bounded_frame_count():
     assert not plt.fignum_exists(fig.number)
 
 
+def test_animation_counts_its_frames_on_a_progress_bar():
+    made = []
+
+    class Bar:
+        def __init__(self, total, desc):
+            self.n, self.total, self.desc, self.closed = 0, total, desc, False
+            made.append(self)
+
+        def update(self, k=1):
+            assert not self.closed
+            self.n += k
+            assert self.n <= self.total
+
+        def close(self):
+            self.closed = True
+
+    fig, ax = plt.subplots()
+    rp.animate(fig, lambda i: ax.set_title(str(i)), 7, progress=Bar)
+    (bar,) = made
+    assert (bar.total, bar.n, bar.closed) == (7, 7, True)
+
+
 def test_animation_shows_its_first_frame_offline():
     """No stylesheet from the web; the image holds frame 0 before any script runs."""
     import base64

@@ -11,6 +11,8 @@ them, so nothing is downloaded; robotlib itself comes only from the wheel
 (checked). There a student's steps run: ``robotlib course DIR``, ``robotlib
 warmup``, and Lab 0 headless under nbval, with the answers a student would
 write (the exercise cells of ``solutions/``) pasted into the released copy.
+The build, the venv and the first (cold) warm-up start with the session,
+beside the other tests (`tests.background`); this module's tests run last.
 """
 
 from __future__ import annotations
@@ -27,6 +29,7 @@ from pathlib import Path
 import pytest
 
 from robotlib.course.bundle import build_wheel
+from tests import background
 
 ROOT = Path(__file__).resolve().parents[2]
 LAB0 = "lab0_getting_started.ipynb"
@@ -47,15 +50,9 @@ def _run(cmd, cwd, env, timeout=600):
     return proc.stdout
 
 
-@pytest.fixture(scope="module")
-def wheel(tmp_path_factory):
-    return build_wheel(ROOT, tmp_path_factory.mktemp("wheel"))
-
-
-@pytest.fixture(scope="module")
-def student(tmp_path_factory, wheel):
-    """A fresh venv with the wheel installed: (its python, its scripts, env)."""
-    home = tmp_path_factory.mktemp("student")
+def _student(home: Path, wheel: Path):
+    """A fresh venv with the wheel installed: (its python, its scripts, env, home)."""
+    home.mkdir(parents=True)
     venv = home / "venv"
     _run([sys.executable, "-m", "venv", venv], cwd=home, env=os.environ)
     scripts = venv / ("Scripts" if os.name == "nt" else "bin")
@@ -82,6 +79,36 @@ def student(tmp_path_factory, wheel):
     install = [python, "-m", "pip", "install", "-q", "--no-index", "--no-deps"]
     _run([*install, "--force-reinstall", wheel], cwd=home, env=env)
     return python, scripts, env, home
+
+
+def background_work(folder: Path):
+    """The wheel, the student's venv, and there a first, cold ``robotlib warmup``.
+
+    Run beside the other tests (`tests.background`): the warm-up compiles every
+    kernel on one core, for most of this module's time.
+    """
+    wheel = build_wheel(ROOT, folder / "wheel")
+    student = _student(folder / "student", wheel)
+    _, scripts, env, home = student
+    (home / "elsewhere").mkdir()
+    cmd = [scripts / "robotlib", "warmup"]
+    first = background.run(cmd, cwd=home / "elsewhere", env=env, timeout=900)
+    return wheel, student, first
+
+
+@pytest.fixture(scope="module")
+def prepared():
+    return background.result(__name__)
+
+
+@pytest.fixture(scope="module")
+def wheel(prepared):
+    return prepared[0]
+
+
+@pytest.fixture(scope="module")
+def student(prepared):
+    return prepared[1]
 
 
 def test_the_wheel_carries_worlds_labs_and_syllabus_never_solutions(wheel):
@@ -111,7 +138,7 @@ def test_robotlib_comes_from_the_wheel(student):
     assert not any(Path(p).is_relative_to(ROOT) for p in where)
 
 
-def test_course_folder_then_lab0_headless(student):
+def test_course_folder_then_lab0_headless(student, prepared):
     python, scripts, env, home = student
     robotlib_cmd = scripts / "robotlib"
     out = _run([robotlib_cmd, "course", "my-course"], cwd=home, env=env)
@@ -134,12 +161,10 @@ def test_course_folder_then_lab0_headless(student):
     assert "wrote 0 files" in again
     assert (course / LAB0).read_text() == answered
 
-    # Every kernel the labs use compiles from the installed package, into a
-    # cache that the next run (and the labs) load from.
-    first = subprocess.run(
-        [robotlib_cmd, "warmup"], cwd=course, env=env, capture_output=True,
-        text=True, timeout=900,
-    )  # fmt: skip
+    # Every kernel the labs use compiles from the installed package (the first
+    # warm-up, run in the background in another folder), into a cache that
+    # the next run (and the labs) load from.
+    first = prepared[2]
     assert first.returncode == 0, first.stderr[-4000:]
     assert "compiling kernels" in first.stderr
     listing = _run([robotlib_cmd, "warmup", "--list"], cwd=course, env=env)

@@ -1,0 +1,100 @@
+"""Slow subprocess work done beside the tests, on a core they leave idle.
+
+Most tests run in the one pytest process, on one core; a few slow ones
+mostly wait for a long subprocess (the documentation build, a cold compile
+in a fresh venv). A test module with a ``background_work(folder)`` function
+gets it called in a thread as soon as the session's tests are collected
+(if any of its tests were selected), with a temporary folder of its own;
+it and the processes it starts run at a lower priority (`NICER`), so
+they take mostly CPU time the tests leave over. The module's tests run last,
+and get what ``background_work`` returned (or raised) from `result`.
+Processes started with `run` are killed if the session ends before them.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+import tempfile
+import threading
+from concurrent.futures import Future, ThreadPoolExecutor
+from pathlib import Path
+
+HOOK = "background_work"
+NICER = 5
+"""Nice levels below the tests: a core the tests leave idle goes to the background
+work, a busy one mostly to the tests (weight 1 to 3), and on a loaded machine the
+background work still moves."""
+
+_pool: ThreadPoolExecutor | None = None
+_jobs: dict[str, Future] = {}
+_folders: list[Path] = []
+_procs: list[subprocess.Popen] = []
+_lock = threading.Lock()
+_ended = threading.Event()
+
+
+def run(cmd, timeout: float, **kwargs) -> subprocess.CompletedProcess:
+    """`subprocess.run`, output captured as text, ended with the session."""
+    with _lock:
+        if _ended.is_set():
+            raise RuntimeError("the test session has ended")
+        proc = subprocess.Popen(
+            [str(c) for c in cmd],
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+            **kwargs,
+        )
+        _procs.append(proc)
+
+    try:
+        out, err = proc.communicate(timeout=timeout)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        proc.communicate()
+        raise
+    return subprocess.CompletedProcess(proc.args, proc.returncode, out, err)
+
+
+def _lower(work, folder: Path):
+    """Run ``work(folder)`` `NICER` levels nicer (its processes inherit it)."""
+    if hasattr(os, "setpriority") and hasattr(threading, "get_native_id"):
+        tid = threading.get_native_id()
+        nice = os.getpriority(os.PRIO_PROCESS, tid)
+        os.setpriority(os.PRIO_PROCESS, tid, min(19, nice + NICER))
+    return work(folder)
+
+
+def start(modules) -> None:
+    """Start each module's ``background_work`` (once per module)."""
+    global _pool
+    for module in modules:
+        if module.__name__ in _jobs:
+            continue
+        if _pool is None:
+            _pool = ThreadPoolExecutor(max_workers=2, thread_name_prefix="background")
+        folder = Path(tempfile.mkdtemp(prefix="robotlib-bg-"))
+        _folders.append(folder)
+        _jobs[module.__name__] = _pool.submit(_lower, getattr(module, HOOK), folder)
+
+
+def result(module: str, timeout: float = 1800.0):
+    """What ``background_work`` of ``module`` returned (its exception re-raised)."""
+    if module not in _jobs:
+        raise LookupError(f"no background work was started for {module}")
+    return _jobs[module].result(timeout=timeout)
+
+
+def end() -> None:
+    """Kill what still runs, wait for the threads, remove the folders."""
+    with _lock:
+        _ended.set()
+        for proc in _procs:
+            if proc.poll() is None:
+                proc.kill()
+    if _pool is not None:
+        _pool.shutdown(wait=True, cancel_futures=True)
+    for folder in _folders:
+        shutil.rmtree(folder, ignore_errors=True)
