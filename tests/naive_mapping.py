@@ -312,3 +312,38 @@ def laser_box(lpose, angles, ranges, max_range, origin, res, shape):
     xs = np.append(lpose[0] + z * np.cos(a), lpose[0])
     ys = np.append(lpose[1] + z * np.sin(a), lpose[1])
     return points_box(xs, ys, origin, res, shape)
+
+
+def fit_curvature(L, origin, res, pose, mount, angles, ranges, max_range, h):
+    """``(cxx, cxy, cyy)``: minus the second differences of the fit's score, per m^2.
+
+    The score is the sum of `bilinear_evidence` at the returns' end points
+    (``ranges < max_range``) seen from robot ``pose``; steps of ``h`` m in x
+    and y, the heading held.
+    """
+
+    def score(x, y):
+        th = pose[2]
+        lx = x + math.cos(th) * mount[0] - math.sin(th) * mount[1]
+        ly = y + math.sin(th) * mount[0] + math.cos(th) * mount[1]
+        return sum(
+            bilinear_evidence(
+                L,
+                origin,
+                res,
+                lx + z * math.cos(th + mount[2] + a),
+                ly + z * math.sin(th + mount[2] + a),
+            )  # fmt: skip
+            for a, z in zip(angles, ranges, strict=True)
+            if z < max_range
+        )
+
+    x, y = pose[0], pose[1]
+    f0 = score(x, y)
+    cxx = (2 * f0 - score(x + h, y) - score(x - h, y)) / h**2
+    cyy = (2 * f0 - score(x, y + h) - score(x, y - h)) / h**2
+    cxy = -(
+        score(x + h, y + h) - score(x + h, y - h) - score(x - h, y + h)
+        + score(x - h, y - h)
+    ) / (4 * h**2)  # fmt: skip
+    return np.array([cxx, cxy, cyy])

@@ -25,6 +25,7 @@ import math
 import multiprocessing
 import sys
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -292,7 +293,7 @@ def run_episodes(
     max_time: float = 120.0,
     seed: int = 0,
     jobs: int = 1,
-    progress: bool = False,
+    progress: bool | Callable = False,
     sim_options: dict | None = None,
 ) -> list[Episode]:
     """Run one episode per start/goal pair, each in its own seeded simulator.
@@ -311,8 +312,10 @@ def run_episodes(
         Episode ``k``'s simulator is seeded with ``[seed, k]``.
     jobs : int
         Worker processes (``spawn``); 1 runs here, in order.
-    progress : bool
-        Print a progress line to stderr.
+    progress : bool or callable
+        True prints a progress line to stderr; a bar factory (called as
+        ``progress(total=n, desc=...)``, e.g. ``robotlib.notebook.progress``)
+        shows a bar that counts the episodes.
     sim_options : dict, optional
         Keyword arguments of each episode's `Simulator`.
 
@@ -334,9 +337,16 @@ def run_episodes(
         for k, p in enumerate(pairs)
     ]
     out: list[Episode | None] = [None] * len(job_list)
+    bar = None
+    if callable(progress):
+        bar = progress(total=len(job_list), desc=f"{controller.name} in {world.name}")
 
     def tick(done: int) -> None:
-        if progress:
+        if bar is not None:
+            bar.update(1)
+            if done == len(job_list):
+                bar.close()
+        elif progress:
             print(  # noqa: T201 - the progress bar
                 f"\r{controller.name} in {world.name}: {done}/{len(job_list)}",
                 end="" if done < len(job_list) else "\n",

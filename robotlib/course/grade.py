@@ -256,10 +256,13 @@ def limits(reference: dict | None, opts: Options) -> tuple[dict[str, float], Opt
     return budgets, Options(**{**vars(opts), "timeout": total, "limits": limits})
 
 
-def reference_run(plan: LabPlan, solution: dict, opts: Options, slot: int = 0) -> dict:
+def reference_run(
+    plan: LabPlan, solution: dict, opts: Options, slot: int | None = None
+) -> dict:
     """Grade the solution itself (warming the numba cache); return its lines.
 
-    ``slot``: the grading slot it runs in (held by the caller, `parallel.slot`).
+    ``slot``: the grading slot it runs in (held by the caller); None: it
+    holds a free one meanwhile (`parallel.slot`), as each submission does.
 
     Raises
     ------
@@ -267,6 +270,9 @@ def reference_run(plan: LabPlan, solution: dict, opts: Options, slot: int = 0) -
         If the solution does not score full marks on its checks, or reaches
         a function its exercises list.
     """
+    if slot is None:
+        with hold_slot() as k:  # its uids: no other grading's at once
+            return reference_run(plan, solution, opts, k)
     warm = Options(**{**vars(opts), "warm": True})
     warm.cell_timeout = max(opts.cell_timeout * 10, 300.0)
     warm.timeout = max(opts.timeout * 3, 1800.0)
@@ -449,8 +455,7 @@ def grade(
             if reference is None:
                 numba_cache.prewarm(plan.setup, opts.mpl_cache)
                 numba_cache.seed(opts.numba_cache)
-                with hold_slot() as k:  # its uids: no other grading's at once
-                    reference = reference_run(plan, sol_nb, opts, k)
+                reference = reference_run(plan, sol_nb, opts)
                 if saved is not None:
                     numba_cache.save_reference(saved, key, reference, opts)
                 bar.advance("(reference run)")

@@ -41,6 +41,7 @@ from ..mapping import (
 )
 from ..p3dx import (
     CYCLE,
+    DEFAULT_ACCELERATION,
     ROBOT_LENGTH_FRONT,
     ROBOT_LENGTH_REAR,
     ROBOT_RADIUS,
@@ -373,11 +374,13 @@ class Exploration:
 
     # -- driving ------------------------------------------------------------
     def _teammate_ahead(self, r: _Robot) -> bool:
+        v = max(float(r.body.state.velocity[0]), 0.0)
+        reach = self.settings.keep_out + v * v / (2 * DEFAULT_ACCELERATION)
         for o in self.robots:
             if o is r:
                 continue
             d = o.pose[:2] - r.pose[:2]
-            if math.hypot(*d) < self.settings.keep_out:
+            if math.hypot(*d) < reach:
                 bearing = wrap_angle(math.atan2(d[1], d[0]) - r.pose[2])
                 if abs(bearing) < math.pi / 3:
                     return True

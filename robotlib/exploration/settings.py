@@ -57,8 +57,8 @@ class ExploreSettings:
         How often frontiers are found again, paths checked against the new
         map and robots that need a target given one (1.0).
     keep_out : float
-        A robot stops while a teammate's centre is closer than this and
-        ahead of it (0.9).
+        A robot stops while a teammate's centre is closer than this plus
+        its own stopping distance (at 0.3 m/s^2) and ahead of it (0.9).
     wait_time : float
         How long a robot blocked by a teammate waits before it re-plans
         around its teammates (2.0; twice as long for every later robot, so

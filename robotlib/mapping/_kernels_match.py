@@ -2,8 +2,10 @@
 
 `match_laser_many` hill-climbs each particle's pose to fit the scan's end
 points to its own map, scored by the maps' positive log-odds, bilinear
-between cell centres. Grids as in `robotlib.mapping._kernels`; re-exported
-there. Imports nothing of robotlib's but the JIT config.
+between cell centres; `fit_curvature_many` measures how sharply that score
+peaks in position at each fit (where a corridor's walls leave the pose
+free). Grids as in `robotlib.mapping._kernels`, which re-exports the
+fitting. Imports nothing of robotlib's but the JIT config.
 """
 
 import math
@@ -146,3 +148,39 @@ def _match_laser_many(Ls, x0, y0, res, poses, mount, angles, ranges, max_range,
 
 
 match_laser_many, match_laser_many_parallel = serial_and_parallel(_match_laser_many)
+
+
+def _fit_curvature_many(Ls, x0, y0, res, poses, mount, angles, ranges, max_range,
+                        h, out):  # fmt: skip
+    """Curvature of the fit's score in position at each pose ``poses[n]``.
+
+    Writes ``(cxx, cxy, cyy)`` to ``out[n]``: minus the second differences
+    of `_match_score` in map ``Ls[n]`` over steps of ``h`` m in x and y (the
+    heading held), score units per m^2. Large along a direction the scan
+    pins; near 0 along a blank corridor.
+    """
+    pts = scan_points(mount, angles, ranges, max_range)
+    bx = np.ascontiguousarray(pts[:, 0])
+    by = np.ascontiguousarray(pts[:, 1])
+    for n in nb.prange(Ls.shape[0]):
+        px = poses[n, 0]
+        py = poses[n, 1]
+        t = poses[n, 2]
+        L = Ls[n]
+        f0 = _match_score(L, x0, y0, res, px, py, t, bx, by)
+        fxp = _match_score(L, x0, y0, res, px + h, py, t, bx, by)
+        fxm = _match_score(L, x0, y0, res, px - h, py, t, bx, by)
+        fyp = _match_score(L, x0, y0, res, px, py + h, t, bx, by)
+        fym = _match_score(L, x0, y0, res, px, py - h, t, bx, by)
+        fpp = _match_score(L, x0, y0, res, px + h, py + h, t, bx, by)
+        fpm = _match_score(L, x0, y0, res, px + h, py - h, t, bx, by)
+        fmp = _match_score(L, x0, y0, res, px - h, py + h, t, bx, by)
+        fmm = _match_score(L, x0, y0, res, px - h, py - h, t, bx, by)
+        out[n, 0] = (2.0 * f0 - fxp - fxm) / (h * h)
+        out[n, 1] = -(fpp - fpm - fmp + fmm) / (4.0 * h * h)
+        out[n, 2] = (2.0 * f0 - fyp - fym) / (h * h)
+
+
+fit_curvature_many, fit_curvature_many_parallel = serial_and_parallel(
+    _fit_curvature_many
+)

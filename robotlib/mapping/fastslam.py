@@ -36,7 +36,7 @@ from ..localization.resampling import effective_sample_size, systematic_resample
 from ..sensing import SonarModel
 from ..sensing.laser import LaserModel, laser_poses
 from ..world import World
-from . import _kernels, _kernels_copy, _kernels_window
+from . import _kernels, _kernels_copy, _kernels_match, _kernels_window
 from .fastslam_settings import FastSLAMSettings
 from .motion import sample_arc_motion
 from .occupancy import OccupancyGrid
@@ -52,10 +52,45 @@ machine)."""
 __all__ = [
     "PARALLEL_MIN",
     "GridFastSLAM",
+    "constrained_fit",
     "normalise_log_weights",
     "resample_maps",
     "resample_parents",
 ]
+
+
+def constrained_fit(poses, fits, curvature, ratio: float) -> np.ndarray:
+    """Keep each fit's move only along the directions its score pins.
+
+    Parameters
+    ----------
+    poses, fits : numpy.ndarray, shape (N, 3)
+        The motion's samples and their scan fits, m and rad.
+    curvature : numpy.ndarray, shape (N, 3)
+        ``(cxx, cxy, cyy)``: the fit score's curvature in position at each
+        fit (`robotlib.mapping._kernels_match.fit_curvature_many`), per m^2.
+    ratio : float
+        A principal direction counts as pinned when its curvature is at least
+        this share of the largest one's (and positive).
+
+    Returns
+    -------
+    numpy.ndarray, shape (N, 3)
+        The fits' headings; positions: the sample's, moved by the fit's
+        displacement projected on the pinned directions. Along a blank
+        corridor the scan pins the heading and the across position only, and
+        its fit drifts towards the cells the map has seen most often; there
+        the sample (the odometry's increment with its noise) is kept.
+    """
+    c = np.asarray(curvature, dtype=float)
+    h = np.stack([c[:, [0, 1]], c[:, [1, 2]]], axis=1)
+    lam, vec = np.linalg.eigh(h)  # ascending: the weaker direction first
+    keep = (lam > 0) & (lam >= ratio * lam[:, 1:])
+    d = fits[:, :2] - poses[:, :2]
+    along = np.einsum("nk,nkj->nj", d, vec) * keep  # components in the eigenbasis
+    out = np.array(fits, dtype=float)
+    out[:, :2] = poses[:, :2] + np.einsum("nj,nkj->nk", along, vec)
+    return out
 
 
 class GridFastSLAM:
@@ -217,17 +252,31 @@ class GridFastSLAM:
         return out
 
     def match_laser(self, poses, scan) -> np.ndarray:
-        """Fit each pose (N, 3) to the scan in its particle's map; return the fits."""
-        k = self.settings.match_beam_step
-        out = np.empty((len(poses), 3))
-        self._kernel("match_laser_many")(
-            self.maps, *self._geometry(), np.ascontiguousarray(poses, dtype=float),
+        """Fit each pose (N, 3) to the scan in its particle's map; return the fits.
+
+        With ``settings.match_degenerate`` > 0, a fit moves a pose only along
+        the directions its score pins (`constrained_fit`).
+        """
+        s = self.settings
+        k = s.match_beam_step
+        poses = np.ascontiguousarray(poses, dtype=float)
+        args = (
             np.asarray(self.laser.mount, dtype=float), self._angles(k),
             np.ascontiguousarray(np.asarray(scan, dtype=float)[::k]),
-            self.laser.max_range, *self.settings.match_step, self.settings.match_levels,
-            *self.settings.match_prior, out,
+            self.laser.max_range,
         )  # fmt: skip
-        return out
+        out = np.empty((len(poses), 3))
+        self._kernel("match_laser_many")(
+            self.maps, *self._geometry(), poses, *args, *s.match_step, s.match_levels,
+            *s.match_prior, out,
+        )  # fmt: skip
+        if s.match_degenerate <= 0.0:
+            return out
+        curv = np.empty((len(poses), 3))
+        self._kernel("fit_curvature_many", _kernels_match)(
+            self.maps, *self._geometry(), out, *args, self.resolution, curv
+        )
+        return constrained_fit(poses, out, curv, s.match_degenerate)
 
     def update_maps(self, scan, poses=None, maps=None) -> None:
         """Add a reading to every particle's map at the particle's pose.

@@ -17,6 +17,7 @@ from robotlib.avoidance import (
     Bug2,
     Controller,
     PotentialField,
+    StartGoal,
     VFHSettings,
     WallFollower,
     choose_direction,
@@ -279,6 +280,28 @@ def test_vfh_reaches_a_goal_in_the_clutter_and_the_field_gets_trapped():
     pf = run_episode("utrap", PotentialField(), pair.goal, start=pair.start, seed=0)
     assert pf.outcome == "local_minimum"
     assert pf.truth[-1, 0] < 7.0  # stuck on the trap's near side
+
+
+def test_run_episodes_counts_its_episodes_on_a_bar_it_is_given():
+    made = []
+
+    class Bar:
+        def __init__(self, total, desc):
+            self.total, self.desc, self.n, self.closed = total, desc, 0, False
+            made.append(self)
+
+        def update(self, k):
+            self.n += k
+
+        def close(self):
+            self.closed = True
+
+    box = World(segments=[[0, 0, 4, 0], [4, 0, 4, 3], [4, 3, 0, 3], [0, 3, 0, 0]])
+    pairs = [StartGoal((1.0, 1.5, 0.0), (3.0, 1.5))] * 3
+    eps = run_episodes(box, VFH(), pairs, max_time=1.0, progress=Bar)
+    (bar,) = made
+    assert len(eps) == 3 and (bar.total, bar.n, bar.closed) == (3, 3, True)
+    assert "VFH" in bar.desc
 
 
 def test_bug2_follows_a_wall_round_a_box():
