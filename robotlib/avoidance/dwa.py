@@ -266,7 +266,7 @@ class DWA(Controller):
         self.window = (np.zeros(0), np.zeros(0))
         self.escapes = 0
         self._planned_for, self._next_plan = None, 0.0
-        self._best, self._best_time, self._togo = math.inf, 0.0, math.inf
+        self._best, self._best_time = math.inf, 0.0
         self._turn_until = -1.0
 
     def echo_points(self, sonar: np.ndarray) -> np.ndarray:
@@ -339,6 +339,8 @@ class DWA(Controller):
 
     def _command(self, sonar: np.ndarray, pose: np.ndarray) -> tuple[float, float]:
         s = self.settings
+        if self.goal is None:
+            raise ValueError("DWA needs a goal (DWA(goal=...) or command(..., goal))")
         self._clock += CYCLE  # one command per robot cycle
         self.grid.update(sonar, pose)
         self.aim, togo = self._target(pose)

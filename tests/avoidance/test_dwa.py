@@ -194,3 +194,8 @@ def test_dwa_gets_out_of_the_u_trap():
         # some of them (the bench counts it)
         assert e.truth[-1, 0] > 7.5
         assert math.dist(e.truth[-1, :2], p.goal) < 1.5
+
+
+def test_dwa_without_a_goal_says_so():
+    with pytest.raises(ValueError, match="needs a goal"):
+        DWA().command(np.full(8, 5.0), np.zeros(3))
