@@ -320,15 +320,15 @@ def _no_redraw(*args, **kwargs) -> None:
     return None
 
 
-_GLYPHS = {
+_GLYPHS = {  # shapes every font with Geometric Shapes has (DejaVu, Liberation...)
     "fa-minus": "&minus;",
-    "fa-fast-backward": "&#x23EE;",
-    "fa-step-backward": "&#x23F4;|",
+    "fa-fast-backward": "|&#x25C0;&#x25C0;",
+    "fa-step-backward": "|&#x25C0;",
     "fa-play fa-flip-horizontal": "&#x25C0;",
-    "fa-pause": "&#x23F8;",
+    "fa-pause": "&#x25AE;&#x25AE;",
     "fa-play": "&#x25B6;",
-    "fa-step-forward": "|&#x23F5;",
-    "fa-fast-forward": "&#x23ED;",
+    "fa-step-forward": "&#x25B6;|",
+    "fa-fast-forward": "&#x25B6;&#x25B6;|",
     "fa-plus": "+",
 }
 _START = (  # the ";" ends the last frame's line, which has none (else it is called)

@@ -114,6 +114,13 @@ def test_animation_shows_its_first_frame_offline():
     page = rp.animate(fig, lambda i: ax.plot([0, i], [0, i]), 3).data
     assert "http://" not in page and "https://" not in page
     assert 'class="fa' not in page
+    # the buttons' characters: Latin and Geometric Shapes, which DejaVu and
+    # Liberation have (the Miscellaneous Technical media symbols showed as boxes)
+    buttons = re.findall(r"<button[^>]*>(.*?)</button>", page, re.S)
+    assert len(buttons) == 9
+    for label in buttons:
+        for code in re.findall(r"&#x([0-9A-Fa-f]+);", label):
+            assert 0x25A0 <= int(code, 16) <= 0x25FF, label
     src = re.search(r'<img id="_anim_img\w+" src="data:image/png;base64,([^"]+)"', page)
     assert src is not None
     assert base64.b64decode(src.group(1), validate=True)[:4] == b"\x89PNG"
