@@ -95,7 +95,7 @@ def main() -> None:
         "",
     ]
     lines += ["| run | wall | load (1 min) | as expected |", "|---|---|---|---|"]
-    rows: dict[str, list] = {}
+    rows: dict[str, dict] = {}  # student -> run -> result
     diffs: list[str] = []
     with tempfile.TemporaryDirectory() as tmp:
         subs = Path(tmp) / "submissions"
@@ -122,7 +122,7 @@ def main() -> None:
             print(lines[-1], *wrong, sep="\n  ", flush=True)
             diffs += [f"{run}: {w}" for w in wrong]
             for r in results:
-                rows.setdefault(r.student, []).append(r)
+                rows.setdefault(r.student, {})[run] = r
         lines += ["", "Differences from the expected worth:", ""]
         lines += [f"- {d}" for d in diffs] or ["- none"]
         head = " | ".join(args.runs)
@@ -131,13 +131,15 @@ def main() -> None:
             f"| case | kind | expected | {head} | same |",
             "|---|---|---|" + "---|" * len(args.runs) + "---|",
         ]
-        for name, results in sorted(rows.items()):
+        for name, by_run in sorted(rows.items()):
             case = cases.get(name) or Case(name, "bench", "", None)
             want = "-" if case.points is None else f"{sum(case.points.values()):g}"
             got = []
-            for r in results:
-                flag = ", flagged" if r.flags else ""
-                got.append(f"{r.total:g} ({r.status}{flag})")
+            for run in args.runs:  # "-": not graded in that run (the added hog)
+                r = by_run.get(run)
+                flag = ", flagged" if r and r.flags else ""
+                got.append(f"{r.total:g} ({r.status}{flag})" if r else "-")
+            results = list(by_run.values())
             same = len({(str(r.points), r.status) for r in results}) == 1
             lines.append(
                 f"| {name} | {case.kind} | {want} | {' | '.join(got)} | "
