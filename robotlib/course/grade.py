@@ -45,7 +45,7 @@ from . import cache as numba_cache
 from . import sandbox as sb
 from .astlock import format_exc
 from .gradebook import Again, Records, Result, write_gradebook
-from .notebooks import META_KEY, notebook_text, read_notebook
+from .notebooks import META_KEY, check_graded_exercises, notebook_text, read_notebook
 from .parallel import Bar, dask_map, raise_interrupt, thread_map
 from .parallel import slot as hold_slot
 from .plan import (
@@ -313,7 +313,9 @@ _PLANS: dict[str, LabPlan] = {}
 def _plan(solution_text: str, lab: str) -> LabPlan:
     key = hashlib.sha256(solution_text.encode()).hexdigest() + lab
     if key not in _PLANS:
-        _PLANS[key] = lab_plan(nbformat.reads(solution_text, as_version=4), lab)
+        solution = nbformat.reads(solution_text, as_version=4)
+        check_graded_exercises(solution, lab)
+        _PLANS[key] = lab_plan(solution, lab)
     return _PLANS[key]
 
 

@@ -35,6 +35,7 @@ __all__ = [
     "write_notebook",
     "check_meta",
     "check_cells",
+    "check_graded_exercises",
     "cell_id",
     "strip_region",
     "release_notebook",
@@ -372,6 +373,30 @@ def _raises_at_top(cell) -> bool:
     return cell.cell_type == "code" and any(
         line == CODE_STUB[1] for line in cell.source.splitlines()
     )
+
+
+def check_graded_exercises(nb: NotebookNode, name: str = "notebook") -> None:
+    """Make sure every automatic check of a solution grades exercises it has.
+
+    A check grades the exercises its metadata lists (``"exercises"``, by
+    default its own ``grade_id``). One naming no exercise cell of the lab
+    would run the solution's code in every student's place, so the lab
+    would hand out its points for nothing.
+
+    Raises
+    ------
+    NotebookError
+        Naming the check and what it grades.
+    """
+    known = {e.exercise_id for e in exercises(nb, name)}
+    for c in check_cells(nb, name):
+        unknown = sorted(set(c.exercises or (c.grade_id,)) - known)
+        if not c.manual and unknown:
+            raise NotebookError(
+                f"{name}: check {c.grade_id!r} grades {', '.join(unknown)}, which no "
+                "exercise cell defines; list the exercises it tests in its metadata "
+                "('exercises': [...])"
+            )
 
 
 def release_notebook(nb: NotebookNode, name: str = "notebook") -> NotebookNode:

@@ -14,7 +14,13 @@ import argparse
 import sys
 from pathlib import Path
 
-from .notebooks import NotebookError, notebook_text, read_notebook, release_notebook
+from .notebooks import (
+    NotebookError,
+    check_graded_exercises,
+    notebook_text,
+    read_notebook,
+    release_notebook,
+)
 
 __all__ = ["project_dir", "release", "stale_labs", "add_arguments", "run"]
 
@@ -65,7 +71,9 @@ def release(
     """
     out = {}
     for src in _sources(Path(solutions), names):
-        nb = release_notebook(read_notebook(src), src.stem)
+        solution = read_notebook(src)
+        check_graded_exercises(solution, src.stem)
+        nb = release_notebook(solution, src.stem)
         out[src.name] = notebook_text(nb)
     return out
 

@@ -8,8 +8,14 @@ import os
 import pytest
 
 from robotlib.course import grade as g
-from robotlib.course.notebooks import release_notebook, write_notebook
+from robotlib.course.notebooks import (
+    NotebookError,
+    check_graded_exercises,
+    release_notebook,
+    write_notebook,
+)
 from robotlib.course.plan import lab_plan, release_notes
+from robotlib.course.release import release
 from robotlib.course.submissions import copies, find_submissions, helpers
 from tests.course.test_course_grade import (
     ADD,
@@ -17,6 +23,7 @@ from tests.course.test_course_grade import (
     FULL,
     MEAN,
     TINY,
+    by_id,
     solution,
     with_cell,
 )
@@ -114,6 +121,23 @@ def test_a_notebook_from_an_older_release_is_noted():
     released = release_notebook(sol, "tiny")
     for nb in (sol, _bare(sol), released, _bare(released)):
         assert release_notes(plan, nb) == []  # the solution, as released, no ids
+
+
+def test_a_check_of_no_exercise_is_refused(tmp_path):
+    """A check naming no exercise of the lab would grade the solution's code."""
+    sol = solution()
+    check_graded_exercises(sol, "tiny")  # the tiny lab as it is passes
+    for meta in (
+        {"grade_id": "sum", "points": 1},
+        {"grade_id": "add", "exercises": ["plus"]},
+    ):
+        bad = copy.deepcopy(sol)
+        by_id(bad, ADD_CHECK).metadata["robotlib"] = meta  # "sum": no exercise named so
+        with pytest.raises(NotebookError, match="no exercise cell defines"):
+            check_graded_exercises(bad, "tiny")
+    write_notebook(bad, tmp_path / "solutions" / "tiny.ipynb")
+    with pytest.raises(NotebookError, match="'add' grades plus"):
+        release(tmp_path / "solutions", tmp_path / "labs")  # `robotlib release` too
 
 
 def _bare(nb):
