@@ -245,6 +245,28 @@ def bilinear_evidence(L, origin, res, px, py):
     )
 
 
+def scan_fit(L, origin, res, pose, mount, angles, ranges, max_range):
+    """The fit's score: `bilinear_evidence` summed at the returns' end points.
+
+    Returns (``ranges < max_range``) seen by the laser at ``mount`` on a robot
+    at ``pose`` (x, y, theta), in map ``L``.
+    """
+    x, y, th = pose
+    lx = x + math.cos(th) * mount[0] - math.sin(th) * mount[1]
+    ly = y + math.sin(th) * mount[0] + math.cos(th) * mount[1]
+    return sum(
+        bilinear_evidence(
+            L,
+            origin,
+            res,
+            lx + z * math.cos(th + mount[2] + a),
+            ly + z * math.sin(th + mount[2] + a),
+        )  # fmt: skip
+        for a, z in zip(angles, ranges, strict=True)
+        if z < max_range
+    )
+
+
 def match_laser(
     L, origin, res, pose, mount, angles, ranges, max_range, steps, levels, prior=(0, 0)
 ):
@@ -261,20 +283,7 @@ def match_laser(
         )
 
     def fit(p):
-        x, y, th = p
-        lx = x + math.cos(th) * mount[0] - math.sin(th) * mount[1]
-        ly = y + math.sin(th) * mount[0] + math.cos(th) * mount[1]
-        return sum(
-            bilinear_evidence(
-                L,
-                origin,
-                res,
-                lx + z * math.cos(th + mount[2] + a),
-                ly + z * math.sin(th + mount[2] + a),
-            )  # fmt: skip
-            for a, z in zip(angles, ranges, strict=True)
-            if z < max_range
-        )
+        return scan_fit(L, origin, res, p, mount, angles, ranges, max_range)
 
     p = [float(v) for v in pose]
     best = score(p)
@@ -323,20 +332,8 @@ def fit_curvature(L, origin, res, pose, mount, angles, ranges, max_range, h):
     """
 
     def score(x, y):
-        th = pose[2]
-        lx = x + math.cos(th) * mount[0] - math.sin(th) * mount[1]
-        ly = y + math.sin(th) * mount[0] + math.cos(th) * mount[1]
-        return sum(
-            bilinear_evidence(
-                L,
-                origin,
-                res,
-                lx + z * math.cos(th + mount[2] + a),
-                ly + z * math.sin(th + mount[2] + a),
-            )  # fmt: skip
-            for a, z in zip(angles, ranges, strict=True)
-            if z < max_range
-        )
+        p = (x, y, pose[2])
+        return scan_fit(L, origin, res, p, mount, angles, ranges, max_range)
 
     x, y = pose[0], pose[1]
     f0 = score(x, y)
