@@ -4,11 +4,13 @@ Most tests run in the one pytest process, on one core; a few slow ones
 mostly wait for a long subprocess (the documentation build, a cold compile
 in a fresh venv). A test module with a ``background_work(folder)`` function
 gets it called in a thread as soon as the session's tests are collected
-(if any of its tests were selected), with a temporary folder of its own;
-it and the processes it starts run at a lower priority (`NICER`), so
-they take mostly CPU time the tests leave over. The module's tests run last,
-and get what ``background_work`` returned (or raised) from `result`.
-Processes started with `run` are killed if the session ends before them.
+(if any of its tests were selected; `selected` lists them), with a
+temporary folder of its own; it and the processes it starts run at a lower
+priority (`NICER`), so they take mostly CPU time the tests leave over. The
+module's tests run last, and get what ``background_work`` returned (or
+raised) from `result`. Processes started with `run` are asked to end
+(SIGTERM, then SIGKILL) if the session ends before them; the tests that look
+for leftover processes skip their trees (`pids`).
 """
 
 from __future__ import annotations
@@ -29,6 +31,7 @@ background work still moves."""
 
 _pool: ThreadPoolExecutor | None = None
 _jobs: dict[str, Future] = {}
+_selected: dict[str, list] = {}
 _folders: list[Path] = []
 _procs: list[subprocess.Popen] = []
 _lock = threading.Lock()
@@ -67,17 +70,35 @@ def _lower(work, folder: Path):
     return work(folder)
 
 
-def start(modules) -> None:
-    """Start each module's ``background_work`` (once per module)."""
+def start(modules: dict) -> None:
+    """Start each module's ``background_work`` (once per module).
+
+    ``modules``: module -> its selected test items.
+    """
     global _pool
-    for module in modules:
+    for module, items in modules.items():
         if module.__name__ in _jobs:
             continue
-        if _pool is None:
-            _pool = ThreadPoolExecutor(max_workers=2, thread_name_prefix="background")
+        if _pool is None:  # a thread each: they mostly wait for their processes
+            _pool = ThreadPoolExecutor(max_workers=8, thread_name_prefix="background")
+        _selected[module.__name__] = list(items)
         folder = Path(tempfile.mkdtemp(prefix="robotlib-bg-"))
         _folders.append(folder)
         _jobs[module.__name__] = _pool.submit(_lower, getattr(module, HOOK), folder)
+
+
+def selected(module: str) -> list:
+    """The test items of ``module`` selected in this session (-k, -m, node ids)."""
+    return _selected.get(module, [])
+
+
+def pids() -> list[int]:
+    """Process ids of the background processes not yet waited for (their trees too).
+
+    An ended one counts until its own ``Popen`` has reaped it: nobody else may.
+    """
+    with _lock:
+        return [proc.pid for proc in _procs if proc.returncode is None]
 
 
 def result(module: str, timeout: float = 1800.0):
@@ -87,13 +108,18 @@ def result(module: str, timeout: float = 1800.0):
     return _jobs[module].result(timeout=timeout)
 
 
-def end() -> None:
-    """Kill what still runs, wait for the threads, remove the folders."""
+def end(grace: float = 10.0) -> None:
+    """End what still runs (SIGTERM, SIGKILL after ``grace`` s), wait, clean up."""
     with _lock:
         _ended.set()
-        for proc in _procs:
-            if proc.poll() is None:
-                proc.kill()
+        running = [proc for proc in _procs if proc.poll() is None]
+    for proc in running:
+        proc.terminate()  # a grading ends its sandboxes on SIGTERM
+    for proc in running:
+        try:
+            proc.wait(timeout=grace)
+        except subprocess.TimeoutExpired:
+            proc.kill()
     if _pool is not None:
         _pool.shutdown(wait=True, cancel_futures=True)
     for folder in _folders:
