@@ -6,11 +6,12 @@ in a fresh venv). A test module with a ``background_work(folder)`` function
 gets it called in a thread as soon as the session's tests are collected
 (if any of its tests were selected; `selected` lists them), with a
 temporary folder of its own; it and the processes it starts run at a lower
-priority (`NICER`), so they take mostly CPU time the tests leave over. The
-module's tests run last, and get what ``background_work`` returned (or
-raised) from `result`. Processes started with `run` are asked to end
-(SIGTERM, then SIGKILL) if the session ends before them; the tests that look
-for leftover processes skip their trees (`pids`).
+priority (`NICER`, or the module's ``BACKGROUND_NICER``), so they take
+mostly CPU time the tests leave over. The module's tests run last, and get
+what ``background_work`` returned (or raised) from `result`. Processes
+started with `run` (or given to `adopt`) are asked to end (SIGTERM, then
+SIGKILL) if the session ends before them; the tests that look for leftover
+processes skip their trees (`pids`).
 """
 
 from __future__ import annotations
@@ -35,13 +36,14 @@ _selected: dict[str, list] = {}
 _folders: list[Path] = []
 _procs: list[subprocess.Popen] = []
 _lock = threading.Lock()
-_ended = threading.Event()
+ENDED = threading.Event()
+"""Set when the session ends: long background work stops at it."""
 
 
 def run(cmd, timeout: float, **kwargs) -> subprocess.CompletedProcess:
     """`subprocess.run`, output captured as text, ended with the session."""
     with _lock:
-        if _ended.is_set():
+        if ENDED.is_set():
             raise RuntimeError("the test session has ended")
         proc = subprocess.Popen(
             [str(c) for c in cmd],
@@ -61,12 +63,18 @@ def run(cmd, timeout: float, **kwargs) -> subprocess.CompletedProcess:
     return subprocess.CompletedProcess(proc.args, proc.returncode, out, err)
 
 
-def _lower(work, folder: Path):
-    """Run ``work(folder)`` `NICER` levels nicer (its processes inherit it)."""
-    if hasattr(os, "setpriority") and hasattr(threading, "get_native_id"):
+def adopt(proc: subprocess.Popen) -> None:
+    """Count a process the work started itself as the background's (`pids`, `end`)."""
+    with _lock:
+        _procs.append(proc)
+
+
+def _lower(work, folder: Path, nicer: int):
+    """Run ``work(folder)`` ``nicer`` levels nicer (its processes inherit it)."""
+    if nicer and hasattr(os, "setpriority") and hasattr(threading, "get_native_id"):
         tid = threading.get_native_id()
         nice = os.getpriority(os.PRIO_PROCESS, tid)
-        os.setpriority(os.PRIO_PROCESS, tid, min(19, nice + NICER))
+        os.setpriority(os.PRIO_PROCESS, tid, min(19, nice + nicer))
     return work(folder)
 
 
@@ -84,7 +92,9 @@ def start(modules: dict) -> None:
         _selected[module.__name__] = list(items)
         folder = Path(tempfile.mkdtemp(prefix="robotlib-bg-"))
         _folders.append(folder)
-        _jobs[module.__name__] = _pool.submit(_lower, getattr(module, HOOK), folder)
+        nicer = getattr(module, "BACKGROUND_NICER", NICER)
+        work = getattr(module, HOOK)
+        _jobs[module.__name__] = _pool.submit(_lower, work, folder, nicer)
 
 
 def selected(module: str) -> list:
@@ -111,7 +121,7 @@ def result(module: str, timeout: float = 1800.0):
 def end(grace: float = 10.0) -> None:
     """End what still runs (SIGTERM, SIGKILL after ``grace`` s), wait, clean up."""
     with _lock:
-        _ended.set()
+        ENDED.set()
         running = [proc for proc in _procs if proc.poll() is None]
     for proc in running:
         proc.terminate()  # a grading ends its sandboxes on SIGTERM

@@ -493,6 +493,7 @@ def run_notebooks(
     panel_bound: float = 60.0,
     at_once: int = 2,
     feedback_bound: float = 1.0,
+    stop: threading.Event | None = None,
 ) -> list[Run]:
     """Open each notebook, Run All Cells, wait (``timeout`` s each), check, save.
 
@@ -501,7 +502,8 @@ def run_notebooks(
     one has finished, the next one starts its Run All, and the finished one
     is checked (its panels and animations) while the others run. Returns the
     `Run` of each path, in order; its ``notebook`` is the saved file
-    (outputs and all), ``errors`` the error outputs in it.
+    (outputs and all), ``errors`` the error outputs in it. Once ``stop`` is
+    set, nothing more is waited for and an empty list is returned.
     """
     runs: dict[str, Run] = {}
     todo, opening, running, done = list(paths), [], [], []
@@ -516,6 +518,8 @@ def run_notebooks(
                 running.append(session)
 
     while todo or opening or running:
+        if stop is not None and stop.is_set():
+            return []
         if todo and len(opening) + len(running) < at_once + 1:
             page = free.pop() if free else None  # one opens ahead
             opening.append(_Session(lab, browser, todo.pop(0), page))
