@@ -103,7 +103,7 @@ def background_work(folder: Path) -> dict:
                 )  # fmt: skip
                 late = compiled.read_text().split() if compiled.exists() else []
                 out["every"] = runs, lab.kernel_list_races(), sorted(set(late))
-            if SELECTED["selftest"] in names:
+            if SELECTED["selftest"] in names and not background.ENDED.is_set():
                 (lab.root / "selftest").mkdir(exist_ok=True)
                 (lab.root / "selftest" / "panels.ipynb").write_text(
                     json.dumps(SELFTEST)
