@@ -35,6 +35,7 @@ _jobs: dict[str, Future] = {}
 _selected: dict[str, list] = {}
 _folders: list[Path] = []
 _procs: list[subprocess.Popen] = []
+_pids: list[int] = []
 _lock = threading.Lock()
 ENDED = threading.Event()
 """Set when the session ends: long background work stops at it."""
@@ -63,10 +64,14 @@ def run(cmd, timeout: float, **kwargs) -> subprocess.CompletedProcess:
     return subprocess.CompletedProcess(proc.args, proc.returncode, out, err)
 
 
-def adopt(proc: subprocess.Popen) -> None:
-    """Count a process the work started itself as the background's (`pids`, `end`)."""
+def adopt(proc: subprocess.Popen | int) -> None:
+    """Count a process the work started itself as the background's (`pids`).
+
+    A ``Popen`` is also ended with the session (`end`); a bare pid (a process
+    a library started) only counts while it runs.
+    """
     with _lock:
-        _procs.append(proc)
+        (_procs if isinstance(proc, subprocess.Popen) else _pids).append(proc)
 
 
 def _lower(work, folder: Path, nicer: int):
@@ -108,7 +113,8 @@ def pids() -> list[int]:
     An ended one counts until its own ``Popen`` has reaped it: nobody else may.
     """
     with _lock:
-        return [proc.pid for proc in _procs if proc.returncode is None]
+        mine = [proc.pid for proc in _procs if proc.returncode is None]
+        return mine + [pid for pid in _pids if os.path.exists(f"/proc/{pid}")]
 
 
 def result(module: str, timeout: float = 1800.0):

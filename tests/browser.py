@@ -29,6 +29,7 @@ import urllib.request
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from robotlib.course.cpu import descendants
 from tests.browser_panels import check_animations, check_panels
 
 CHROMIUM = "/usr/bin/chromium"
@@ -197,15 +198,28 @@ class Run:
     notebook: dict = field(default_factory=dict)
 
 
+def _driver(pid: int) -> bool:
+    try:
+        with open(f"/proc/{pid}/cmdline", "rb") as f:
+            return b"run-driver" in f.read()
+    except OSError:
+        return False
+
+
 class Browser:
-    """Headless chromium (Debian's) driven by playwright."""
+    """Headless chromium (Debian's) driven by playwright (``driver``: its pid)."""
 
     def __init__(self, screenshots: Path):
         from playwright.sync_api import sync_playwright
 
         self.screenshots = Path(screenshots)
         self.screenshots.mkdir(parents=True, exist_ok=True)
+        before = set(descendants(os.getpid()))
         self._pw = sync_playwright().start()
+        self.driver = next(  # playwright's driver: chromium runs below it
+            (p for p in descendants(os.getpid()) if p not in before and _driver(p)),
+            None,
+        )
         self.browser = self._pw.chromium.launch(
             executable_path=CHROMIUM,
             headless=True,

@@ -95,6 +95,8 @@ def background_work(folder: Path) -> dict:
     out = {}
     try:
         browser = Browser(ARTIFACTS)
+        if browser.driver is not None:  # chromium's processes: not a test's
+            background.adopt(browser.driver)
         try:
             if SELECTED["every"] in names:
                 runs = run_notebooks(
