@@ -296,7 +296,7 @@ def laser_update(
         costs = _map_cost(walls, mu, P, np.array([mu, x]), zb, model, beams, sigma, cap)
         if costs[1] > costs[0]:  # the beams fit the prior's mean better
             return mu, P, 0.0, 0
-    if refuse > 0 and fit[2] > chi2.isf(refuse, used):  # a fit the beams contradict
+    if refuse > 0 and fit[2] > chdtri(used, refuse):  # a fit the beams contradict
         return mu, P, 0.0, 0
     return *fit, used
 
