@@ -30,7 +30,7 @@ from dataclasses import dataclass, field
 
 from nbformat import NotebookNode
 
-from . import answers
+from . import answers, scan
 from .astlock import parse
 from .notebooks import (
     ANSWER_STUB,
@@ -413,8 +413,8 @@ def scan_submission(plan: LabPlan, cells: list[dict]) -> tuple[dict, list[str]]:
     zero: dict[str, list[str]] = {}
     flags: list[str] = []
     for cell in cells:
-        for f in answers.scan_code(cell["source"], plan.aliases):
-            ex = cell["exercise"] if not f.listed else cell["exercise"]
+        for f in scan.scan_code(cell["source"], plan.aliases):
+            ex = cell["exercise"]
             if f.listed:
                 ex = ex or plan.owner.get(f.function)
                 name = plan.listed_as(f.function, ex)
