@@ -14,8 +14,9 @@ newer than ``LAB.ipynb``, ``Untitled.ipynb`` beside, section folders, the
 nbgrader layout, a notebook at the top, a Latin-1 folder name, an exercise
 in a helper module, a check cell from an older release, another lab's
 notebook, a slow but correct answer, code that looks like a route to the
-library and is not (``__import__('time')``, ...), and what is not a
-submission (an unreadable file, an empty folder, two notebooks, a link).
+library and is not (``__import__('time')``, ...), the library's own version
+tried in a cell of one's own, and what is not a submission (an unreadable
+file, an empty folder, two notebooks, a link).
 Lab 4 adds its own (a slow A*, a sign error in ``steer``).
 
 The adversarial set (``kind == "adversarial"``): the library's own version of
@@ -242,6 +243,14 @@ def _honest(lab: _Lab, folder: Path, put) -> None:
     put("slow_cell", lab.with_answer(first, slow), lab.full, "3 s of CPU in a cell")
     put("ordinary_code", lab.with_answer(first, lab.answer(first) + _ordinary(lab)),
         lab.full, "imports and lookups that reach nothing of the library's")  # fmt: skip
+    if lab.listed():  # the library's own version tried in a cell of one's own
+        _, module, attr = lab.listed()[0]
+        compared = copy.deepcopy(lab.answered)
+        compared.cells.insert(lab.setup + 1, nbformat.v4.new_code_cell(
+            f"import {module} as _lib\ntry:\n    _lib.{attr}()\n"
+            "except Exception as exc:  # refused: the exercise's own work\n    print(exc)\n"
+        ))  # fmt: skip
+        put("library_compared", compared, lab.full, f"{attr} of the library tried in a cell of one's own")  # fmt: skip
     older = copy.deepcopy(lab.answered)
     check = lab.plan.checks[0].index
     older.cells[check].source += "\n# (from last year's release)"

@@ -11,6 +11,7 @@ gives one, naming the listed function when the code names it.
 from __future__ import annotations
 
 import pytest
+from nbformat.v4 import new_code_cell
 
 from robotlib.course.answers import aliases
 from robotlib.course.notebooks import read_notebook
@@ -191,6 +192,11 @@ def test_in_an_exercise_cell_honest_imports_cost_nothing_and_routes_zero():
         "_m = importlib.import_module('math')\n" + answer,
     )
     assert scan_submission(plan, student_cells(plan, honest)) == ({}, [])
+    # a cell of one's own naming the listed function: its tripwire refuses it
+    # if it runs (an answer calling it is zeroed then), the scan says nothing
+    compared = read_notebook(TINY)
+    compared.cells.append(new_code_cell("from numpy import mean as m\nm([1.0])"))
+    assert scan_submission(plan, student_cells(plan, compared)) == ({}, [])
     for route in ("m = __import__('numpy').mean", "exec(text)", "__import__('os').system(c)"):  # fmt: skip
         cheat = with_cell(read_notebook(TINY), MEAN, route + "\n" + answer)
         zero, flags = scan_submission(plan, student_cells(plan, cheat))
