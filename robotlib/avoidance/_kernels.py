@@ -390,11 +390,22 @@ def dwa_evaluate(points, vs, ws, steps, dt, radius, goal, free, heading, togo):
     """
     n_pts = points.shape[0]
     d0 = np.empty(n_pts)
+    near2 = np.empty(n_pts)  # squared distance a step must come under to stop
+    r2 = radius * radius
     for p in range(n_pts):
-        d0[p] = math.hypot(points[p, 0], points[p, 1]) - radius
+        h = math.hypot(points[p, 0], points[p, 1])
+        d0[p] = h - radius
+        m = h - 1e-3
+        near2[p] = min(r2, m * m) if m > 0.0 else -1.0
+    idx = np.empty(n_pts, dtype=np.int64)
     for i in range(vs.shape[0]):
         v = vs[i]
         reach = v * steps * dt
+        n_in = 0  # the points an arc of this speed can reach
+        for p in range(n_pts):
+            if d0[p] <= reach:
+                idx[n_in] = p
+                n_in += 1
         for j in range(ws.shape[0]):
             w = ws[j]
             f = math.inf
@@ -411,11 +422,11 @@ def dwa_evaluate(points, vs, ws, steps, dt, radius, goal, free, heading, togo):
                     xk = v * t
                     yk = 0.0
                 hit = False
-                for p in range(n_pts):
-                    if d0[p] > reach:
-                        continue
-                    d = math.hypot(points[p, 0] - xk, points[p, 1] - yk) - radius
-                    if d <= 0.0 and d < d0[p] - 1e-3:
+                for q in range(n_in):
+                    p = idx[q]
+                    ex = points[p, 0] - xk
+                    ey = points[p, 1] - yk
+                    if ex * ex + ey * ey <= near2[p]:
                         hit = True
                         break
                 if hit:

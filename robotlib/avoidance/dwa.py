@@ -283,11 +283,14 @@ class DWA(Controller):
         py = sens[:, 1:2] + r[:, None] * np.sin(ang)
         return np.column_stack([px.ravel(), py.ravel()])
 
-    def _echoes(self, sonar: np.ndarray, pose: np.ndarray) -> np.ndarray:
-        """Return the echo points of the last ``recent`` s, robot frame, m.
+    def _echoes(self, sonar: np.ndarray, pose: np.ndarray, reach: float) -> np.ndarray:
+        """Return the echo points of the last ``recent`` s nearer than ``reach`` m.
 
-        The grid lets a sonar looking past a corner clear it; these are
-        never cleared, so a corner seen a moment ago still stops the arcs.
+        Robot frame, m, shape (P, 2). The grid lets a sonar looking past a
+        corner clear it; these are never cleared, so a corner seen a moment
+        ago still stops the arcs.
+        Of the points in one ``echo_cell`` square only the newest is kept
+        (a robot at rest hears the same echoes every cycle).
         """
         local = self.echo_points(sonar)
         c, si = math.cos(pose[2]), math.sin(pose[2])
@@ -297,8 +300,12 @@ class DWA(Controller):
             np.full(len(local), self._clock),
         ])  # fmt: skip
         keep = self._recent[:, 2] > self._clock - self.settings.recent - 1e-9
-        self._recent = np.concatenate([now, self._recent[keep]])
+        recent = np.concatenate([now, self._recent[keep]])
+        key = np.floor(recent[:, :2] / self.settings.echo_cell).astype(np.int64)
+        _, first = np.unique(key, axis=0, return_index=True)  # the newest of each
+        self._recent = recent[np.sort(first)]
         d = self._recent[:, :2] - pose[:2]
+        d = d[np.hypot(d[:, 0], d[:, 1]) < reach]
         return np.column_stack(
             [c * d[:, 0] + si * d[:, 1], -si * d[:, 0] + c * d[:, 1]]
         )
@@ -352,7 +359,7 @@ class DWA(Controller):
             self._turn_until = self._clock + s.look_time
         reach = s.max_speed * s.horizon + s.radius + s.clearance_cap
         seen = self.grid.points(pose, reach)
-        points = np.concatenate([seen, self._echoes(sonar, pose)])
+        points = np.concatenate([seen, self._echoes(sonar, pose, reach)])
         vs, ws = dynamic_window(*self.last, s)
         if self._clock < self._turn_until:  # escape: stop and turn to look round
             vs = np.zeros_like(vs)

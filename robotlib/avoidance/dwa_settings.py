@@ -77,6 +77,9 @@ class DWASettings:
         The arcs are also stopped by every echo point of the last ``recent``
         s (in the odometry frame; the grid may have cleared a corner since),
         s (2).
+    echo_cell : float
+        Of the recent echo points in one square of this side only the
+        newest is kept, m (0.05).
     block, margin : float
         The navigation function's paths keep at least ``block`` m from an
         occupied cell and pay more within ``block + margin`` m (`ROBOT_RADIUS`,
@@ -124,6 +127,7 @@ class DWASettings:
     arc: float = 0.5 * SONAR_CONE
     arc_points: int = 3
     recent: float = 2.0
+    echo_cell: float = 0.05
     block: float = ROBOT_RADIUS
     margin: float = 0.5
     border: float = 3.0
@@ -140,8 +144,8 @@ class DWASettings:
                   "horizon", "step", "radius", "latency", "heading_weight",
                   "progress_weight", "clearance_weight", "velocity_weight",
                   "clearance_cap", "resolution", "extent", "memory", "occupied",
-                  "cmax", "arc", "recent", "block", "margin", "border", "replan",
-                  "lookahead", "patience", "progress", "look_time",
+                  "cmax", "arc", "recent", "echo_cell", "block", "margin", "border",
+                  "replan", "lookahead", "patience", "progress", "look_time",
                   "tolerance")  # fmt: skip
         for name in floats:
             put(self, name, float(getattr(self, name)))
@@ -149,7 +153,8 @@ class DWASettings:
             put(self, name, int(getattr(self, name)))
         positive = ("max_speed", "max_turn", "accel", "rot_accel", "window_time",
                     "horizon", "step", "radius", "clearance_cap", "resolution",
-                    "extent", "occupied", "cmax", "block", "lookahead")  # fmt: skip
+                    "extent", "occupied", "cmax", "echo_cell", "block",
+                    "lookahead")  # fmt: skip
         for name in positive:
             if not getattr(self, name) > 0:
                 raise ValueError(f"{name} must be > 0, got {getattr(self, name)}")
