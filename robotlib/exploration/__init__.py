@@ -8,7 +8,8 @@
   obstacles), Burgard et al.'s utility and its coordination of a team.
 - `ExploreSettings`, `Exploration`, `explore`: the loop (map with the
   robot's own laser or sonar from the true pose or SLAM's, choose, plan with
-  A*, follow, avoid, re-plan, go home).
+  A*, follow, avoid, re-plan, go home); `Member`: one robot in it, its
+  belief and path (with the checks that keep it clear in `member`).
 - `team_starts`, `explore_team`: 2-4 robots in one simulator, one map.
 - `reachable_area`, `explored_fraction`, `ExplorationResult`: judged by the
   true world.
@@ -25,7 +26,7 @@ from .choice import (
     known_space,
     utility,
 )
-from .explore import DONE, EXPLORE, HOME, Exploration, explore
+from .explore import Exploration, explore
 from .frontiers import (
     FREE,
     OCCUPIED,
@@ -36,6 +37,7 @@ from .frontiers import (
     frontier_cells,
     frontier_regions,
 )
+from .member import DONE, EXPLORE, HOME, Member
 from .metrics import ExplorationResult, explored_fraction, reachable_area, time_to
 from .settings import POSES, SENSORS, ExploreSettings
 from .team import explore_team, team_starts
@@ -54,6 +56,7 @@ __all__ = [
     "ExplorationResult",
     "ExploreSettings",
     "Frontier",
+    "Member",
     "choose",
     "classify",
     "discount",
