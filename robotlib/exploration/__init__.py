@@ -2,7 +2,8 @@
 
 - `classify`, `frontier_cells`, `frontier_regions`, `find_frontiers`: free
   cells next to unknown ones on an occupancy grid, grouped in `Frontier`
-  regions with a size and a centroid.
+  regions with a size and a centroid; `open_frontier` drops those facing
+  only a small closed pocket (the inside of a box).
 - `known_space`, `frontier_costs`, `information_gain`, `utility`,
   `discount`, `choose`: path costs on the known map (unknown cells as
   obstacles), Burgard et al.'s utility and its coordination of a team.
@@ -36,6 +37,7 @@ from .frontiers import (
     find_frontiers,
     frontier_cells,
     frontier_regions,
+    open_frontier,
 )
 from .member import DONE, EXPLORE, HOME, Member
 from .metrics import ExplorationResult, explored_fraction, reachable_area, time_to
@@ -69,6 +71,7 @@ __all__ = [
     "frontier_regions",
     "information_gain",
     "known_space",
+    "open_frontier",
     "reachable_area",
     "team_starts",
     "time_to",

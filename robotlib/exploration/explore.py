@@ -7,18 +7,22 @@ on one shared log-odds map. Each 100 ms cycle:
    the map at the pose it believes (the truth, or its own grid FastSLAM's
    best particle when ``ExploreSettings.pose`` is ``"slam"``);
 2. every ``decide_period`` (or at once when a robot needs one) the
-   frontiers are found again; a robot whose path now crosses a known wall
+   frontiers are found again (those facing only a small closed pocket, the
+   inside of a box, left out); a robot whose path now crosses a known wall
    re-plans; a robot that reached its target, whose target is no longer a
    frontier, or that waited too long for a teammate, gets a new target
    (`robotlib.exploration.choose`: nearest, utility, or coordinated among
    the team); with no reachable frontier left it drives home;
 3. every robot follows its A* path (planned on the inflated known map,
-   unknown cells blocked) with pure pursuit, handing over to a sonar
-   stop-and-turn avoider when something is very close in front; a robot
-   stops while a teammate is close ahead of it and, after
-   ``wait_time``, re-plans around its teammates;
+   unknown cells blocked) with pure pursuit, as fast as it can still stop
+   short of the known walls, the near sonar echoes and its teammates
+   (`robotlib.exploration.member.keeps_clear`), else turning in place, or
+   backing off a wall it came too near; a robot stops while a teammate is
+   close ahead of it and, after ``wait_time``, re-plans around its
+   teammates;
 4. the simulator steps; a robot that stalls against a wall or a robot
-   counts a collision.
+   counts a collision, and a stall (the robot's own report) blocks the
+   cell it ran into on the map.
 
 The true poses are used to judge (coverage, collisions) and, with ``pose``
 ``"true"``, to map; they never steer otherwise. Imports the simulator,
@@ -38,8 +42,9 @@ from ..planning import astar
 from ..sim import Simulator
 from ..world import World
 from .choice import choose, frontier_costs, information_gain, known_space
-from .frontiers import classify, frontier_cells, frontier_regions
+from .frontiers import classify, frontier_cells, frontier_regions, open_frontier
 from .member import (
+    BACK_OFF,
     DONE,
     EXPLORE,
     HOME,
@@ -47,13 +52,24 @@ from .member import (
     cell,
     clear_bodies,
     count_echoes,
+    escape,
     keeps_clear,
+    mark_contact,
     teammate_ahead,
 )
 from .metrics import ExplorationResult, explored_fraction, reachable_area
 from .settings import ExploreSettings
 
 __all__ = ["Exploration", "explore"]
+
+SLOWER = (1.0, 0.5, 0.25)
+"""The shares of pure pursuit's speed tried, in turn, when the next arc
+does not keep clear (`keeps_clear`) before the robot stops to turn."""
+
+POCKET = 1.0
+"""Unknown pieces smaller than this (m^2), their rim all known, are not
+explored (`robotlib.exploration.frontiers.open_frontier`): a generated hall's
+boxes are at most 0.9 m wide."""
 
 PARK = 2.5
 """A robot driving home that a teammate blocks this near its start (m) parks
@@ -125,6 +141,12 @@ class Exploration:
             -1, 2
         )
 
+    def _no_teammate_at(self, r: Member) -> bool:
+        """Whether no teammate is near enough to ``r`` to be what it touched."""
+        mates = self._positions(skip=r)
+        gap = np.hypot(*(mates - r.pose[:2]).T) if len(mates) else [np.inf]
+        return bool(np.min(gap) > 2 * ROBOT_RADIUS + 0.15)
+
     def _needs_target(self, r: Member, state, frontier) -> bool:
         if r.mode != EXPLORE or r.target is None or r.follower is None:
             return True
@@ -153,7 +175,7 @@ class Exploration:
             raise ValueError(
                 f"frontiers(state) gave shape {frontier.shape}, not {state.shape}"
             )
-        frontier = frontier.astype(bool)
+        frontier = open_frontier(state, frontier, round(POCKET / g.resolution**2))
         regions = frontier_regions(frontier, g.origin, g.resolution, s.min_frontier)
         robots_xy = self._positions()
         echoes = self.echoes >= 2
@@ -265,11 +287,29 @@ class Exploration:
             r.waited += CYCLE
             return 0.0, 0.0
         r.waited = 0.0
-        if v > 0 and not keeps_clear(
-            self.grid, s.occupied_level, self.echoes, r.pose, v, w, mates
-        ):
-            r.stuck += CYCLE  # turn in place towards the path (always safe)
-            return 0.0, math.copysign(s.w_max / 2, w)
+        if r.backing:
+            off = escape(
+                self.grid, s.occupied_level, self.echoes, r.pose, s.w_max, BACK_OFF
+            )
+            r.backing = off is not None
+            if r.backing:
+                return off
+        if v > 0:  # on the same arc, as fast as keeps clear until it can stop
+            speed = float(r.body.state.velocity[0])
+            for f in SLOWER:
+                if keeps_clear(
+                    self.grid, s.occupied_level, self.echoes, r.pose, f * v, f * w,
+                    mates, speed,
+                ):  # fmt: skip
+                    v, w = f * v, f * w
+                    break
+            else:
+                r.stuck += CYCLE
+                off = escape(self.grid, s.occupied_level, self.echoes, r.pose, s.w_max)
+                if off is not None:  # too near a wall: back off it first
+                    r.backing = True
+                    return off
+                return 0.0, math.copysign(s.w_max / 2, w)  # turn towards the path
         if r.follower.done:
             if r.mode == HOME:
                 r.stop()
@@ -291,6 +331,7 @@ class Exploration:
             self.decide()
         for r in self.robots:
             v, w = self._command(r)
+            r.command, r.speed = (v, w), float(r.body.state.velocity[0])
             r.body.command("VEL", v)
             r.body.command("RVEL", w)
         self.sim.step()
@@ -307,6 +348,8 @@ class Exploration:
                 else:
                     self.wall_collisions += 1
             r.stalled = r.body.stalled
+            if r.body.state.stalled and self._no_teammate_at(r):
+                mark_contact(self.echoes, self.grid, r, r.command[0] or r.speed)
             r.truth.append(r.body.true_pose.copy())
             r.estimates.append(r.pose.copy())
         if self.cycle % self._sample == 0:

@@ -25,6 +25,7 @@ import numpy as np
 
 from ..mapping import SONAR_SETTINGS, FastSLAMSettings, GridFastSLAM, OccupancyGrid
 from ..p3dx import (
+    CYCLE,
     DEFAULT_ACCELERATION,
     ROBOT_LENGTH_FRONT,
     ROBOT_LENGTH_REAR,
@@ -34,6 +35,7 @@ from ..p3dx import (
 )
 from ..planning import PurePursuit
 from ..planning.follow import sonar_points
+from ..sensing.laser import LaserModel, laser_poses
 from ..world import wrap_angle
 from .settings import ExploreSettings
 
@@ -42,12 +44,18 @@ __all__ = [
     "cell",
     "clear_bodies",
     "count_echoes",
+    "mark_contact",
     "teammate_ahead",
     "keeps_clear",
+    "escape",
     "EXPLORE",
     "HOME",
     "DONE",
 ]
+
+TOUCH = ROBOT_RADIUS + 0.15
+"""Returns nearer the robot's centre than this (m) are kept for
+`mark_contact`."""
 
 ECHO_RANGE = 0.6
 """Echoes of the two forward sonars (``AXIS``) nearer than this (m) mark
@@ -61,6 +69,21 @@ AXIS = slice(3, 5)
 
 BODY = math.hypot(ROBOT_LENGTH_REAR, ROBOT_WIDTH / 2) + 0.05
 """A teammate's reach from its centre, m: its rear corners, and a little."""
+
+CLEARANCE = 0.02
+"""`keeps_clear` wants the body this far (m) from the nearest occupied
+cell's centre along the next half second."""
+
+BACK_OFF = 0.1
+"""A robot backing off a wall (`escape`) stops when it is this much (m)
+further than `keeps_clear` wants: at the limit itself, the first turn
+towards its path would bring it back."""
+
+AWAY = 0.3
+"""A robot nearer a blocked cell than `keeps_clear` wants may drive only
+where the distance grows by this share of the way (about 17 degrees off
+the tangent): the wall can lie 0.07 m from the cell's centre, so moving
+along the circle round the centre can still push into it."""
 
 EXPLORE, HOME, DONE = "explore", "home", "done"
 """A robot's modes: driving to a frontier, driving home, home (or idle)."""
@@ -95,7 +118,11 @@ class Member:
         self.stuck = 0.0
         self.spin = 2 * math.pi  # a look round first: the laser sees only ahead
         self.blocked = False
+        self.backing = False  # backing off a wall it came too near
         self.stalled = False
+        self.near = np.zeros((0, 2))  # this cycle's returns within TOUCH, m
+        self.command = (0.0, 0.0)  # the last (v, w) sent, and the speed then
+        self.speed = 0.0
         self.truth = [self.pose.copy()]
         self.estimates = [self.pose.copy()]
         self.targets: list[np.ndarray] = []
@@ -118,8 +145,10 @@ class Member:
             self.pose = self.body.true_pose.copy()
         if sensor == "laser":
             grid.update_laser(self.pose, z)
+            self.near = laser_points(self.pose, z, TOUCH)
         else:
             grid.update_sonar(self.pose, z)
+            self.near = sonar_points(self.pose, z, TOUCH)
 
     def drive_to(self, path, goal, settings: ExploreSettings) -> None:
         """Follow ``path`` (K, 2) to ``goal`` (2,)."""
@@ -198,6 +227,40 @@ def count_echoes(echoes: np.ndarray, grid: OccupancyGrid, r: Member, others) -> 
         echoes[i, j] = min(echoes[i, j] + 1, 100)
 
 
+def laser_points(pose, ranges, max_range: float) -> np.ndarray:
+    """World points ``(x, y)`` of the laser returns shorter than ``max_range``, m."""
+    laser = LaserModel()
+    x, y, th = laser_poses(pose, laser)[0]
+    z = np.asarray(ranges, dtype=float)
+    keep = z < max_range
+    a = th + laser.angles[keep]
+    return np.column_stack([x + z[keep] * np.cos(a), y + z[keep] * np.sin(a)])
+
+
+def mark_contact(echoes: np.ndarray, grid: OccupancyGrid, r: Member, v: float) -> None:
+    """Block the cell ``r`` ran into (its motors stalled driving at ``v``, m/s).
+
+    A wall can stand in a cell the map holds free (the laser's beams pass
+    through the rest of a cell a wall only grazes: a box's corner, a door
+    jamb's end). The nearest return of this cycle's reading on the side the
+    robot drove to, or without one the point just ahead of the body, is
+    blocked in ``echoes`` so that neither the plan nor `keeps_clear` lead
+    there again.
+    """
+    if v == 0.0:
+        return
+    a = r.pose[2] + (0.0 if v > 0 else math.pi)
+    way = np.array([math.cos(a), math.sin(a)])
+    spot = r.pose[:2] + (ROBOT_RADIUS + grid.resolution / 2) * way
+    d = r.near - r.pose[:2]
+    ahead = d @ way > 0
+    if ahead.any():
+        k = np.argmin(np.hypot(*d[ahead].T))
+        spot = r.near[ahead][k]
+    i, j = cell(grid, spot)
+    echoes[i, j] = 100
+
+
 def teammate_ahead(r: Member, others, keep_out: float) -> bool:
     """Whether a teammate (positions ``others`` (K, 2)) is close ahead of ``r``.
 
@@ -215,31 +278,87 @@ def teammate_ahead(r: Member, others, keep_out: float) -> bool:
     return False
 
 
-def keeps_clear(
-    grid: OccupancyGrid, occupied_level: float, echoes, pose, v: float, w: float, mates
-) -> bool:
-    """Whether driving ``(v, w)`` from ``pose`` for half a second keeps clear.
-
-    Clear of the cells the map holds occupied (log-odds above
-    ``occupied_level``) or that hold two ``echoes`` (int, the grid's shape),
-    and of the teammates at ``mates`` (K, 2); moving away from one already
-    too close is allowed.
-    """
+def _blocked_near(grid, occupied_level, echoes, pose):
+    """Centres (K, 2) of the blocked cells within a metre of ``pose``, m."""
     i, j = cell(grid, pose)
     k = int(math.ceil(1.0 / grid.resolution))
     win = (slice(max(i - k, 0), i + k + 1), slice(max(j - k, 0), j + k + 1))
     ii, jj = np.nonzero((grid.logodds[win] > occupied_level) | (echoes[win] >= 2))
     cx = grid.origin[0] + (jj + win[1].start + 0.5) * grid.resolution
     cy = grid.origin[1] + (ii + win[0].start + 0.5) * grid.resolution
+    return np.column_stack([cx, cy])
+
+
+def escape(
+    grid: OccupancyGrid,
+    occupied_level: float,
+    echoes,
+    pose,
+    w_max: float,
+    margin: float = 0.0,
+):
+    """Return a command ``(v, w)`` backing a robot off the cell it is too near.
+
+    None when no blocked cell is nearer than `keeps_clear` wants plus
+    ``margin`` (m; the loop keeps backing off to ``BACK_OFF``). The robot
+    turns in place until its front or its back points away from the near
+    cells (the sum of their unit vectors, within 20 degrees), then drives
+    that way at 0.1 m/s.
+    """
+    cells = _blocked_near(grid, occupied_level, echoes, pose)
+    if not len(cells):
+        return None
+    gap = pose[:2] - cells
+    d = np.hypot(*gap.T)
+    near = d < ROBOT_RADIUS + CLEARANCE + margin
+    if not near.any():
+        return None
+    push = (gap[near] / d[near, None]).sum(axis=0)  # away from all the near cells
+    away = math.atan2(push[1], push[0])
+    err = wrap_angle(away - pose[2])
+    if abs(err) <= math.radians(20):
+        return 0.1, 0.0
+    back = wrap_angle(err + math.pi)
+    if abs(back) <= math.radians(20):
+        return -0.1, 0.0
+    turn = err if abs(err) < abs(back) else back
+    return 0.0, math.copysign(w_max / 2, turn)
+
+
+def keeps_clear(
+    grid: OccupancyGrid,
+    occupied_level: float,
+    echoes,
+    pose,
+    v: float,
+    w: float,
+    mates,
+    speed: float = 0.0,
+) -> bool:
+    """Whether driving ``(v, w)`` from ``pose`` keeps clear until it could stop.
+
+    The arc is followed for half a second at ``v`` or, if longer, for the
+    distance the robot needs to brake (at `DEFAULT_ACCELERATION`) from the
+    larger of ``v`` and its present ``speed`` (m/s): a robot at 0.5 m/s
+    coasts 0.4 m after it is told to stop. Clear of the cells the map holds
+    occupied (log-odds above ``occupied_level``) or that hold two ``echoes``
+    (int, the grid's shape), and of the teammates at ``mates`` (K, 2). A
+    robot already too close may only move clearly away (``AWAY``): the
+    nearest cell's centre is not where the wall is.
+    """
+    cx, cy = _blocked_near(grid, occupied_level, echoes, pose).T
+    u = max(v, speed, 0.0)
+    reach = max(0.5 * v, u * CYCLE + u * u / (2 * DEFAULT_ACCELERATION))
+    s = np.linspace(0.0, reach, 8)
     x, y, th = pose
-    t = np.linspace(0.0, 0.5, 6)
-    a = th + w * t
-    px = x + v * t * np.cos(a)
-    py = y + v * t * np.sin(a)
-    d = np.full(len(t), np.inf)
+    a = th + (w / v if v > 0 else 0.0) * s
+    px = x + s * np.cos(a)
+    py = y + s * np.sin(a)
+    d = np.full(len(s), np.inf)
     if len(cx):
         d = np.hypot(px[:, None] - cx, py[:, None] - cy).min(axis=1)
     if len(mates):  # a teammate: a disc round its corners
         gap = np.hypot(px[:, None] - mates[:, 0], py[:, None] - mates[:, 1])
         d = np.minimum(d, gap.min(axis=1) - BODY)
-    return bool(d[1:].min() >= min(ROBOT_RADIUS + 0.02, d[0] - 0.005))
+    need = np.minimum(ROBOT_RADIUS + CLEARANCE, d[0] + AWAY * s)
+    return bool((d[1:] >= need[1:]).all())
