@@ -121,6 +121,7 @@ class Member:
         self.backing = False  # backing off a wall it came too near
         self.stalled = False
         self.near = np.zeros((0, 2))  # this cycle's returns within TOUCH, m
+        self.scan = None  # this cycle's laser scan (None: mapping with sonar)
         self.command = (0.0, 0.0)  # the last (v, w) sent, and the speed then
         self.speed = 0.0
         self.truth = [self.pose.copy()]
@@ -146,6 +147,7 @@ class Member:
         if sensor == "laser":
             grid.update_laser(self.pose, z)
             self.near = laser_points(self.pose, z, TOUCH)
+            self.scan = z
         else:
             grid.update_sonar(self.pose, z)
             self.near = sonar_points(self.pose, z, TOUCH)
@@ -212,7 +214,11 @@ def count_echoes(echoes: np.ndarray, grid: OccupancyGrid, r: Member, others) -> 
     """Count ``r``'s near forward sonar echoes not explained by a teammate.
 
     ``echoes`` (int, the grid's shape) is incremented where they fall;
-    ``others`` (K, 2) are the teammates' positions, m.
+    ``others`` (K, 2) are the teammates' positions, m. An echo is put on its
+    sonar's axis, but it may come from the edge of the cone: with a laser,
+    an echo whose point the laser's beams (the nearest three) all pass
+    beyond is no obstacle there (a door jamb seen obliquely would otherwise
+    close the door the robot is driving through).
     """
     if r.spin > 0:
         return
@@ -222,9 +228,28 @@ def count_echoes(echoes: np.ndarray, grid: OccupancyGrid, r: Member, others) -> 
     if len(others) and len(pts):
         d = np.hypot(*(pts[:, None, :] - others[None, :, :]).transpose(2, 0, 1))
         pts = pts[d.min(axis=1) > ROBOT_RADIUS + 0.15]
+    if r.scan is not None and len(pts):
+        pts = pts[~_seen_through(r.pose, r.scan, pts)]
     for x, y in pts:
         i, j = cell(grid, (x, y))
         echoes[i, j] = min(echoes[i, j] + 1, 100)
+
+
+def _seen_through(pose, ranges, pts) -> np.ndarray:
+    """Whether the laser's three beams nearest each point (K, 2) pass it by 0.1 m."""
+    laser = LaserModel()
+    x, y, th = laser_poses(pose, laser)[0]
+    ang = laser.angles
+    bearing = np.arctan2(pts[:, 1] - y, pts[:, 0] - x) - th
+    bearing = (bearing + np.pi) % (2 * np.pi) - np.pi
+    k = np.rint((bearing - ang[0]) / (ang[1] - ang[0])).astype(np.int64)
+    dist = np.hypot(pts[:, 0] - x, pts[:, 1] - y)
+    out = np.zeros(len(pts), dtype=bool)
+    for n in range(len(pts)):
+        if 0 <= k[n] < len(ang):
+            near = np.asarray(ranges)[max(k[n] - 1, 0) : k[n] + 2]
+            out[n] = near.min() > dist[n] + 0.1
+    return out
 
 
 def laser_points(pose, ranges, max_range: float) -> np.ndarray:

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from robotlib.exploration import ExploreSettings, explore
-from robotlib.exploration.member import escape, keeps_clear, mark_contact
+from robotlib.exploration.member import count_echoes, escape, keeps_clear, mark_contact
 from robotlib.mapping import OccupancyGrid
 from robotlib.world import seeded_world
 
@@ -61,6 +61,25 @@ def test_a_stall_blocks_the_nearest_return_on_the_side_driven_to():
     before = echoes.copy()
     mark_contact(echoes, g, r, 0.0)  # not driving: no contact to place
     assert (echoes == before).all()
+
+
+def test_an_echo_the_laser_sees_past_marks_nothing():
+    """A sonar echo lands on its axis; the jamb that made it may be off it."""
+    g, echoes = _wall_at_x2()
+    sonar = np.full(8, 5.0)
+    sonar[3:5] = 0.5  # both forward sonars: something 0.5 m ahead
+    r = SimpleNamespace(
+        pose=np.array([0.5, 2.0, 0.0]), spin=0.0, scan=np.full(181, 3.0),
+        body=SimpleNamespace(state=SimpleNamespace(sonar=sonar)),
+    )  # fmt: skip
+    count_echoes(echoes, g, r, np.zeros((0, 2)))
+    assert echoes.sum() == 0  # the laser's beams there reach 3 m
+    r.scan = np.full(181, 0.6)  # the laser sees it too
+    count_echoes(echoes, g, r, np.zeros((0, 2)))
+    assert echoes.sum() == 2
+    r.scan = None  # mapping with the sonar: every near echo counts
+    count_echoes(echoes, g, r, np.zeros((0, 2)))
+    assert echoes.sum() == 4
 
 
 @pytest.mark.slow
