@@ -289,8 +289,9 @@ class Exploration:
         r.waited = 0.0
         if r.backing:
             off = escape(
-                self.grid, s.occupied_level, self.echoes, r.pose, s.w_max, BACK_OFF
-            )
+                self.grid, s.occupied_level, self.echoes, r.pose, s.w_max, BACK_OFF,
+                r.returns,
+            )  # fmt: skip
             r.backing = off is not None
             if r.backing:
                 return off
@@ -299,13 +300,16 @@ class Exploration:
             for f in SLOWER:
                 if keeps_clear(
                     self.grid, s.occupied_level, self.echoes, r.pose, f * v, f * w,
-                    mates, speed,
+                    mates, speed, r.returns,
                 ):  # fmt: skip
                     v, w = f * v, f * w
                     break
             else:
                 r.stuck += CYCLE
-                off = escape(self.grid, s.occupied_level, self.echoes, r.pose, s.w_max)
+                off = escape(
+                    self.grid, s.occupied_level, self.echoes, r.pose, s.w_max, 0.0,
+                    r.returns,
+                )  # fmt: skip
                 if off is not None:  # too near a wall: back off it first
                     r.backing = True
                     return off

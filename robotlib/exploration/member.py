@@ -121,6 +121,7 @@ class Member:
         self.backing = False  # backing off a wall it came too near
         self.stalled = False
         self.near = np.zeros((0, 2))  # this cycle's returns within TOUCH, m
+        self.returns = np.zeros((0, 2))  # its laser returns within 1 m, m
         self.scan = None  # this cycle's laser scan (None: mapping with sonar)
         self.command = (0.0, 0.0)  # the last (v, w) sent, and the speed then
         self.speed = 0.0
@@ -146,7 +147,9 @@ class Member:
             self.pose = self.body.true_pose.copy()
         if sensor == "laser":
             grid.update_laser(self.pose, z)
-            self.near = laser_points(self.pose, z, TOUCH)
+            self.returns = laser_points(self.pose, z, 1.0)
+            gap = np.hypot(*(self.returns - self.pose[:2]).T)
+            self.near = self.returns[gap < TOUCH]
             self.scan = z
         else:
             grid.update_sonar(self.pose, z)
@@ -303,15 +306,23 @@ def teammate_ahead(r: Member, others, keep_out: float) -> bool:
     return False
 
 
-def _blocked_near(grid, occupied_level, echoes, pose):
-    """Centres (K, 2) of the blocked cells within a metre of ``pose``, m."""
+def _blocked_near(grid, occupied_level, echoes, pose, returns=None):
+    """Centres (K, 2) of the blocked cells within a metre of ``pose``, m.
+
+    With the laser's ``returns`` (P, 2) after them: a wall can stand in a
+    cell the map holds free (one the beams only graze), never where the
+    laser sees it.
+    """
     i, j = cell(grid, pose)
     k = int(math.ceil(1.0 / grid.resolution))
     win = (slice(max(i - k, 0), i + k + 1), slice(max(j - k, 0), j + k + 1))
     ii, jj = np.nonzero((grid.logodds[win] > occupied_level) | (echoes[win] >= 2))
     cx = grid.origin[0] + (jj + win[1].start + 0.5) * grid.resolution
     cy = grid.origin[1] + (ii + win[0].start + 0.5) * grid.resolution
-    return np.column_stack([cx, cy])
+    cells = np.column_stack([cx, cy])
+    if returns is None or not len(returns):
+        return cells
+    return np.vstack([cells, np.asarray(returns, dtype=float).reshape(-1, 2)])
 
 
 def escape(
@@ -321,16 +332,18 @@ def escape(
     pose,
     w_max: float,
     margin: float = 0.0,
+    returns=None,
 ):
     """Return a command ``(v, w)`` backing a robot off the cell it is too near.
 
     None when no blocked cell is nearer than `keeps_clear` wants plus
-    ``margin`` (m; the loop keeps backing off to ``BACK_OFF``). The robot
+    ``margin`` (m; the loop keeps backing off to ``BACK_OFF``), counting
+    the laser's ``returns`` (P, 2) as blocked too. The robot
     turns in place until its front or its back points away from the near
     cells (the sum of their unit vectors, within 20 degrees), then drives
     that way at 0.1 m/s.
     """
-    cells = _blocked_near(grid, occupied_level, echoes, pose)
+    cells = _blocked_near(grid, occupied_level, echoes, pose, returns)
     if not len(cells):
         return None
     gap = pose[:2] - cells
@@ -359,6 +372,7 @@ def keeps_clear(
     w: float,
     mates,
     speed: float = 0.0,
+    returns=None,
 ) -> bool:
     """Whether driving ``(v, w)`` from ``pose`` keeps clear until it could stop.
 
@@ -367,11 +381,12 @@ def keeps_clear(
     larger of ``v`` and its present ``speed`` (m/s): a robot at 0.5 m/s
     coasts 0.4 m after it is told to stop. Clear of the cells the map holds
     occupied (log-odds above ``occupied_level``) or that hold two ``echoes``
-    (int, the grid's shape), and of the teammates at ``mates`` (K, 2). A
+    (int, the grid's shape), of the laser's ``returns`` (P, 2, m) and of
+    the teammates at ``mates`` (K, 2). A
     robot already too close may only move clearly away (``AWAY``): the
     nearest cell's centre is not where the wall is.
     """
-    cx, cy = _blocked_near(grid, occupied_level, echoes, pose).T
+    cx, cy = _blocked_near(grid, occupied_level, echoes, pose, returns).T
     u = max(v, speed, 0.0)
     reach = max(0.5 * v, u * CYCLE + u * u / (2 * DEFAULT_ACCELERATION))
     s = np.linspace(0.0, reach, 8)
