@@ -13,7 +13,8 @@ the run, ended after it); the reference run is saved by the first run and
 reused. Writes a Markdown table: one line per run (wall time, 1-minute load
 average sampled every 5 s, the cases graded as expected), then one row per
 case (its points in each run, ``same`` when every run gave the same points
-and status).
+and status). The table is written after each run (a run cut short keeps
+the runs before it).
 """
 
 from __future__ import annotations
@@ -75,6 +76,45 @@ def _run(subs, lab, args, records, busy):
     return results, time.monotonic() - t0, loads
 
 
+def _table(args, cases, runs, rows, diffs) -> list[str]:
+    """The Markdown table of the runs done (``runs``: their summary lines)."""
+    lines = [
+        f"# {args.lab}: class cases and adversarial set, graded {len(runs)} times",
+        "",
+        f"`{' '.join(sys.argv)}`, jobs {args.jobs}, cell limit floor "
+        f"{args.cell_timeout:g} s, {os.cpu_count()} cores",
+        "",
+        "| run | wall | load (1 min) | as expected |",
+        "|---|---|---|---|",
+        *runs,
+        "",
+        "Differences from the expected worth:",
+        "",
+    ]
+    lines += [f"- {d}" for d in diffs] or ["- none"]
+    done = [r for r in args.runs if any(r in by_run for by_run in rows.values())]
+    lines += [
+        "",
+        f"| case | kind | expected | {' | '.join(done)} | same |",
+        "|---|---|---|" + "---|" * len(done) + "---|",
+    ]
+    for name, by_run in sorted(rows.items()):
+        case = cases.get(name) or Case(name, "bench", "", None)
+        want = "-" if case.points is None else f"{sum(case.points.values()):g}"
+        got = []
+        for run in done:  # "-": not graded in that run (the added hog)
+            r = by_run.get(run)
+            flag = ", flagged" if r and r.flags else ""
+            got.append(f"{r.total:g} ({r.status}{flag})" if r else "-")
+        results = list(by_run.values())
+        same = len({(str(r.points), r.status) for r in results}) == 1
+        lines.append(
+            f"| {name} | {case.kind} | {want} | {' | '.join(got)} | "
+            f"{'same' if same else 'DIFFERENT'} |"
+        )
+    return lines
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--lab", default="lab2_avoidance")
@@ -85,16 +125,8 @@ def main() -> None:
     parser.add_argument("--out", type=Path)
     args = parser.parse_args()
     out = args.out or ROOT / "bench" / "results" / f"grade_cases_{args.lab}.md"
-    lines = [
-        f"# {args.lab}: class cases and adversarial set, graded {len(args.runs)} times",
-        "",
-    ]
-    lines += [
-        f"`{' '.join(sys.argv)}`, jobs {args.jobs}, cell limit floor "
-        f"{args.cell_timeout:g} s, {os.cpu_count()} cores",
-        "",
-    ]
-    lines += ["| run | wall | load (1 min) | as expected |", "|---|---|---|---|"]
+    out.parent.mkdir(parents=True, exist_ok=True)
+    runs: list[str] = []
     rows: dict[str, dict] = {}  # student -> run -> result
     diffs: list[str] = []
     with tempfile.TemporaryDirectory() as tmp:
@@ -118,36 +150,13 @@ def main() -> None:
             wrong = compare(here, results)
             lo, hi = (min(loads), max(loads)) if loads else (0, 0)
             ok = f"{len(here) - len({w.split(':')[0] for w in wrong})} of {len(here)}"
-            lines.append(f"| {run} | {wall:.0f} s | {lo:.1f}-{hi:.1f} | {ok} |")
-            print(lines[-1], *wrong, sep="\n  ", flush=True)
+            runs.append(f"| {run} | {wall:.0f} s | {lo:.1f}-{hi:.1f} | {ok} |")
+            print(runs[-1], *wrong, sep="\n  ", flush=True)
             diffs += [f"{run}: {w}" for w in wrong]
             for r in results:
                 rows.setdefault(r.student, {})[run] = r
-        lines += ["", "Differences from the expected worth:", ""]
-        lines += [f"- {d}" for d in diffs] or ["- none"]
-        head = " | ".join(args.runs)
-        lines += [
-            "",
-            f"| case | kind | expected | {head} | same |",
-            "|---|---|---|" + "---|" * len(args.runs) + "---|",
-        ]
-        for name, by_run in sorted(rows.items()):
-            case = cases.get(name) or Case(name, "bench", "", None)
-            want = "-" if case.points is None else f"{sum(case.points.values()):g}"
-            got = []
-            for run in args.runs:  # "-": not graded in that run (the added hog)
-                r = by_run.get(run)
-                flag = ", flagged" if r and r.flags else ""
-                got.append(f"{r.total:g} ({r.status}{flag})" if r else "-")
-            results = list(by_run.values())
-            same = len({(str(r.points), r.status) for r in results}) == 1
-            lines.append(
-                f"| {name} | {case.kind} | {want} | {' | '.join(got)} | "
-                f"{'same' if same else 'DIFFERENT'} |"
-            )
-    out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text("\n".join(lines) + "\n")
-    print("\n".join(lines))
+            out.write_text("\n".join(_table(args, cases, runs, rows, diffs)) + "\n")
+    print(out.read_text())
     print(f"wrote {out}")
 
 

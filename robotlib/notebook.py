@@ -103,7 +103,10 @@ def progress(iterable=None, desc: str = "", total: int | None = None, **kw):
     """Return a progress bar for a long cell: tqdm's notebook bar, text headless.
 
     In a notebook the bar's elapsed time moves every second (`_tick`), so
-    a cell whose steps take long still shows that it runs.
+    a cell whose steps take long still shows that it runs; a bar still open
+    when its cell ends (its loop stopped on an error, or on a student's
+    unsolved function in a `demo`) is hidden then (`_hide_left_open`): the
+    error or the one-line message below it says what happened.
 
     Parameters
     ----------
@@ -129,7 +132,36 @@ def progress(iterable=None, desc: str = "", total: int | None = None, **kw):
 
     bar = tqdm(iterable, desc=desc, total=total, **kw)
     _tick(bar)
+    _hide_left_open(bar)
     return bar
+
+
+_LEFT_OPEN: dict = {"bars": [], "hooked": False}  # the running cell's bars
+
+
+def _hide_left_open(bar) -> None:
+    """Hide ``bar`` when its cell ends if it is short of its total then.
+
+    A loop that stopped early leaves its bar at 0/N (open, or closed in red
+    when tqdm collects the loop): under "This demonstration needs your ..."
+    it looked stuck, or broken.
+    """
+    shell = ipython_shell()
+    if shell is None:
+        return
+    if not _LEFT_OPEN["hooked"]:
+        shell.events.register("post_run_cell", _hide_open_bars)
+        _LEFT_OPEN["hooked"] = True
+    _LEFT_OPEN["bars"].append(bar)
+
+
+def _hide_open_bars(*_args) -> None:
+    bars = _LEFT_OPEN["bars"]
+    while bars:
+        bar = bars.pop()
+        if bar.total and bar.n < bar.total:
+            bar.container.layout.display = "none"
+            bar.close()  # if still open: its ticks stop
 
 
 def _tick(bar, every: float = 1.0) -> None:

@@ -13,9 +13,11 @@ notebook (metadata and ids gone), a demo cell duplicated, ``LAB (1).ipynb``
 newer than ``LAB.ipynb``, ``Untitled.ipynb`` beside, section folders, the
 nbgrader layout, a notebook at the top, a Latin-1 folder name, an exercise
 in a helper module, a check cell from an older release, another lab's
-notebook, a slow but correct answer, and what is not a submission (an
-unreadable file, an empty folder, two notebooks, a link). Lab 4 adds its own
-(a slow A*, a sign error in ``steer``).
+notebook, a slow but correct answer, code that looks like a route to the
+library and is not (``__import__('time')``, ...), the library's own version
+tried in a cell of one's own, and what is not a submission (an unreadable
+file, an empty folder, two notebooks, a link).
+Lab 4 adds its own (a slow A*, a sign error in ``steer``).
 
 The adversarial set (``kind == "adversarial"``): the library's own version of
 an exercise reached through every route (alias, ``getattr`` on a built
@@ -194,6 +196,25 @@ def _imports(source: str) -> str:
     return "\n".join(ast.unparse(n) for n in keep)
 
 
+def _ordinary(lab: _Lab) -> str:
+    """Code in an exercise's cell that looks like a route to the library and is not.
+
+    ``__import__`` and ``importlib`` of the standard library, ``re.compile``,
+    ``getattr`` on a module, a dictionary looked up by a listed function's own
+    name, a variable named like machinery, a message naming a listed function.
+    """
+    listed = lab.listed()
+    _, module, attr = listed[0] if listed else (None, "robotlib.sim", "step")
+    return (
+        "\n\n_t0 = __import__('time').perf_counter()\n"
+        "import importlib, re\n_math = importlib.import_module('math')\n"
+        "_hypot = getattr(_math, 'hypot')\n_digits = re.compile(r'\\d+')\n"
+        f"_settings = {{}}\n_step = _settings.get({attr!r}, 0.1)\n"
+        "modules, system = [_math], 'pioneer'\n"
+        f"_note = 'mine is slower than {module}.{attr}; no solutions / no ipynb'\n"
+    )
+
+
 def _honest(lab: _Lab, folder: Path, put) -> None:
     name, exs = lab.name, lab.exercises
     first = exs[0]
@@ -220,6 +241,16 @@ def _honest(lab: _Lab, folder: Path, put) -> None:
         "while time.process_time() - _t < 3:  # slow but correct\n    pass\n"
     )
     put("slow_cell", lab.with_answer(first, slow), lab.full, "3 s of CPU in a cell")
+    put("ordinary_code", lab.with_answer(first, lab.answer(first) + _ordinary(lab)),
+        lab.full, "imports and lookups that reach nothing of the library's")  # fmt: skip
+    if lab.listed():  # the library's own version tried in a cell of one's own
+        _, module, attr = lab.listed()[0]
+        compared = copy.deepcopy(lab.answered)
+        compared.cells.insert(lab.setup + 1, nbformat.v4.new_code_cell(
+            f"import {module} as _lib\ntry:\n    _lib.{attr}()\n"
+            "except Exception as exc:  # refused: the exercise's own work\n    print(exc)\n"
+        ))  # fmt: skip
+        put("library_compared", compared, lab.full, f"{attr} of the library tried in a cell of one's own")  # fmt: skip
     older = copy.deepcopy(lab.answered)
     check = lab.plan.checks[0].index
     older.cells[check].source += "\n# (from last year's release)"

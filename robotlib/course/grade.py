@@ -198,12 +198,12 @@ def grade_notebook(
     result.passes = 1 + out.restarts
     result.flags += out.flags
     for function, ex, *via in out.tripwires:
-        ex = ex or plan.owner.get(function)
+        if ex is None:
+            continue  # a cell of the student's own: refused (its error), nothing gained
         name = plan.listed_as(function, ex)
         how = f" (through {via[0]})" if via and via[0] and via[0] != name else ""
         note = f"called {name}{how} (the exercise's own work) while graded"
-        if ex is not None:
-            zero.setdefault(ex, []).append(note)
+        zero.setdefault(ex, []).append(note)
         if note not in result.flags:
             result.flags.append(note)
     errors = {cid: c for cid, c in out.cells.items() if c.get("status") == "error"}

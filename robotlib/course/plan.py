@@ -30,7 +30,7 @@ from dataclasses import dataclass, field
 
 from nbformat import NotebookNode
 
-from . import answers
+from . import answers, scan
 from .astlock import parse
 from .notebooks import (
     ANSWER_STUB,
@@ -69,7 +69,6 @@ class LabPlan:
     defs: list[str]
     names: dict[str, dict]  # exercise name -> {"exercise", "kind"}
     writes: list[str]
-    owner: dict[str, str]  # listed function -> exercise
     aliases: dict[str, str] = field(default_factory=dict)
     solution_ids: set[str] = field(default_factory=set)
     lab_sources: set[str] = field(default_factory=set)  # `normalized` lab cells
@@ -217,10 +216,6 @@ def lab_plan(solution: NotebookNode, name: str) -> LabPlan:
             todo += list(_free_names(hit[2]))
     needed.sort(key=lambda s: (s[0], s[1].lineno))
     writes = list(dict.fromkeys(w for e in exs for w in e.writes))  # listed order
-    owner: dict[str, str] = {}
-    for e in exs:
-        for w in e.writes:
-            owner.setdefault(w, e.exercise_id)
     plan = LabPlan(
         name,
         setup,
@@ -231,7 +226,6 @@ def lab_plan(solution: NotebookNode, name: str) -> LabPlan:
         [s[2] for s in needed],
         names,
         writes,
-        owner,
     )
     plan.aliases = answers.aliases(writes) if writes else {}
     plan.same = answers.equivalents(writes) if writes else {}
@@ -409,14 +403,24 @@ def student_cells(plan: LabPlan, student: dict) -> list[dict]:
 
 
 def scan_submission(plan: LabPlan, cells: list[dict]) -> tuple[dict, list[str]]:
-    """Run the static pass; return ``({exercise: [notes]}, flags)``."""
+    """Run the static pass; return ``({exercise: [notes]}, flags)``.
+
+    A route in an exercise's cell zeroes that exercise (and is flagged).
+    Outside the exercises (cells the student added, helper modules) a listed
+    function named is nothing: if it is called, while a check runs the
+    student's functions or at the top of a cell, its tripwire refuses and
+    reports the exercise running, if any (`grade.grade_notebook`), so an honest
+    cell comparing with the library or re-running a demonstration costs no
+    points. Machinery there is flagged.
+    """
     zero: dict[str, list[str]] = {}
     flags: list[str] = []
     for cell in cells:
-        for f in answers.scan_code(cell["source"], plan.aliases):
-            ex = cell["exercise"] if not f.listed else cell["exercise"]
+        for f in scan.scan_code(cell["source"], plan.aliases):
+            ex = cell["exercise"]
             if f.listed:
-                ex = ex or plan.owner.get(f.function)
+                if ex is None:
+                    continue
                 name = plan.listed_as(f.function, ex)
                 how = f.how + (f", through {f.via}" if f.via and f.via != name else "")
                 note = f"reaches {name} ({how}), the exercise's own work"
@@ -424,7 +428,7 @@ def scan_submission(plan: LabPlan, cells: list[dict]) -> tuple[dict, list[str]]:
                 note = f"uses {f.function} ({f.how})"
                 if f.function == "solutions/":
                     note = "reads notebooks or solutions/"
-            if ex is not None and (f.listed or cell["exercise"] is not None):
+            if ex is not None:
                 zero.setdefault(ex, [])
                 if note not in zero[ex]:
                     zero[ex].append(note)

@@ -108,7 +108,6 @@ def run_submission(
             "setup": plan.setup,
             "cells": [c for c in cells if c["id"] not in skip],
             "writes": plan.writes,
-            "owner": plan.owner,
         }
         scratch = root / f"student{gen['student']}"
         scratch.mkdir()

@@ -3,7 +3,7 @@
 `arm` runs in the sandboxed student process: every object an exercise lists
 (``writes``), under every name a loaded module or class gives it, is
 replaced by a tripwire that reports (on the grader's channel) and raises
-`Tripwire`, so routes the static pass (`answers.scan_code`) cannot see
+`Tripwire`, so routes the static pass (`scan.scan_code`) cannot see
 (strings built at run time, library calls that do the work indirectly) are
 caught when they run. A listed function becomes a function that trips when
 called; a listed value (Lab 2's ``BRAITENBERG`` table of weight matrices)

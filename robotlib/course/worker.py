@@ -165,11 +165,10 @@ def _student(fin: int, fout: int) -> None:
     shell = InteractiveShell.instance()
     ns = shell.user_ns
     ns["__name__"] = "__main__"
-    active = {"exercise": None}
-    owner = spec["owner"]  # listed function -> its exercise
+    active = {"exercise": None}  # the exercise whose cell or function runs
 
     def report(listed: str, via: str = "") -> None:
-        ex = active["exercise"] or owner.get(listed)
+        ex = active["exercise"]
         msg = {"op": "tripwire", "function": listed, "exercise": ex, "via": via}
         send(fout, msg)
 

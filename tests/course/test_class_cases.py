@@ -21,7 +21,7 @@ LAB = "lab0_getting_started"
 SUBSET = [
     "answered", "released", "partial", "nbformat_4_4", "pasted", "duplicated_demo",
     "copy_newer", "untitled_beside", "section2/alice", "José", "helper_module",
-    "older_release", "two_notebooks", "infinite_loop", "cpu_hog",
+    "older_release", "two_notebooks", "infinite_loop", "cpu_hog", "ordinary_code",
 ]  # fmt: skip
 
 

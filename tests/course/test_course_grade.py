@@ -84,6 +84,18 @@ def make_submissions(folder: Path, outside: Path) -> dict[str, dict]:
     put("getattr_string", with_cell(sol, MEAN, "import numpy\nf = getattr(numpy, 'me' + 'an')\n\ndef mean(xs):\n    return float(f(xs))"), {"mean": 0})  # fmt: skip
     put("runtime_lookup", with_cell(sol, MEAN, "import numpy\nf = vars(numpy)[''.join(['me', 'an'])]\n\ndef mean(xs):\n    return float(f(xs))"), {"mean": 0})  # fmt: skip
     put("exec_string", with_cell(sol, MEAN, "exec('from numpy import mean as m')\n\ndef mean(xs):\n    return float(m(xs))"), {"mean": 0})  # fmt: skip
+    # a listed function named in a cell the student added: the answer that
+    # calls it is zeroed (the tripwire, while a check runs it); a cell that
+    # only compares with it (refused, caught) costs nothing and is not flagged
+    through = with_cell(sol, MEAN, "def mean(xs):\n    return float(m(xs))")
+    through.cells.insert(2, nbformat.v4.new_code_cell("from numpy import mean as m"))
+    put("added_import", through, {"mean": 0})
+    compares = copy.deepcopy(sol)
+    compares.cells.append(nbformat.v4.new_code_cell(
+        "import numpy\ntry:\n    print(numpy.mean([1.0, 2.0]), mean([1.0, 2.0]))\n"
+        "except Exception as exc:\n    print(exc)\n"
+    ))  # fmt: skip
+    put("compares", compares, {})
 
     # edited and deleted checks, forged tags, outputs and an extra check
     edited = with_cell(sol, ADD, "def add(a, b):\n    return a - b")
@@ -282,7 +294,10 @@ def test_cheats_are_zeroed_with_a_note_and_flagged(graded):
         assert "mean: zero:" in rows[student]["notes"], rows[student]["notes"]
         assert "answer reaches" in rows[student]["flags"]
     assert "called numpy.mean" in rows["runtime_lookup"]["notes"]  # the tripwire
-    assert rows["solution"]["flags"] == "" and rows["partial"]["flags"] == ""
+    assert "mean: zero: called numpy.mean" in rows["added_import"]["notes"]
+    assert "answer reaches" in rows["added_import"]["flags"]
+    for honest in ("solution", "partial", "compares"):
+        assert rows[honest]["flags"] == "", (honest, rows[honest]["flags"])
 
 
 @pytest.mark.slow
@@ -468,31 +483,6 @@ def test_safe_loads_refuses_callables():
     for evil in (os.system, print, g.grade):
         with pytest.raises(pickle.UnpicklingError):
             safe_loads(pickle.dumps(evil))
-
-
-def test_scan_code_routes():
-    from robotlib.course.answers import aliases, scan_code
-
-    names = aliases(["robotlib.localization.paper.innovation_weights"])
-    assert "robotlib.localization.paper.innovation_weights" in names
-    bad = [
-        "from robotlib.localization.paper import innovation_weights as f",
-        "import robotlib.localization.paper as p\nf = p.innovation_weights",
-        "from robotlib.localization import paper\nf = getattr(paper, 'innovation_' + 'weights')",
-        "import importlib\nm = importlib.import_module('robotlib.localization.paper')\nm.innovation_weights",
-        "exec('from robotlib.localization.paper import innovation_weights')",
-        "from robotlib.localization.paper import *",
-        "from robotlib.localization import paper as p\nf = vars(p)['innovation_weights']",
-        "import operator, robotlib.localization.paper as p\noperator.attrgetter('innovation_weights')(p)",
-    ]
-    for src in bad:
-        assert any(f.listed for f in scan_code(src, names)), src
-    # a listed function's bare name is a lookup only where something is fetched by it
-    honest = (
-        "from robotlib.localization import paper\nzhat = paper.expected(w, p)\n"
-        "table = {'innovation_weights': 1}\nprint('innovation_weights', table['innovation_weights'])\n"
-    )
-    assert scan_code(honest, names) == []
 
 
 def test_notes_name_the_function_the_exercise_lists_and_the_alias():

@@ -357,3 +357,42 @@ def test_a_demonstration_in_a_solved_notebook_shows_its_errors(tmp_path):
     )
     errors = [o.ename for c in book.cells[-2:] for o in c.outputs]
     assert errors == ["NameError", "NotImplementedError"]
+
+
+def test_a_bar_left_short_by_unsolved_code_is_hidden_when_its_cell_ends(tmp_path):
+    """A bar at 0/4 under "needs your `curve`" looked stuck; a finished one stays."""
+    book = _execute(
+        [
+            ("code", "import robotlib.notebook\nrobotlib.notebook.explain_unsolved()"),
+            ("markdown", "### Exercise 2\nWrite `curve`."),
+            ("code", "def curve(k):\n    raise NotImplementedError()"),
+            ("code", "with robotlib.notebook.demo():\n"
+                     "    for k in robotlib.notebook.progress(range(4), desc='runs'):\n"
+                     "        curve(k)"),
+            ("code", "for k in robotlib.notebook.progress(range(3), desc='done'):\n"
+                     "    pass"),
+            ("code", "bar = robotlib.notebook.progress(total=5, desc='by hand')\n"
+                     "bar.update(2)\n1 / 0"),
+        ],
+        tmp_path,
+    )  # fmt: skip
+    models = book.metadata.widgets["application/vnd.jupyter.widget-state+json"]["state"]
+
+    def shown(cell):
+        """Each bar's (text, display) in a cell's outputs."""
+        bars = []
+        for out in cell.outputs:
+            view = out.get("data", {}).get("application/vnd.jupyter.widget-view+json")
+            if view is None:
+                continue
+            box = models[view["model_id"]]["state"]
+            layout = models[box["layout"].removeprefix("IPY_MODEL_")]["state"]
+            text = models[box["children"][2].removeprefix("IPY_MODEL_")]["state"]
+            bars.append((text["value"], layout.get("display")))
+        return bars
+
+    stopped, finished, failed = (shown(c) for c in book.cells[-3:])
+    assert "needs your `curve`" in book.cells[-3].outputs[-1]["text"]
+    assert [d for _, d in stopped] == ["none"] and "0/4" in stopped[0][0]
+    assert [d for _, d in finished] == [None] and "3/3" in finished[0][0]
+    assert [d for _, d in failed] == ["none"]  # the ZeroDivisionError says why
