@@ -29,7 +29,6 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.spatial import cKDTree
 
 from .icp import icp, line_normals, scan_to_points, transform_points
 from .posegraph import PoseGraph, compose, optimize, prune_loops, relative_pose
@@ -239,6 +238,8 @@ def _sequential(graph, points, k, guess, s):
     ref = np.concatenate(ref)
     if len(ref) < 10:
         return None
+    from scipy.spatial import cKDTree
+
     tree = cKDTree(ref)
     normals = line_normals(ref, tree=tree) if s.point_to_line else None
     r = icp(ref, points[k], guess, max_distance=s.gate, point_to_line=s.point_to_line,

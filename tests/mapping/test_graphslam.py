@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import bz2
 import math
 from pathlib import Path
 
@@ -24,6 +23,20 @@ from robotlib.mapping.posegraph import (
 from robotlib.mapping.relations import read_relations, relation_errors
 
 DATA = Path(__file__).resolve().parent.parent / "data"
+
+
+def test_importing_mapping_leaves_scipy_sparse_and_spatial_for_later():
+    import subprocess
+    import sys
+
+    code = (
+        "import sys, robotlib.mapping; "
+        "print(sorted(m for m in sys.modules if m.startswith('scipy.')))"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=True
+    ).stdout
+    assert "'scipy.sparse" not in out and "'scipy.spatial" not in out, out
 
 
 @pytest.mark.parametrize("seed", range(3))
@@ -160,10 +173,10 @@ def test_relation_errors_vanish_on_the_truth(tmp_path):
     assert relation_errors(times, shifted, rel).translation.max() > 0.05
 
 
-def _intel_head(tmp_path):
-    log = tmp_path / "intel_head.clf"
-    log.write_bytes(bz2.decompress((DATA / "intel_head.clf.bz2").read_bytes()))
-    states = [s for s in read_log(log).states if "laser" in s.extra]
+def _intel_head():
+    states = [
+        s for s in read_log(DATA / "intel_head.clf.bz2").states if "laser" in s.extra
+    ]
     scans = np.array([s.extra["laser"] for s in states])
     lo, hi = states[0].extra["laser_angles"]
     angles = np.linspace(lo, hi, scans.shape[1])
@@ -172,8 +185,8 @@ def _intel_head(tmp_path):
     return odo, scans, angles, times
 
 
-def test_graph_slam_on_the_head_of_the_intel_log(tmp_path):
-    odo, scans, angles, times = _intel_head(tmp_path)
+def test_graph_slam_on_the_head_of_the_intel_log():
+    odo, scans, angles, times = _intel_head()
     rel = read_relations(DATA / "intel_head.relations")
     res = graph_slam(odo, scans, angles, 81.0, GraphSLAMSettings())
     assert res.poses.shape == odo.shape and res.failed_matches == 0
