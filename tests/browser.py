@@ -29,6 +29,7 @@ import urllib.request
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from robotlib.course.cpu import descendants
 from tests.browser_panels import check_animations, check_panels
 
 CHROMIUM = "/usr/bin/chromium"
@@ -197,15 +198,28 @@ class Run:
     notebook: dict = field(default_factory=dict)
 
 
+def _driver(pid: int) -> bool:
+    try:
+        with open(f"/proc/{pid}/cmdline", "rb") as f:
+            return b"run-driver" in f.read()
+    except OSError:
+        return False
+
+
 class Browser:
-    """Headless chromium (Debian's) driven by playwright."""
+    """Headless chromium (Debian's) driven by playwright (``driver``: its pid)."""
 
     def __init__(self, screenshots: Path):
         from playwright.sync_api import sync_playwright
 
         self.screenshots = Path(screenshots)
         self.screenshots.mkdir(parents=True, exist_ok=True)
+        before = set(descendants(os.getpid()))
         self._pw = sync_playwright().start()
+        self.driver = next(  # playwright's driver: chromium runs below it
+            (p for p in descendants(os.getpid()) if p not in before and _driver(p)),
+            None,
+        )
         self.browser = self._pw.chromium.launch(
             executable_path=CHROMIUM,
             headless=True,
@@ -493,6 +507,7 @@ def run_notebooks(
     panel_bound: float = 60.0,
     at_once: int = 2,
     feedback_bound: float = 1.0,
+    stop: threading.Event | None = None,
 ) -> list[Run]:
     """Open each notebook, Run All Cells, wait (``timeout`` s each), check, save.
 
@@ -501,7 +516,8 @@ def run_notebooks(
     one has finished, the next one starts its Run All, and the finished one
     is checked (its panels and animations) while the others run. Returns the
     `Run` of each path, in order; its ``notebook`` is the saved file
-    (outputs and all), ``errors`` the error outputs in it.
+    (outputs and all), ``errors`` the error outputs in it. Once ``stop`` is
+    set, nothing more is waited for and an empty list is returned.
     """
     runs: dict[str, Run] = {}
     todo, opening, running, done = list(paths), [], [], []
@@ -516,6 +532,8 @@ def run_notebooks(
                 running.append(session)
 
     while todo or opening or running:
+        if stop is not None and stop.is_set():
+            return []
         if todo and len(opening) + len(running) < at_once + 1:
             page = free.pop() if free else None  # one opens ahead
             opening.append(_Session(lab, browser, todo.pop(0), page))

@@ -27,10 +27,12 @@ def pytest_collection_modifyitems(session, config, items):
 def pytest_collection_finish(session):
     if session.config.option.collectonly:
         return
-    modules = {getattr(item, "module", None) for item in session.items}
-    background.start(
-        sorted((m for m in modules if hasattr(m, background.HOOK)), key=str)
-    )
+    modules: dict = {}
+    for item in session.items:
+        module = getattr(item, "module", None)
+        if hasattr(module, background.HOOK):
+            modules.setdefault(module, []).append(item)
+    background.start(modules)
 
 
 def pytest_sessionfinish(session, exitstatus):

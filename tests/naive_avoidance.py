@@ -140,10 +140,10 @@ def potential_force(ranges, sensors, max_range, gx, gy, k_att, k_rep, d0):
     return f
 
 
-def dwa_evaluate(points, vs, ws, steps, dt, radius, goal):
+def dwa_evaluate(points, vs, ws, steps, dt, radius, look, goal):
     """The dynamic window's roll-out, vectorised over samples, steps and points.
 
-    Returns ``free, heading, togo`` of shape (V, W) as the kernel defines them.
+    Returns ``free, heading, togo, gap`` of shape (V, W) as the kernel defines them.
     """
     pts = np.asarray(points, dtype=float).reshape(-1, 2)
     v = np.asarray(vs, dtype=float)[:, None, None]
@@ -169,4 +169,8 @@ def dwa_evaluate(points, vs, ws, steps, dt, radius, goal):
     ]
     heading = np.abs(wrap(np.arctan2(goal[1] - ys, goal[0] - xs) - ths))
     togo = np.hypot(goal[0] - xs, goal[1] - ys)
-    return free, heading, togo
+    # the poses from step 1 to the one that touched (or the last)
+    upto = np.arange(steps + 1) <= np.minimum(first, steps)[..., None]
+    near = np.where(upto[..., None], d, np.inf)[..., 1:, :]
+    gap = np.minimum(near.min(axis=(-1, -2), initial=np.inf), look)
+    return free, heading, togo, gap

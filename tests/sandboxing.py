@@ -8,7 +8,9 @@ their own process tree: the test process is a child subreaper while they run
 (`orphans_adopted`), so a process that escapes its parent (``setsid``, a
 double fork) is re-parented to the test, not to init, and `procs_with`
 searches only below the test. Another user's grading run on the same machine
-is never seen. Afterwards the test process stops adopting and reaps the
+is never seen, nor the session's own background work (`tests.background`:
+a lab grading beside the tests, in a process that adopts its own orphans).
+Afterwards the test process stops adopting and reaps the
 adopted processes that have ended, so no zombies pile up in the session.
 """
 
@@ -20,6 +22,7 @@ import pytest
 
 from robotlib.course import sandbox as sb
 from robotlib.course.session import _descendants
+from tests import background
 
 
 def need_sandbox() -> None:
@@ -58,7 +61,7 @@ def orphans_adopted():
 
 
 def _reap_ended_children() -> None:
-    me = os.getpid()
+    me, theirs = os.getpid(), set(background.pids())  # its Popen waits for those
     for entry in os.listdir("/proc"):
         if not entry.isdigit():
             continue
@@ -68,7 +71,7 @@ def _reap_ended_children() -> None:
                 state, ppid = f.read().rpartition(b")")[2].split()[:2]
         except (OSError, ValueError):
             continue
-        if state == b"Z" and int(ppid) == me:
+        if state == b"Z" and int(ppid) == me and int(entry) not in theirs:
             with contextlib.suppress(ChildProcessError):
                 os.waitpid(int(entry), os.WNOHANG)
 
@@ -83,14 +86,18 @@ def procs_with(needle: bytes, below: int | None = None) -> list[int]:
     """Pids of this test's processes whose command line contains ``needle``.
 
     The processes below ``below`` (default: this process, which must be
-    inside `orphans_adopted`, so that escaped descendants count).
+    inside `orphans_adopted`, so that escaped descendants count; the trees of
+    the session's background processes are not the test's).
     """
     if below is None:
         if not _adopting():
             raise RuntimeError("start the processes inside orphans_adopted()")
         below = os.getpid()
+    others = set()
+    for pid in background.pids():
+        others |= {pid, *_descendants(pid)}
     out = []
-    for entry in map(str, _descendants(below)):
+    for entry in map(str, (p for p in _descendants(below) if p not in others)):
         if entry.isdigit():
             try:
                 with open(f"/proc/{entry}/cmdline", "rb") as f:

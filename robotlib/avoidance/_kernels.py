@@ -371,7 +371,9 @@ def vfh_step(
 
 
 @nb.njit(**JIT)
-def dwa_evaluate(points, vs, ws, steps, dt, radius, goal, free, heading, togo):
+def dwa_evaluate(
+    points, vs, ws, steps, dt, radius, look, goal, free, heading, togo, gap
+):
     """Roll out every velocity sample of the dynamic window against points.
 
     ``points`` (P, 2): obstacle points in the robot frame, m. ``vs`` (V,),
@@ -386,18 +388,33 @@ def dwa_evaluate(points, vs, ws, steps, dt, radius, goal, free, heading, togo):
     spot moves no point nearer); ``heading[i, j]``, the absolute angle between
     the heading at the last pose driven and the direction from there to
     ``goal`` (2,), rad; ``togo[i, j]``, the distance from that pose to the
-    goal, m.
+    goal, m; ``gap[i, j]``, the smallest distance between the disc and any
+    point over the poses of steps 1 to the one that stopped the arc (or the
+    last), m, at most ``look`` (points farther than the arc's reach plus
+    ``look`` are not looked at).
     """
     n_pts = points.shape[0]
     d0 = np.empty(n_pts)
+    near2 = np.empty(n_pts)  # squared distance a step must come under to stop
+    r2 = radius * radius
     for p in range(n_pts):
-        d0[p] = math.hypot(points[p, 0], points[p, 1]) - radius
+        h = math.hypot(points[p, 0], points[p, 1])
+        d0[p] = h - radius
+        m = h - 1e-3
+        near2[p] = min(r2, m * m) if m > 0.0 else -1.0
+    idx = np.empty(n_pts, dtype=np.int64)
     for i in range(vs.shape[0]):
         v = vs[i]
         reach = v * steps * dt
+        n_in = 0  # the points an arc of this speed can reach or pass near
+        for p in range(n_pts):
+            if d0[p] <= reach + look:
+                idx[n_in] = p
+                n_in += 1
         for j in range(ws.shape[0]):
             w = ws[j]
             f = math.inf
+            g2 = (look + radius) ** 2  # the smallest squared distance seen
             x = 0.0
             y = 0.0
             th = 0.0
@@ -411,13 +428,14 @@ def dwa_evaluate(points, vs, ws, steps, dt, radius, goal, free, heading, togo):
                     xk = v * t
                     yk = 0.0
                 hit = False
-                for p in range(n_pts):
-                    if d0[p] > reach:
-                        continue
-                    d = math.hypot(points[p, 0] - xk, points[p, 1] - yk) - radius
-                    if d <= 0.0 and d < d0[p] - 1e-3:
+                for q in range(n_in):
+                    p = idx[q]
+                    ex = points[p, 0] - xk
+                    ey = points[p, 1] - yk
+                    e2 = ex * ex + ey * ey
+                    g2 = min(g2, e2)
+                    if e2 <= near2[p]:
                         hit = True
-                        break
                 if hit:
                     f = v * (t - dt)
                     break
@@ -425,5 +443,6 @@ def dwa_evaluate(points, vs, ws, steps, dt, radius, goal, free, heading, togo):
                 y = yk
                 th = th_k
             free[i, j] = f
+            gap[i, j] = math.sqrt(g2) - radius
             heading[i, j] = abs(_wrap(math.atan2(goal[1] - y, goal[0] - x) - th))
             togo[i, j] = math.hypot(goal[0] - x, goal[1] - y)

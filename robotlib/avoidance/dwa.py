@@ -8,8 +8,8 @@ distance it drives before its disc touches one, how well it then faces the
 goal, how much nearer the goal it gets), keeps the admissible ones (those that
 can still brake to a stop, after one cycle of latency, before touching
 anything: ``v * latency + v**2 / (2 accel) <= free``) and picks the best of
-the objective (`choose_velocity`: heading, progress, free distance and speed, weighted,
-each about [0, 1]).
+the objective (`choose_velocity`: heading, progress, free distance, side
+clearance and speed, less the turn rate, weighted, each about [0, 1]).
 
 The obstacle points are the occupied cells of a short-memory certainty grid
 (`robotlib.avoidance.dwa_grid.ObstacleGrid`, filled from the sonar as
@@ -101,7 +101,7 @@ def evaluate_window(points, vs, ws, goal, settings: DWASettings):
     goal : array_like, shape (2,)
         The goal in the robot frame, m.
     settings : DWASettings
-        ``horizon``, ``step`` and ``radius`` are read.
+        ``horizon``, ``step``, ``radius`` and ``gap_cap`` are read.
 
     Returns
     -------
@@ -113,6 +113,10 @@ def evaluate_window(points, vs, ws, goal, settings: DWASettings):
         the direction from there to the goal, rad, in [0, pi].
     togo : numpy.ndarray, shape (V, W)
         Distance from the end of the part driven to the goal, m.
+    gap : numpy.ndarray, shape (V, W)
+        Smallest distance between the disc and a point along the part
+        driven (up to the pose that touched), m, at most ``gap_cap``
+        (negative: a point already inside the disc).
     """
     pts = np.ascontiguousarray(points, dtype=np.float64).reshape(-1, 2)
     vs = np.ascontiguousarray(vs, dtype=np.float64).reshape(-1)
@@ -124,30 +128,36 @@ def evaluate_window(points, vs, ws, goal, settings: DWASettings):
         raise ValueError("points and velocity samples must be finite")
     steps = int(math.ceil(settings.horizon / settings.step - 1e-9))
     shape = (len(vs), len(ws))
-    free, heading, togo = np.empty(shape), np.empty(shape), np.empty(shape)
+    free, heading, togo, gap = (np.empty(shape) for _ in range(4))
     _kernels.dwa_evaluate(
-        pts, vs, ws, steps, settings.step, settings.radius, goal, free, heading, togo
-    )
-    return free, heading, togo
+        pts, vs, ws, steps, settings.step, settings.radius, settings.gap_cap, goal,
+        free, heading, togo, gap,
+    )  # fmt: skip
+    return free, heading, togo, gap
 
 
-def choose_velocity(vs, ws, free, heading, togo, goal_distance, settings: DWASettings):
+def choose_velocity(
+    vs, ws, free, heading, togo, gap, goal_distance, settings: DWASettings
+):
     """Pick the best admissible sample of the objective.
 
     A sample is admissible when it can brake to a stop, after
     ``settings.latency`` s, within its free distance:
     ``v * latency + v**2 / (2 accel) <= free``. Its score is the weighted sum
-    of four terms: the goal alignment ``1 - heading / pi``; the progress
+    of these terms: the goal alignment ``1 - heading / pi``; the progress
     ``(goal_distance - togo) / (max_speed * horizon)``; the free distance
-    ``min(free, clearance_cap) / clearance_cap`` (Fox et al.'s "dist"; a
-    sample at rest, ``v == 0``, counts that of the slowest sample moving off
-    along its turn); and the speed ``v / max_speed``.
+    ``min(free, clearance_cap) / clearance_cap`` (Fox et al.'s "dist"); the
+    side clearance ``max(gap, 0) / gap_cap`` (how far the arc passes from
+    what it does not hit); the speed ``v / max_speed``; minus the turn
+    ``|w| / max_turn`` (turning makes the odometry drift). A sample at rest,
+    ``v == 0``, counts the free distance and the side clearance of the
+    slowest sample moving off along its turn.
 
     Parameters
     ----------
     vs, ws : array_like, shape (V,) and (W,)
         Velocity samples, m/s and rad/s.
-    free, heading, togo : array_like, shape (V, W)
+    free, heading, togo, gap : array_like, shape (V, W)
         From `evaluate_window`.
     goal_distance : float
         The goal's distance now, m.
@@ -167,17 +177,20 @@ def choose_velocity(vs, ws, free, heading, togo, goal_distance, settings: DWASet
     v = vs[:, None]
     admissible = v * s.latency + v**2 / (2.0 * s.accel) <= free
     clear = np.minimum(free, s.clearance_cap) / s.clearance_cap
+    side = np.clip(np.asarray(gap, dtype=float), 0.0, s.gap_cap) / s.gap_cap
     if len(vs) > 1 and vs[0] == 0.0 < vs[1]:
         # at rest a sample is as clear as setting off along its turn: were
         # standing still always clearest, DWA would stall beside a box
-        clear[0] = clear[1]
+        clear[0], side[0] = clear[1], side[1]
     score = (
         s.heading_weight * (1.0 - np.asarray(heading) / math.pi)
         + s.progress_weight
         * (goal_distance - np.asarray(togo))
         / (s.max_speed * s.horizon)
         + s.clearance_weight * clear
+        + s.gap_weight * side
         + s.velocity_weight * v / s.max_speed
+        - s.turn_weight * np.abs(ws)[None, :] / s.max_turn
     )
     score = np.where(admissible, score, -np.inf)
     if not admissible.any():
@@ -283,11 +296,14 @@ class DWA(Controller):
         py = sens[:, 1:2] + r[:, None] * np.sin(ang)
         return np.column_stack([px.ravel(), py.ravel()])
 
-    def _echoes(self, sonar: np.ndarray, pose: np.ndarray) -> np.ndarray:
-        """Return the echo points of the last ``recent`` s, robot frame, m.
+    def _echoes(self, sonar: np.ndarray, pose: np.ndarray, reach: float) -> np.ndarray:
+        """Return the echo points of the last ``recent`` s nearer than ``reach`` m.
 
-        The grid lets a sonar looking past a corner clear it; these are
-        never cleared, so a corner seen a moment ago still stops the arcs.
+        Robot frame, m, shape (P, 2). The grid lets a sonar looking past a
+        corner clear it; these are never cleared, so a corner seen a moment
+        ago still stops the arcs.
+        Of the points in one ``echo_cell`` square only the newest is kept
+        (a robot at rest hears the same echoes every cycle).
         """
         local = self.echo_points(sonar)
         c, si = math.cos(pose[2]), math.sin(pose[2])
@@ -297,8 +313,12 @@ class DWA(Controller):
             np.full(len(local), self._clock),
         ])  # fmt: skip
         keep = self._recent[:, 2] > self._clock - self.settings.recent - 1e-9
-        self._recent = np.concatenate([now, self._recent[keep]])
+        recent = np.concatenate([now, self._recent[keep]])
+        key = np.floor(recent[:, :2] / self.settings.echo_cell).astype(np.int64)
+        _, first = np.unique(key, axis=0, return_index=True)  # the newest of each
+        self._recent = recent[np.sort(first)]
         d = self._recent[:, :2] - pose[:2]
+        d = d[np.hypot(d[:, 0], d[:, 1]) < reach]
         return np.column_stack(
             [c * d[:, 0] + si * d[:, 1], -si * d[:, 0] + c * d[:, 1]]
         )
@@ -352,13 +372,15 @@ class DWA(Controller):
             self._turn_until = self._clock + s.look_time
         reach = s.max_speed * s.horizon + s.radius + s.clearance_cap
         seen = self.grid.points(pose, reach)
-        points = np.concatenate([seen, self._echoes(sonar, pose)])
+        points = np.concatenate([seen, self._echoes(sonar, pose, reach)])
         vs, ws = dynamic_window(*self.last, s)
         if self._clock < self._turn_until:  # escape: stop and turn to look round
             vs = np.zeros_like(vs)
-        free, heading, togo_arc = evaluate_window(points, vs, ws, (ax, ay), s)
+        free, heading, togo_arc, gap = evaluate_window(points, vs, ws, (ax, ay), s)
         dist = math.hypot(ax, ay)
-        v, w, self.score = choose_velocity(vs, ws, free, heading, togo_arc, dist, s)
+        v, w, self.score = choose_velocity(
+            vs, ws, free, heading, togo_arc, gap, dist, s
+        )
         if v == 0.0 and self.last[0] == 0.0:  # at rest: turn to the open way
             turn = min(s.max_turn, s.rot_accel * s.window_time + abs(self.last[1]))
             w = float(np.clip(2.0 * self._open_towards(points, bearing), -turn, turn))

@@ -56,6 +56,14 @@ class DWASettings:
         fraction of ``max_speed * horizon``), of the free distance along the
         arc (capped at ``clearance_cap``, as a fraction of it) and of the
         speed (as a fraction of ``max_speed``) (0.5, 1.0, 0.4, 0.2).
+    gap_weight, gap_cap : float
+        Weight of the side clearance, how near the disc passes to the points
+        along the part of the arc it drives (capped at ``gap_cap`` m, as a
+        fraction of it) (0.3, 0.3 m): the robot keeps off walls it passes.
+    turn_weight : float
+        Weight of the turn rate ``|w| / max_turn``, taken off the score
+        (0.1): every radian turned adds to the odometry's heading error, so
+        a robot that weaves drifts more.
     clearance_cap : float
         Free distance beyond this counts as this, m (1.0).
     resolution, extent : float
@@ -77,6 +85,9 @@ class DWASettings:
         The arcs are also stopped by every echo point of the last ``recent``
         s (in the odometry frame; the grid may have cleared a corner since),
         s (2).
+    echo_cell : float
+        Of the recent echo points in one square of this side only the
+        newest is kept, m (0.05).
     block, margin : float
         The navigation function's paths keep at least ``block`` m from an
         occupied cell and pay more within ``block + margin`` m (`ROBOT_RADIUS`,
@@ -115,6 +126,9 @@ class DWASettings:
     progress_weight: float = 1.0
     clearance_weight: float = 0.4
     velocity_weight: float = 0.2
+    turn_weight: float = 0.1
+    gap_weight: float = 0.3
+    gap_cap: float = 0.3
     clearance_cap: float = 1.0
     resolution: float = 0.1
     extent: float = 40.0
@@ -124,6 +138,7 @@ class DWASettings:
     arc: float = 0.5 * SONAR_CONE
     arc_points: int = 3
     recent: float = 2.0
+    echo_cell: float = 0.05
     block: float = ROBOT_RADIUS
     margin: float = 0.5
     border: float = 3.0
@@ -139,8 +154,9 @@ class DWASettings:
         floats = ("max_speed", "max_turn", "accel", "rot_accel", "window_time",
                   "horizon", "step", "radius", "latency", "heading_weight",
                   "progress_weight", "clearance_weight", "velocity_weight",
-                  "clearance_cap", "resolution", "extent", "memory", "occupied",
-                  "cmax", "arc", "recent", "block", "margin", "border", "replan",
+                  "turn_weight", "gap_weight", "gap_cap", "clearance_cap",
+                  "resolution", "extent", "memory", "occupied", "cmax", "arc",
+                  "recent", "echo_cell", "block", "margin", "border", "replan",
                   "lookahead", "patience", "progress", "look_time",
                   "tolerance")  # fmt: skip
         for name in floats:
@@ -148,15 +164,16 @@ class DWASettings:
         for name in ("n_v", "n_w", "arc_points"):
             put(self, name, int(getattr(self, name)))
         positive = ("max_speed", "max_turn", "accel", "rot_accel", "window_time",
-                    "horizon", "step", "radius", "clearance_cap", "resolution",
-                    "extent", "occupied", "cmax", "block", "lookahead")  # fmt: skip
+                    "horizon", "step", "radius", "clearance_cap", "gap_cap",
+                    "resolution", "extent", "occupied", "cmax", "echo_cell",
+                    "block", "lookahead")  # fmt: skip
         for name in positive:
             if not getattr(self, name) > 0:
                 raise ValueError(f"{name} must be > 0, got {getattr(self, name)}")
         if self.n_v < 2 or self.n_w < 2 or self.arc_points < 1:
             raise ValueError("n_v and n_w must be at least 2, arc_points at least 1")
         weights = (self.heading_weight, self.progress_weight, self.clearance_weight,
-                   self.velocity_weight)  # fmt: skip
+                   self.velocity_weight, self.turn_weight, self.gap_weight)  # fmt: skip
         if min(weights) < 0:
             raise ValueError("the objective's weights must be >= 0")
         if min(self.latency, self.memory, self.arc, self.recent, self.margin,

@@ -210,7 +210,8 @@ def force_field(
     -------
     x, y, fx, fy : numpy.ndarray, shape (ny, nx)
         Grid points (m) and the force there, world frame; nan where a robot
-        would not fit.
+        would not fit or could not get to from the world's start (outside
+        the outer walls, `World.free_space`).
     """
     from ..sensing import expected_ranges
 
@@ -233,5 +234,12 @@ def force_field(
     c, s = np.cos(poses[:, 2]), np.sin(poses[:, 2])
     fx, fy = c * f[:, 0] - s * f[:, 1], s * f[:, 0] + c * f[:, 1]
     free = world.is_free(poses[:, :2])
+    # and reachable from the start: a robot fits outside the outer walls too
+    reach = world.free_space()
+    i, j = reach.cell_of(poses[:, :2])
+    ny, nx = reach.shape
+    on = (i >= 0) & (i < ny) & (j >= 0) & (j < nx)
+    free &= on
+    free[on] &= reach.data[i[on], j[on]]
     fx, fy = np.where(free, fx, np.nan), np.where(free, fy, np.nan)
     return gx, gy, fx.reshape(gx.shape), fy.reshape(gx.shape)

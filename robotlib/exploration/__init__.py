@@ -2,13 +2,15 @@
 
 - `classify`, `frontier_cells`, `frontier_regions`, `find_frontiers`: free
   cells next to unknown ones on an occupancy grid, grouped in `Frontier`
-  regions with a size and a centroid.
+  regions with a size and a centroid; `open_frontier` drops those facing
+  only a small closed pocket (the inside of a box).
 - `known_space`, `frontier_costs`, `information_gain`, `utility`,
   `discount`, `choose`: path costs on the known map (unknown cells as
   obstacles), Burgard et al.'s utility and its coordination of a team.
 - `ExploreSettings`, `Exploration`, `explore`: the loop (map with the
   robot's own laser or sonar from the true pose or SLAM's, choose, plan with
-  A*, follow, avoid, re-plan, go home).
+  A*, follow, avoid, re-plan, go home); `Member`: one robot in it, its
+  belief and path (with the checks that keep it clear in `member`).
 - `team_starts`, `explore_team`: 2-4 robots in one simulator, one map.
 - `reachable_area`, `explored_fraction`, `ExplorationResult`: judged by the
   true world.
@@ -25,7 +27,7 @@ from .choice import (
     known_space,
     utility,
 )
-from .explore import DONE, EXPLORE, HOME, Exploration, explore
+from .explore import Exploration, explore
 from .frontiers import (
     FREE,
     OCCUPIED,
@@ -35,7 +37,9 @@ from .frontiers import (
     find_frontiers,
     frontier_cells,
     frontier_regions,
+    open_frontier,
 )
+from .member import DONE, EXPLORE, HOME, Member
 from .metrics import ExplorationResult, explored_fraction, reachable_area, time_to
 from .settings import POSES, SENSORS, ExploreSettings
 from .team import explore_team, team_starts
@@ -54,6 +58,7 @@ __all__ = [
     "ExplorationResult",
     "ExploreSettings",
     "Frontier",
+    "Member",
     "choose",
     "classify",
     "discount",
@@ -66,6 +71,7 @@ __all__ = [
     "frontier_regions",
     "information_gain",
     "known_space",
+    "open_frontier",
     "reachable_area",
     "team_starts",
     "time_to",

@@ -7,18 +7,22 @@ on one shared log-odds map. Each 100 ms cycle:
    the map at the pose it believes (the truth, or its own grid FastSLAM's
    best particle when ``ExploreSettings.pose`` is ``"slam"``);
 2. every ``decide_period`` (or at once when a robot needs one) the
-   frontiers are found again; a robot whose path now crosses a known wall
+   frontiers are found again (those facing only a small closed pocket, the
+   inside of a box, left out); a robot whose path now crosses a known wall
    re-plans; a robot that reached its target, whose target is no longer a
    frontier, or that waited too long for a teammate, gets a new target
    (`robotlib.exploration.choose`: nearest, utility, or coordinated among
    the team); with no reachable frontier left it drives home;
 3. every robot follows its A* path (planned on the inflated known map,
-   unknown cells blocked) with pure pursuit, handing over to a sonar
-   stop-and-turn avoider when something is very close in front; a robot
-   stops while a teammate is close ahead of it and, after
-   ``wait_time``, re-plans around its teammates;
+   unknown cells blocked) with pure pursuit, as fast as it can still stop
+   short of the known walls, the near sonar echoes and its teammates
+   (`robotlib.exploration.member.keeps_clear`), else turning in place, or
+   backing off a wall it came too near; a robot stops while a teammate is
+   close ahead of it and, after ``wait_time``, re-plans around its
+   teammates;
 4. the simulator steps; a robot that stalls against a wall or a robot
-   counts a collision.
+   counts a collision, and a stall (the robot's own report) blocks the
+   cell it ran into on the map.
 
 The true poses are used to judge (coverage, collisions) and, with ``pose``
 ``"true"``, to map; they never steer otherwise. Imports the simulator,
@@ -32,114 +36,45 @@ import math
 import numpy as np
 
 from .._random import as_rng
-from ..mapping import (
-    SONAR_SETTINGS,
-    FastSLAMSettings,
-    GridFastSLAM,
-    OccupancyGrid,
-    map_score,
-)
-from ..p3dx import (
-    CYCLE,
-    DEFAULT_ACCELERATION,
-    ROBOT_LENGTH_FRONT,
-    ROBOT_LENGTH_REAR,
-    ROBOT_RADIUS,
-    ROBOT_WIDTH,
-    SONAR_POSES,
-)
-from ..planning import PurePursuit, astar
-from ..planning.follow import sonar_points
+from ..mapping import OccupancyGrid, map_score
+from ..p3dx import CYCLE, ROBOT_RADIUS
+from ..planning import astar
 from ..sim import Simulator
-from ..world import World, wrap_angle
+from ..world import World
 from .choice import choose, frontier_costs, information_gain, known_space
-from .frontiers import classify, frontier_cells, frontier_regions
+from .frontiers import classify, frontier_cells, frontier_regions, open_frontier
+from .member import (
+    BACK_OFF,
+    DONE,
+    EXPLORE,
+    HOME,
+    Member,
+    cell,
+    clear_bodies,
+    count_echoes,
+    escape,
+    keeps_clear,
+    mark_contact,
+    teammate_ahead,
+)
 from .metrics import ExplorationResult, explored_fraction, reachable_area
 from .settings import ExploreSettings
 
-__all__ = ["Exploration", "explore", "EXPLORE", "HOME", "DONE"]
+__all__ = ["Exploration", "explore"]
 
-ECHO_RANGE = 0.6
-"""Echoes of the two forward sonars (``AXIS``) nearer than this (m) mark
-their cell for planning (two echoes in a cell block it): thin posts the
-laser's beams pass between. The oblique sonars are left out: an echo is put
-on its sonar's axis, and a door jamb seen at the edge of a 30 degree cone
-would close the door."""
+SLOWER = (1.0, 0.5, 0.25)
+"""The shares of pure pursuit's speed tried, in turn, when the next arc
+does not keep clear (`keeps_clear`) before the robot stops to turn."""
 
-AXIS = slice(3, 5)
-"""The sonars at +-10 degrees."""
-
-BODY = math.hypot(ROBOT_LENGTH_REAR, ROBOT_WIDTH / 2) + 0.05
-"""A teammate's reach from its centre, m: its rear corners, and a little."""
+POCKET = 1.0
+"""Unknown pieces smaller than this (m^2), their rim all known, are not
+explored (`robotlib.exploration.frontiers.open_frontier`): a generated hall's
+boxes are at most 0.9 m wide."""
 
 PARK = 2.5
 """A robot driving home that a teammate blocks this near its start (m) parks
 there: the start poses of a team lie in one file, and the first one home
 would otherwise stand in the way of the others."""
-
-EXPLORE, HOME, DONE = "explore", "home", "done"
-"""A robot's modes: driving to a frontier, driving home, home (or idle)."""
-
-
-class _Robot:
-    """One team member: its body, its belief, its target and path."""
-
-    def __init__(self, index: int, body, settings: ExploreSettings, world, rng):
-        self.index = index
-        self.body = body
-        self.home = body.true_pose.copy()
-        self.pose = body.true_pose.copy()
-        self.mode = EXPLORE
-        self.target: np.ndarray | None = None
-        self.follower: PurePursuit | None = None
-        self.waited = 0.0
-        self.stuck = 0.0
-        self.spin = 2 * math.pi  # a look round first: the laser sees only ahead
-        self.blocked = False
-        self.stalled = False
-        self.truth = [self.pose.copy()]
-        self.estimates = [self.pose.copy()]
-        self.targets: list[np.ndarray] = []
-        self.slam = None
-        if settings.pose == "slam":
-            fs = SONAR_SETTINGS if settings.sensor == "sonar" else FastSLAMSettings()
-            self.slam = GridFastSLAM.for_world(
-                world, settings.resolution, start=self.home,
-                n_particles=settings.particles, sensor=settings.sensor,
-                settings=fs, rng=rng,
-            )  # fmt: skip
-
-    def sense(self, grid: OccupancyGrid, sensor: str) -> None:
-        """Add this cycle's reading to the shared map at the believed pose."""
-        z = self.body.scan_laser() if sensor == "laser" else self.body.state.sonar
-        if self.slam is not None:
-            self.slam.step(self.body.state.pose, z)
-            self.pose = self.slam.particles[self.slam.best()].copy()
-        else:
-            self.pose = self.body.true_pose.copy()
-        if sensor == "laser":
-            grid.update_laser(self.pose, z)
-        else:
-            grid.update_sonar(self.pose, z)
-
-    def drive_to(self, path, goal, settings: ExploreSettings) -> None:
-        """Follow ``path`` (K, 2) to ``goal`` (2,)."""
-        self.target = np.asarray(goal, dtype=float)
-        self.follower = PurePursuit(
-            path, settings.lookahead, settings.speed, settings.w_max,
-            settings.goal_tolerance,
-        )  # fmt: skip
-        self.waited = self.stuck = 0.0
-
-    def distance_home(self) -> float:
-        """Distance from the believed position to the start, m."""
-        return float(np.hypot(*(self.pose[:2] - self.home[:2])))
-
-    def remaining_path(self) -> np.ndarray:
-        """Return the part of the path still ahead, (K, 2) m."""
-        p = self.follower
-        k = int(np.searchsorted(p.cum, p.s, side="right")) - 1
-        return p.path[max(k, 0) :]
 
 
 class Exploration:
@@ -184,7 +119,7 @@ class Exploration:
         for k, pose in enumerate(starts):
             body = self.sim.add_robot(pose)
             body.command("SETV", max(s.speed, 0.75))
-            self.robots.append(_Robot(k, body, s, world, rng.spawn(1)[0]))
+            self.robots.append(Member(k, body, s, world, rng.spawn(1)[0]))
         self.grid = OccupancyGrid.for_world(world, s.resolution)
         self.echoes = np.zeros(self.grid.shape, dtype=np.int16)
         self.reachable = reachable_area(world, s.resolution)
@@ -206,7 +141,13 @@ class Exploration:
             -1, 2
         )
 
-    def _needs_target(self, r: _Robot, state, frontier) -> bool:
+    def _no_teammate_at(self, r: Member) -> bool:
+        """Whether no teammate is near enough to ``r`` to be what it touched."""
+        mates = self._positions(skip=r)
+        gap = np.hypot(*(mates - r.pose[:2]).T) if len(mates) else [np.inf]
+        return bool(np.min(gap) > 2 * ROBOT_RADIUS + 0.15)
+
+    def _needs_target(self, r: Member, state, frontier) -> bool:
         if r.mode != EXPLORE or r.target is None or r.follower is None:
             return True
         if (
@@ -214,11 +155,11 @@ class Exploration:
             or np.hypot(*(r.pose[:2] - r.target)) < self.settings.goal_tolerance
         ):
             return True
-        i, j = _cell(self.grid, r.target)
+        i, j = cell(self.grid, r.target)
         win = frontier[max(i - 2, 0) : i + 3, max(j - 2, 0) : j + 3]
         return not win.any()
 
-    def _path_blocked(self, r: _Robot, cs) -> bool:
+    def _path_blocked(self, r: Member, cs) -> bool:
         if r.follower is None:
             return False
         ahead = r.remaining_path()
@@ -234,7 +175,7 @@ class Exploration:
             raise ValueError(
                 f"frontiers(state) gave shape {frontier.shape}, not {state.shape}"
             )
-        frontier = frontier.astype(bool)
+        frontier = open_frontier(state, frontier, round(POCKET / g.resolution**2))
         regions = frontier_regions(frontier, g.origin, g.resolution, s.min_frontier)
         robots_xy = self._positions()
         echoes = self.echoes >= 2
@@ -306,11 +247,11 @@ class Exploration:
             elif spaces[n] is not cs and r.mode != HOME:
                 r.waited = 0.0  # nothing reachable around the teammates: wait again
             elif r.mode == HOME and r.blocked and r.distance_home() < PARK:
-                r.mode, r.follower, r.target = DONE, None, None  # parked by home
+                r.stop()  # parked by home
             else:
                 self._go_home(r, spaces[n])
 
-    def _plan(self, r: _Robot, cs, goal) -> bool:
+    def _plan(self, r: Member, cs, goal) -> bool:
         start = _start(cs, r.pose)
         if start is None or not cs.is_free(goal):
             return False
@@ -321,118 +262,61 @@ class Exploration:
         r.drive_to(np.vstack([r.pose[:2], path, plan.path[-1:]]), goal, self.settings)
         return True
 
-    def _go_home(self, r: _Robot, cs) -> None:
+    def _go_home(self, r: Member, cs) -> None:
         if not self.settings.go_home or np.hypot(*(r.pose[:2] - r.home[:2])) < 0.3:
-            r.mode, r.follower, r.target = DONE, None, None
+            r.stop()
             return
         home = cs.nearest_free(r.home, 1.0)
         if home is not None and self._plan(r, cs, home):
             r.mode = HOME
         else:
-            r.mode, r.follower, r.target = DONE, None, None
-
-    def _clear_bodies(self) -> None:
-        """Mark the cells under every robot's body free: it stands there, no wall.
-
-        The laser and sonar see teammates' bodies; without this, a teammate
-        would leave a trail of obstacles on the shared map.
-        """
-        g = self.grid
-        k = int(math.ceil(BODY / g.resolution))
-        level = -(self.settings.free_level + 0.1)
-        for r in self.robots:
-            i, j = _cell(g, r.pose)
-            win = (slice(max(i - k, 0), i + k + 1), slice(max(j - k, 0), j + k + 1))
-            ii, jj = np.mgrid[win]
-            cx = g.origin[0] + (jj + 0.5) * g.resolution
-            cy = g.origin[1] + (ii + 0.5) * g.resolution
-            c, si = math.cos(r.pose[2]), math.sin(r.pose[2])
-            dx, dy = cx - r.pose[0], cy - r.pose[1]
-            along, across = c * dx + si * dy, c * dy - si * dx
-            pad = g.resolution / 2
-            inside = (along <= ROBOT_LENGTH_FRONT + pad) & (
-                along >= -ROBOT_LENGTH_REAR - pad
-            )
-            inside &= np.abs(across) <= ROBOT_WIDTH / 2 + pad
-            cells = g.logodds[win]
-            cells[inside] = np.minimum(cells[inside], level)
-
-    def _mark_echoes(self, r: _Robot) -> None:
-        """Count the near sonar echoes not explained by a teammate, per cell."""
-        if r.spin > 0:
-            return
-        z = np.full(len(SONAR_POSES), np.inf)
-        z[AXIS] = r.body.state.sonar[AXIS]
-        pts = sonar_points(r.pose, z, ECHO_RANGE)
-        others = self._positions(skip=r)
-        if len(others) and len(pts):
-            d = np.hypot(*(pts[:, None, :] - others[None, :, :]).transpose(2, 0, 1))
-            pts = pts[d.min(axis=1) > ROBOT_RADIUS + 0.15]
-        for x, y in pts:
-            i, j = _cell(self.grid, (x, y))
-            self.echoes[i, j] = min(self.echoes[i, j] + 1, 100)
+            r.stop()
 
     # -- driving ------------------------------------------------------------
-    def _teammate_ahead(self, r: _Robot) -> bool:
-        v = max(float(r.body.state.velocity[0]), 0.0)
-        reach = self.settings.keep_out + v * v / (2 * DEFAULT_ACCELERATION)
-        for o in self.robots:
-            if o is r:
-                continue
-            d = o.pose[:2] - r.pose[:2]
-            if math.hypot(*d) < reach:
-                bearing = wrap_angle(math.atan2(d[1], d[0]) - r.pose[2])
-                if abs(bearing) < math.pi / 3:
-                    return True
-        return False
-
-    def _safe(self, r: _Robot, v: float, w: float) -> bool:
-        """Whether driving ``(v, w)`` for half a second keeps clear.
-
-        Clear of the known walls, the sonar's echoes and the teammates;
-        moving away from one already too close is allowed.
-        """
-        g, s = self.grid, self.settings
-        i, j = _cell(g, r.pose)
-        k = int(math.ceil(1.0 / g.resolution))
-        win = (slice(max(i - k, 0), i + k + 1), slice(max(j - k, 0), j + k + 1))
-        occ = (g.logodds[win] > s.occupied_level) | (self.echoes[win] >= 2)
-        ii, jj = np.nonzero(occ)
-        cx = g.origin[0] + (jj + win[1].start + 0.5) * g.resolution
-        cy = g.origin[1] + (ii + win[0].start + 0.5) * g.resolution
-        x, y, th = r.pose
-        t = np.linspace(0.0, 0.5, 6)
-        a = th + w * t
-        px = x + v * t * np.cos(a)
-        py = y + v * t * np.sin(a)
-        d = np.full(len(t), np.inf)
-        if len(cx):
-            near = np.hypot(px[:, None] - cx, py[:, None] - cy).min(axis=1)
-            d = near
-        mates = self._positions(skip=r)
-        if len(mates):  # a teammate: a disc round its corners
-            gap = np.hypot(px[:, None] - mates[:, 0], py[:, None] - mates[:, 1])
-            d = np.minimum(d, gap.min(axis=1) - BODY)
-        return bool(d[1:].min() >= min(ROBOT_RADIUS + 0.02, d[0] - 0.005))
-
-    def _command(self, r: _Robot) -> tuple[float, float]:
+    def _command(self, r: Member) -> tuple[float, float]:
         if r.spin > 0:
             r.spin -= abs(r.body.state.velocity[1]) * CYCLE
             return 0.0, self.settings.w_max
         if r.follower is None:
             return 0.0, 0.0
+        s = self.settings
         v, w = r.follower.command(r.pose)
-        r.blocked = v > 0 and self._teammate_ahead(r)
+        mates = self._positions(skip=r)
+        r.blocked = v > 0 and teammate_ahead(r, mates, s.keep_out)
         if r.blocked:
             r.waited += CYCLE
             return 0.0, 0.0
         r.waited = 0.0
-        if v > 0 and not self._safe(r, v, w):
-            r.stuck += CYCLE  # turn in place towards the path (always safe)
-            return 0.0, math.copysign(self.settings.w_max / 2, w)
+        if r.backing:
+            off = escape(
+                self.grid, s.occupied_level, self.echoes, r.pose, s.w_max, BACK_OFF,
+                r.returns,
+            )  # fmt: skip
+            r.backing = off is not None
+            if r.backing:
+                return off
+        if v > 0:  # on the same arc, as fast as keeps clear until it can stop
+            speed = float(r.body.state.velocity[0])
+            for f in SLOWER:
+                if keeps_clear(
+                    self.grid, s.occupied_level, self.echoes, r.pose, f * v, f * w,
+                    mates, speed, r.returns,
+                ):  # fmt: skip
+                    v, w = f * v, f * w
+                    break
+            else:
+                r.stuck += CYCLE
+                off = escape(
+                    self.grid, s.occupied_level, self.echoes, r.pose, s.w_max, 0.0,
+                    r.returns,
+                )  # fmt: skip
+                if off is not None:  # too near a wall: back off it first
+                    r.backing = True
+                    return off
+                return 0.0, math.copysign(s.w_max / 2, w)  # turn towards the path
         if r.follower.done:
             if r.mode == HOME:
-                r.mode, r.follower, r.target = DONE, None, None
+                r.stop()
         return v, w
 
     # -- the loop -----------------------------------------------------------
@@ -441,8 +325,8 @@ class Exploration:
         s = self.settings
         for r in self.robots:
             r.sense(self.grid, s.sensor)
-            self._mark_echoes(r)
-        self._clear_bodies()
+            count_echoes(self.echoes, self.grid, r, self._positions(skip=r))
+        clear_bodies(self.grid, self.robots, s.free_level)
         needs = any(
             r.mode == EXPLORE and (r.follower is None or r.follower.done)
             for r in self.robots
@@ -451,6 +335,7 @@ class Exploration:
             self.decide()
         for r in self.robots:
             v, w = self._command(r)
+            r.command, r.speed = (v, w), float(r.body.state.velocity[0])
             r.body.command("VEL", v)
             r.body.command("RVEL", w)
         self.sim.step()
@@ -467,6 +352,8 @@ class Exploration:
                 else:
                     self.wall_collisions += 1
             r.stalled = r.body.stalled
+            if r.body.state.stalled and self._no_teammate_at(r):
+                mark_contact(self.echoes, self.grid, r, r.command[0] or r.speed)
             r.truth.append(r.body.true_pose.copy())
             r.estimates.append(r.pose.copy())
         if self.cycle % self._sample == 0:
@@ -526,13 +413,6 @@ class Exploration:
 def _start(cs, pose):
     """Where a robot at ``pose`` starts planning: its cell, or the nearest free one."""
     return pose[:2] if cs.is_free(pose[:2]) else cs.nearest_free(pose, 1.0)
-
-
-def _cell(grid: OccupancyGrid, xy) -> tuple[int, int]:
-    ny, nx = grid.shape
-    j = int((xy[0] - grid.origin[0]) // grid.resolution)
-    i = int((xy[1] - grid.origin[1]) // grid.resolution)
-    return min(max(i, 0), ny - 1), min(max(j, 0), nx - 1)
 
 
 def explore(

@@ -31,6 +31,7 @@ __all__ = [
     "frontier_cells",
     "frontier_regions",
     "find_frontiers",
+    "open_frontier",
 ]
 
 FREE, UNKNOWN, OCCUPIED = 0, 1, 2
@@ -95,6 +96,43 @@ def classify(grid, free_level: float = 0.2, occupied_level: float = 0.2) -> np.n
     return state
 
 
+def _next_to(mask: np.ndarray) -> np.ndarray:
+    near = np.zeros_like(mask)
+    near[1:, :] |= mask[:-1, :]
+    near[:-1, :] |= mask[1:, :]
+    near[:, 1:] |= mask[:, :-1]
+    near[:, :-1] |= mask[:, 1:]
+    return near
+
+
+def open_frontier(state, frontier, min_cells: int) -> np.ndarray:
+    """Keep the ``frontier`` cells next to an unknown piece of ``min_cells`` or more.
+
+    An unknown piece smaller than that, all of its rim known, is a pocket
+    no sensor will look into from the free space: the inside of a box whose
+    wall the laser's beams grazed at a shallow angle and made free in a
+    cell or two. Its frontier stays whatever the robots do.
+
+    Parameters
+    ----------
+    state : array_like of int, shape (ny, nx)
+        Cell states as `classify` returns them.
+    frontier : array_like of bool, shape (ny, nx)
+        Frontier cells (`frontier_cells`, or a student's).
+    min_cells : int
+        Smallest unknown piece worth a visit, cells (4-connected).
+
+    Returns
+    -------
+    numpy.ndarray of bool, shape (ny, nx)
+    """
+    unknown = np.asarray(state) == UNKNOWN
+    labels, n = ndimage.label(unknown)
+    sizes = np.bincount(labels.ravel(), minlength=n + 1)
+    big = (sizes >= min_cells)[labels] & unknown
+    return np.asarray(frontier, dtype=bool) & _next_to(big)
+
+
 def frontier_cells(state) -> np.ndarray:
     """Free cells with an unknown 4-neighbour.
 
@@ -110,13 +148,7 @@ def frontier_cells(state) -> np.ndarray:
     s = np.asarray(state)
     if s.ndim != 2:
         raise ValueError(f"state must be 2-D, got shape {s.shape}")
-    unknown = s == UNKNOWN
-    near = np.zeros_like(unknown)
-    near[1:, :] |= unknown[:-1, :]
-    near[:-1, :] |= unknown[1:, :]
-    near[:, 1:] |= unknown[:, :-1]
-    near[:, :-1] |= unknown[:, 1:]
-    return (s == FREE) & near
+    return (s == FREE) & _next_to(s == UNKNOWN)
 
 
 def frontier_regions(

@@ -7,11 +7,13 @@ Procedural pieces (what a lab asks students to write) are in
 (`OdometryMotionModel`), a sensor model (`PaperSensorModel`,
 `BeamSensorModel`, `LikelihoodFieldSensorModel`) and a resampling policy
 (`PaperResampling`, `ThresholdResampling`, `KLDResampling`), optionally with
-augmented MCL's `AugmentedInjection`. `History` records a run from outside.
+augmented MCL's `AugmentedInjection`, and reports the weighted mean or
+(`mode_estimate`) the heaviest place. `History` records a run from outside.
 """
 
 from . import histogram, paper
 from .cones import ConeTable, cone_table, expected_readings
+from .estimates import mode_estimate
 from .histogram import GridFilter, HistogramFilter1D
 from .history import History, localized_step
 from .kld import kld_bound, kld_resample
@@ -65,6 +67,7 @@ __all__ = [
     "kld_bound",
     "kld_resample",
     "localized_step",
+    "mode_estimate",
     "multinomial_resample",
     "odometry_increment",
     "paper",

@@ -26,6 +26,7 @@ import math
 import numpy as np
 
 from ..world import World
+from .estimates import mode_estimate
 from .history import StepInfo
 from .motion import (
     PARALLEL_MIN,
@@ -80,6 +81,12 @@ class MCL:
         over the admissible area (global localization).
     init_std : tuple of float
         Standard deviations ``(x, y, theta)`` around ``init``, m and rad.
+    estimator : str
+        ``"mean"``: the weighted mean pose (`robotlib.localization.paper.estimate`);
+        ``"mode"``: the weighted mean of the heaviest place
+        (`robotlib.localization.estimates.mode_estimate`), which a cloud
+        split over several places (a global start, a kidnapping) does not
+        drag between them.
     """
 
     def __init__(
@@ -97,9 +104,13 @@ class MCL:
         rng: np.random.Generator | int | None = None,
         init=None,
         init_std=(0.1, 0.1, 0.05),
+        estimator: str = "mean",
     ):
         if n < 1:
             raise ValueError("n must be at least 1")
+        if estimator not in ("mean", "mode"):
+            raise ValueError(f"estimator must be 'mean' or 'mode', got {estimator!r}")
+        self.estimator = estimator
         self.world = world
         self.sensor = sensor
         self.motion = OdometryMotionModel() if motion is None else motion
@@ -255,6 +266,8 @@ class MCL:
         n = self.n
         if self._fused is not None:
             self.last_estimate = self._fused_step(odo_prev, odo_now, z)
+            if self.estimator == "mode":  # the kernel gives the mean
+                self.last_estimate = self.estimate()
         else:
             self.predict(odo_prev, odo_now)
             self.update(z)
@@ -317,7 +330,9 @@ class MCL:
             self.injection.update(self.log_mean_likelihood)
 
     def estimate(self) -> np.ndarray:
-        """Weighted mean pose (circular mean of the heading), shape (3,)."""
+        """Return the pose estimate (3,): per ``estimator``, the mean or the mode."""
+        if self.estimator == "mode":
+            return mode_estimate(self.particles, self.weights)
         return estimate(self.particles, self.weights)
 
     def resample(self) -> tuple[bool, int, int]:
@@ -329,22 +344,28 @@ class MCL:
             ``(resampled, injected, regenerated)``.
         """
         idx = self.resampling.indexes(self)
-        injected = 0
         if idx is not None:
             self.particles = self.particles[idx]
             self.weights = np.full(len(idx), 1.0 / len(idx))
-            if self.injection is not None:
-                injected = self._inject()
+        injected = 0 if self.injection is None else self._inject(idx is not None)
         regenerated = self._regenerate() if self.check else 0
         return idx is not None, injected, regenerated
 
-    def _inject(self) -> int:
-        """Augmented MCL: random particles in proportion to the likelihood's drop."""
+    def _inject(self, resampled: bool) -> int:
+        """Augmented MCL: random particles in proportion to the likelihood's drop.
+
+        Replacing (Thrun, table 8.3) happens when the set is resampled; adding
+        (``grow``) on any step, since a kidnapped filter's particles all fit
+        the scans equally badly, its weights stay even and its policy may not
+        resample for several steps.
+        """
         inj, n = self.injection, self.n
         prob = inj.probability
         if prob <= 0:
             return 0
         if inj.grow is None:  # replace (Thrun, table 8.3)
+            if not resampled:
+                return 0
             mask = self.rng.random(n) < prob
             k = int(mask.sum())
             if k:
@@ -354,9 +375,8 @@ class MCL:
         if k:
             share = prob if inj.share is None else min(prob, inj.share)
             self.particles = np.concatenate([self.particles, self._random_poses(k)])
-            self.weights = np.concatenate(
-                [np.full(n, (1.0 - share) / n), np.full(k, share / k)]
-            )
+            kept = self.weights * ((1.0 - share) / self.weights.sum())
+            self.weights = np.concatenate([kept, np.full(k, share / k)])
         return k
 
     def _regenerate(self) -> int:

@@ -18,14 +18,19 @@ ranges (none: an empty array) and laser ranges (``state.extra["laser"]``,
 with ``"laser_angles"`` and ``"laser_max_range"``), and the last
 ``TRUEPOS``. A log without sensor lines gives one poll per ``ODOM``. Other
 message types are skipped. A malformed line stops the reading there, with a
-`LogError` naming the file and line; what came before stays readable.
+`LogError` naming the file and line; what came before stays readable. A
+``.bz2`` or ``.gz`` log is read as it is compressed (the public logs ship so);
+a damaged archive stops the reading the same way.
 
 Imports the robot's state record and the log errors only.
 """
 
 from __future__ import annotations
 
+import bz2
+import gzip
 import math
+from pathlib import Path
 
 import numpy as np
 
@@ -113,6 +118,13 @@ def parse_carmen_line(line: str) -> tuple[str, dict] | None:
     return None
 
 
+def _open_text(path):
+    """Open a log as text, through bz2 or gzip by its suffix."""
+    path = Path(path)
+    opener = {".bz2": bz2.open, ".gz": gzip.open}.get(path.suffix.lower(), open)
+    return opener(path, "rt", encoding="utf-8", errors="replace")
+
+
 def read_carmen_into(run) -> None:
     """Fill a `RecordedRun` (its ``path`` set) from a CARMEN log."""
     odom = {"pose": [0.0, 0.0, 0.0], "velocity": (0.0, 0.0), "time": 0.0}
@@ -121,8 +133,16 @@ def read_carmen_into(run) -> None:
     odoms = []
     has_sensor = False
     run.metadata.setdefault("format", "carmen")
-    with open(run.path, encoding="utf-8", errors="replace") as f:
-        for lineno, line in enumerate(f, 1):
+    with _open_text(run.path) as f:
+        lines = enumerate(f, 1)
+        while True:
+            try:
+                lineno, line = next(lines, (None, None))
+            except (OSError, EOFError) as exc:  # a damaged archive
+                run.error = LogError(f"{run.path}: cannot read on ({exc})")
+                break
+            if line is None:
+                break
             try:
                 parsed = parse_carmen_line(line)
             except (ValueError, IndexError) as exc:

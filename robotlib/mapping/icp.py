@@ -16,16 +16,20 @@ With the match comes a covariance (the Gauss-Newton estimate
 ``s**2 (J^T J)^-1`` of the final residuals) and its quality (the inlier
 fraction and RMS), which a pose graph uses to weigh and to accept the edge.
 
-Imports numpy and scipy's k-d tree only; never plots.
+Imports numpy and scipy's k-d tree only (when a match runs: importing
+`robotlib.mapping` does not load scipy.spatial); never plots.
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
-from scipy.spatial import cKDTree
+
+if TYPE_CHECKING:
+    from scipy.spatial import cKDTree
 
 __all__ = ["ICPResult", "icp", "scan_to_points", "transform_points", "line_normals"]
 
@@ -94,7 +98,10 @@ def line_normals(points, k: int = 5, tree: cKDTree | None = None) -> np.ndarray:
     """
     pts = np.asarray(points, dtype=float).reshape(-1, 2)
     k = min(k, len(pts))
-    tree = cKDTree(pts) if tree is None else tree
+    if tree is None:
+        from scipy.spatial import cKDTree
+
+        tree = cKDTree(pts)
     _, idx = tree.query(pts, k=k)
     nb = pts[np.asarray(idx).reshape(len(pts), k)]
     d = nb - nb.mean(axis=1, keepdims=True)
@@ -172,7 +179,10 @@ def icp(
     if max_distance <= 0 or max_iterations < 1:
         raise ValueError("max_distance must be > 0 and max_iterations >= 1")
     lo = max_distance / 3.0 if min_distance is None else float(min_distance)
-    tree = cKDTree(ref) if tree is None else tree
+    if tree is None:
+        from scipy.spatial import cKDTree
+
+        tree = cKDTree(ref)
     if point_to_line and normals is None:
         normals = line_normals(ref, tree=tree)
     pose = np.asarray(init, dtype=float).reshape(3).copy()

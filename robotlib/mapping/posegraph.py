@@ -17,7 +17,8 @@ first pose fixed; a Huber kernel (optional) lowers the weight of edges that
 disagree with the rest, and `prune_loops` removes the loop closures that
 still disagree after optimising (a wrong match).
 
-Imports numpy and scipy.sparse only; never plots.
+Imports numpy and scipy.sparse only (when `optimize` runs: importing
+`robotlib.mapping` does not load it); never plots.
 """
 
 from __future__ import annotations
@@ -25,8 +26,6 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 
 __all__ = [
     "PoseGraph",
@@ -212,6 +211,9 @@ def optimize(
     -------
     OptimizeResult
     """
+    import scipy.sparse as sp
+    import scipy.sparse.linalg as spla
+
     n = len(graph.poses)
     ii, jj, z, info = graph.arrays()
     x = graph.poses.copy()

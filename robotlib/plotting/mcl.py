@@ -105,7 +105,12 @@ def plot_particle_count(ax, history: History):
 
 
 def plot_mcl_run(
-    history: History, world, fig=None, tolerance: float = 0.5, title: str = ""
+    history: History,
+    world,
+    fig=None,
+    tolerance: float = 0.5,
+    title: str = "",
+    kidnap: int = 0,
 ):
     """Draw the paper's Figs. 2-4 for one run: trajectories in time, error, particles.
 
@@ -126,6 +131,11 @@ def plot_mcl_run(
         The "localized" error bound drawn on the error plot, m.
     title : str
         A line above the figure (the settings of the run, say).
+    kidnap : int
+        The log step the robot was carried before (``true_pose[kidnap]`` is
+        in the new place; `robotlib.experiments.drive_tour`'s ``kidnap``), 0
+        for none: the true path breaks there instead of joining the two
+        places, and a line on the error plot marks it.
 
     Returns
     -------
@@ -156,7 +166,10 @@ def plot_mcl_run(
     a = history.arrays()
     steps, truth, est = a["step"], a["true_pose"], a["estimate"]
     plot_world(ax_map, world, color=COLORS["walls"], linewidth=1)
-    ax_map.plot(truth[:, 0], truth[:, 1], "-", color=COLORS["true"], label="true")
+    cut = [kidnap] if 0 < kidnap < len(truth) else []
+    for i, piece in enumerate(np.split(truth, cut)):
+        label = "true" if i == 0 else None
+        ax_map.plot(piece[:, 0], piece[:, 1], "-", color=COLORS["true"], label=label)
     marks = steps[(steps % 10 == 0) | (steps == 1)]
     for k in marks:
         x, y = truth[k - 1, :2]
@@ -178,6 +191,13 @@ def plot_mcl_run(
         ax_map.set_title("true and estimated trajectory (Fig. 2)", loc="right")
     ax_err.plot(steps, a["error"], color=COLORS["estimate"])
     ax_err.axhline(tolerance, color=COLORS["reference"], ls=":", lw=1)
+    for k in cut:  # between the last step in the old place and the first in the new
+        ax_err.axvline(k + 0.5, color=COLORS["reference"], lw=0.8)
+        ax_err.annotate(
+            "kidnapped", (k + 0.5, 1), xycoords=("data", "axes fraction"),
+            xytext=(-3, -3), textcoords="offset points", ha="right", va="top",
+            fontsize=7,
+        )  # fmt: skip
     ax_err.set_xlabel("step")
     ax_err.set_ylabel("position error [m]")
     loc = history.localized_step(tolerance)

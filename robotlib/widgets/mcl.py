@@ -357,7 +357,8 @@ class MCLPanel:
         )  # fmt: skip
         self.runner.check()
         title = self.describe(request["settings"], request["world"])
-        plot_mcl_run(history, route.world, self.figure, title=title)
+        kidnap = request.get("kidnap", 0)
+        plot_mcl_run(history, route.world, self.figure, title=title, kidnap=kidnap)
         self.runner.check()
         buf = io.BytesIO()
         self.figure.savefig(buf, format="png")

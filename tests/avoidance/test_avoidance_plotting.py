@@ -73,3 +73,17 @@ def test_force_field_points_to_the_goal_in_the_open():
     fig, ax = plt.subplots()
     plot_force_field(ax, (x, y, fx, fy), BOX, (5.0, 2.0))
     plt.close(fig)
+
+
+def test_force_field_leaves_out_the_points_outside_the_outer_walls():
+    from robotlib.world import load_world
+
+    utrap = load_world("utrap")  # its bounds leave a margin around the outer walls
+    x, y, fx, fy = force_field(utrap, (8.5, 3.5), resolution=0.5)
+    walls = np.asarray(utrap.segments)
+    x0, x1 = walls[:, [0, 2]].min(), walls[:, [0, 2]].max()
+    y0, y1 = walls[:, [1, 3]].min(), walls[:, [1, 3]].max()
+    outside = (x < x0) | (x > x1) | (y < y0) | (y > y1)
+    assert outside.sum() > 20  # the margin's points: a robot fits there
+    assert np.isnan(fx[outside]).all() and np.isnan(fy[outside]).all()
+    assert np.isfinite(fx[~outside]).sum() > 200  # the inside still has its arrows

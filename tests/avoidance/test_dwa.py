@@ -38,9 +38,9 @@ def test_rollout_kernel_matches_reference(seed):
     vs = np.linspace(0.0, 0.5, 6)
     ws = np.linspace(-1.0, 1.0, 9)
     goal = rng.uniform(-4, 4, 2)
-    out = [np.empty((6, 9)) for _ in range(3)]
-    kern.dwa_evaluate(pts, vs, ws, 25, 0.1, 0.3, goal, *out)
-    ref = naive.dwa_evaluate(pts, vs, ws, 25, 0.1, 0.3, goal)
+    out = [np.empty((6, 9)) for _ in range(4)]
+    kern.dwa_evaluate(pts, vs, ws, 25, 0.1, 0.3, 0.3, goal, *out)
+    ref = naive.dwa_evaluate(pts, vs, ws, 25, 0.1, 0.3, 0.3, goal)
     for got, want in zip(out, ref, strict=True):
         np.testing.assert_allclose(got, want, rtol=1e-9, atol=1e-9)
 
@@ -67,8 +67,8 @@ def test_never_commands_a_velocity_that_hits_a_seen_obstacle_within_braking(seed
     v0, w0 = rng.uniform(0, 0.5), rng.uniform(-1, 1)
     vs, ws = dynamic_window(v0, w0, s)
     goal = rng.uniform(-4, 4, 2)
-    free, heading, togo = evaluate_window(pts, vs, ws, goal, s)
-    v, w, score = choose_velocity(vs, ws, free, heading, togo, np.hypot(*goal), s)
+    free, heading, togo, gap = evaluate_window(pts, vs, ws, goal, s)
+    v, w, score = choose_velocity(vs, ws, free, heading, togo, gap, np.hypot(*goal), s)
     braking = v * s.latency + v**2 / (2 * s.accel)
     # shrink the disc by what one roll-out step can skip past
     assert not _touches(pts, v, w, braking, s.radius - 0.5 * s.max_speed * s.step)
@@ -97,9 +97,23 @@ def test_nothing_admissible_means_stop():
     wall = np.column_stack([np.full(30, 0.32), np.linspace(-1.5, 1.5, 30)])
     wall = np.concatenate([wall, wall * [-1, 1], wall[:, ::-1], -wall[:, ::-1]])
     vs, ws = dynamic_window(0.5, 0.0, s)  # too fast to stop inside the box
-    free, heading, togo = evaluate_window(wall, vs, ws, (3.0, 0.0), s)
-    v, w, score = choose_velocity(vs, ws, free, heading, togo, 3.0, s)
+    free, heading, togo, gap = evaluate_window(wall, vs, ws, (3.0, 0.0), s)
+    v, w, score = choose_velocity(vs, ws, free, heading, togo, gap, 3.0, s)
     assert (v, w) == (0.0, 0.0) and np.isneginf(score).all()
+
+
+def test_side_clearance_prefers_the_arc_away_from_a_wall_ahead_on_the_left():
+    s = DWASettings()
+    wall = np.column_stack([np.linspace(0.5, 3.0, 26), np.full(26, 0.45)])  # left
+    vs, ws = np.array([0.3]), np.array([-0.3, 0.0, 0.3])
+    free, heading, togo, gap = evaluate_window(wall, vs, ws, (3.0, 0.0), s)
+    assert gap[0, 1] == pytest.approx(0.15, abs=0.01)  # straight on: 0.45 - 0.3
+    assert gap[0, 0] > gap[0, 1] > gap[0, 2]  # right, ahead, left
+    # with the goal straight ahead, only the side clearance tells the arcs
+    # apart among equally fast ones that turn as much
+    _, w, _ = choose_velocity(vs, ws[[0, 2]], free[:, [0, 2]], heading[:, [0, 2]],
+                              togo[:, [0, 2]], gap[:, [0, 2]], 3.0, s)  # fmt: skip
+    assert w == -0.3
 
 
 def test_open_directions_sees_a_wall_ahead():

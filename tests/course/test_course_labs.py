@@ -1,7 +1,9 @@
 """Every lab graded in the sandbox: solution full, released zero, cheats zero.
 
 For each ``solutions/*.ipynb`` one grading run (after the grader's reference
-run of the solution; two labs graded at a time) holds the released lab, a
+run of the solution; two labs graded at a time, in a process of their own
+that starts with the session, beside the other tests: `tests.background`;
+this module's tests run last) holds the released lab, a
 partial solution (for the labs listed in `PARTIAL`), wrong answers that the
 lab's strict checks must reject (`WRONG`) and two cheating submissions built
 from the exercises' ``writes`` metadata: each exercise with ``writes`` has,
@@ -20,6 +22,11 @@ New labs are picked up automatically.
 from __future__ import annotations
 
 import copy
+import pickle
+import signal
+import sys
+import threading
+import traceback
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
@@ -33,7 +40,8 @@ from robotlib.course.notebooks import (
     write_notebook,
 )
 from robotlib.course.plan import lab_plan
-from tests.sandboxing import need_sandbox
+from tests import background
+from tests.sandboxing import need_sandbox, orphans_adopted
 
 pytestmark = pytest.mark.slow  # every lab graded whole in the sandbox
 
@@ -352,42 +360,72 @@ def _submissions(lab: str, folder: Path) -> list[dict[str, tuple[str, str]]]:
     return [c for _, c in plan]
 
 
-@pytest.fixture(scope="module")
-def gradings(request, tmp_path_factory):
-    """The selected labs' gradings, two labs at a time (two submissions each).
+def background_work(folder: Path) -> dict[str, tuple | str]:
+    """Grade the selected labs beside the other tests (`tests.background`).
+
+    One process of its own (`_grade_labs`): its sandboxes stay out of the
+    process trees the other grading tests search for leftovers. Returns lab
+    -> (results, checks, cheat plans), or the text of what went wrong.
+    """
+    need_sandbox()
+    labs = {
+        item.callspec.params["lab_graded"]
+        for item in background.selected(__name__)
+        if "lab_graded" in getattr(getattr(item, "callspec", None), "params", {})
+    }
+    labs = [lab for lab in ORDER if lab in labs]
+    cmd = [sys.executable, "-m", __name__, folder, *labs]
+    proc = background.run(cmd, cwd=ROOT, timeout=3000)
+    out = {}
+    for lab in labs:
+        path = folder / f"{lab}.pickle"
+        got = pickle.loads(path.read_bytes()) if path.exists() else None
+        out[lab] = got or f"exit {proc.returncode}: {proc.stderr[-4000:]}"
+    return out
+
+
+def _grade_labs(folder: Path, labs: list[str]) -> None:
+    """Grade ``labs`` two at a time (two submissions each), heaviest first.
 
     Each grading starts with its reference run, in one sandbox; with two labs
     at once the other core grades the other lab meanwhile, and no lab's last
-    submission runs alone. Heaviest labs first (`ORDER`).
+    submission runs alone. Each lab's outcome goes to ``folder/LAB.pickle``.
+    SIGTERM (the session ended early) ends every grading's processes.
     """
-    need_sandbox()
-    here = request.module.__name__
-    chosen = {
-        item.callspec.params["lab_graded"]
-        for item in request.session.items
-        if item.module.__name__ == here
-        and "lab_graded" in getattr(getattr(item, "callspec", None), "params", {})
-    }
-    pool = ThreadPoolExecutor(max_workers=2)
-    runs = {}
-    for lab in (lab for lab in ORDER if lab in chosen):
-        folder = tmp_path_factory.mktemp(lab) / "subs"
-        plans = _submissions(lab, folder)
+    runs, ending = [], threading.Event()
+
+    def graded(lab: str) -> None:
         opts = g.Options(cell_timeout=90, timeout=400)
-        job = pool.submit(g.grade, folder, lab, jobs=2, opts=opts, progress=False)
-        runs[lab] = (job, opts, plans)
-    yield runs
-    for job, opts, _ in runs.values():  # a failed or interrupted session
-        job.cancel()
-        if opts.stop is not None:
-            opts.stop.set()  # ends a running grading's processes
-    pool.shutdown(wait=True)
+        runs.append(opts)
+        if ending.is_set():
+            return
+        try:
+            plans = _submissions(lab, folder / lab / "subs")
+            results, items = g.grade(
+                folder / lab / "subs", lab, jobs=2, opts=opts, progress=False
+            )
+            out = (results, items, plans)
+        except BaseException:
+            out = traceback.format_exc()
+        (folder / f"{lab}.pickle").write_bytes(pickle.dumps(out))
+
+    def stop(*_):
+        ending.set()
+        for opts in runs:
+            if opts.stop is not None:
+                opts.stop.set()
+
+    signal.signal(signal.SIGTERM, stop)
+    with orphans_adopted(), ThreadPoolExecutor(max_workers=2) as pool:
+        list(pool.map(graded, labs))
 
 
 @pytest.fixture(scope="module", params=ORDER)
-def lab_graded(request, gradings):
-    job, _, plans = gradings[request.param]
-    results, items = job.result()
+def lab_graded(request):
+    got = background.result(__name__, timeout=3000)[request.param]
+    if isinstance(got, str):
+        pytest.fail(f"grading {request.param} failed:\n{got}")
+    results, items, plans = got
     return request.param, {r.student: r for r in results}, items, plans
 
 
@@ -466,3 +504,7 @@ def test_wrong_answers_fail_their_strict_checks(lab_graded):
             else:
                 assert r.points[c.grade_id] == 0, (name, c.grade_id)
         assert not r.flags, (name, r.flags)
+
+
+if __name__ == "__main__":  # the gradings' own process (`background_work`)
+    _grade_labs(Path(sys.argv[1]), sys.argv[2:])

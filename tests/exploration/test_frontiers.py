@@ -18,6 +18,7 @@ from robotlib.exploration import (
     frontier_regions,
     information_gain,
     known_space,
+    open_frontier,
 )
 from tests import naive_exploration as naive
 
@@ -116,3 +117,16 @@ def test_path_costs_treat_unknown_as_obstacle():
     assert cs.blocked[state == UNKNOWN].all()
     gain = information_gain(state, (0.0, 0.0), 0.1, [[1.95, 1.0], [0.35, 1.0]], 0.5)
     assert gain[0] > 5 * gain[1]
+
+
+def test_open_frontier_drops_what_faces_a_closed_pocket_only():
+    state = np.full((12, 20), FREE, dtype=np.int8)
+    state[2:7, 2:7] = OCCUPIED  # a box, its inside unknown, one wall cell free
+    state[3:6, 3:6] = UNKNOWN
+    state[4, 6] = FREE
+    state[:, 14:] = UNKNOWN  # the unexplored rest of the building
+    frontier = frontier_cells(state)
+    kept = open_frontier(state, frontier, min_cells=10)
+    assert frontier[4, 6] and not kept[4, 6]  # the box's pocket: 9 cells
+    assert kept[:, 13].all() and (kept == (frontier & (np.arange(20) == 13))).all()
+    assert open_frontier(state, frontier, min_cells=9)[4, 6]

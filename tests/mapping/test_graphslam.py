@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import bz2
 import math
 from pathlib import Path
 
@@ -24,6 +23,20 @@ from robotlib.mapping.posegraph import (
 from robotlib.mapping.relations import read_relations, relation_errors
 
 DATA = Path(__file__).resolve().parent.parent / "data"
+
+
+def test_importing_mapping_leaves_scipy_sparse_and_spatial_for_later():
+    import subprocess
+    import sys
+
+    code = (
+        "import sys, robotlib.mapping; "
+        "print(sorted(m for m in sys.modules if m.startswith('scipy.')))"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=True
+    ).stdout
+    assert "'scipy.sparse" not in out and "'scipy.spatial" not in out, out
 
 
 @pytest.mark.parametrize("seed", range(3))
@@ -160,10 +173,10 @@ def test_relation_errors_vanish_on_the_truth(tmp_path):
     assert relation_errors(times, shifted, rel).translation.max() > 0.05
 
 
-def _intel_head(tmp_path):
-    log = tmp_path / "intel_head.clf"
-    log.write_bytes(bz2.decompress((DATA / "intel_head.clf.bz2").read_bytes()))
-    states = [s for s in read_log(log).states if "laser" in s.extra]
+def _intel_head():
+    states = [
+        s for s in read_log(DATA / "intel_head.clf.bz2").states if "laser" in s.extra
+    ]
     scans = np.array([s.extra["laser"] for s in states])
     lo, hi = states[0].extra["laser_angles"]
     angles = np.linspace(lo, hi, scans.shape[1])
@@ -172,8 +185,25 @@ def _intel_head(tmp_path):
     return odo, scans, angles, times
 
 
-def test_graph_slam_on_the_head_of_the_intel_log(tmp_path):
-    odo, scans, angles, times = _intel_head(tmp_path)
+@pytest.mark.slow
+def test_scans_between_keyframes_are_matched_not_dead_reckoned():
+    from robotlib.mapping import heading_rms, record_drive
+
+    log = record_drive(
+        "loop", [(12.0, 1.5), (19.5, 1.5), (19.5, 8.0)], seed=51, every=2
+    )
+    m = log.laser_model
+    run = [graph_slam(log.odometry, log.laser, m.angles, m.max_range,
+                      GraphSLAMSettings(match_scans=on), mount=m.mount)
+           for on in (False, True)]  # fmt: skip
+    between = np.setdiff1d(np.arange(len(log)), run[1].keyframes)
+    dead, matched = (heading_rms(r.poses[between], log.truth[between]) for r in run)
+    assert matched < 0.6 * dead
+    np.testing.assert_array_equal(run[0].graph.poses, run[1].graph.poses)
+
+
+def test_graph_slam_on_the_head_of_the_intel_log():
+    odo, scans, angles, times = _intel_head()
     rel = read_relations(DATA / "intel_head.relations")
     res = graph_slam(odo, scans, angles, 81.0, GraphSLAMSettings())
     assert res.poses.shape == odo.shape and res.failed_matches == 0

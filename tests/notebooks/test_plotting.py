@@ -125,3 +125,30 @@ def test_animation_shows_its_first_frame_offline():
     assert src is not None
     assert base64.b64decode(src.group(1), validate=True)[:4] == b"\x89PNG"
     assert "document.getElementById(img_id)" in page  # waits for the page
+
+
+def test_an_mcl_run_breaks_the_true_path_at_a_kidnapping():
+    """The true path must not draw a straight line from the old place to the new."""
+    from matplotlib.figure import Figure
+
+    from robotlib.localization import History
+    from robotlib.plotting.mcl import plot_mcl_run
+    from robotlib.plotting.style import COLORS
+
+    h = History()
+    for k in range(12):  # 0.5 m a step along y = 1, carried to y = 8 before step 6
+        h.true_pose.append(np.array([0.5 * k, 1.0 if k < 6 else 8.0, 0.0]))
+        h.estimate.append(h.true_pose[-1] + 0.1)
+        h.n_particles.append(100)
+    world = load_world("corridor")
+    for kidnap, longest in ((0, np.hypot(0.5, 7.0)), (6, 0.5)):
+        fig = plot_mcl_run(h, world, Figure(), kidnap=kidnap)
+        ax_map, ax_err = fig.axes[:2]
+        true = [ln for ln in ax_map.get_lines() if ln.get_color() == COLORS["true"]]
+        steps = [np.hypot(*np.diff(ln.get_xydata(), axis=0).T) for ln in true]
+        assert max(s.max() for s in steps) == pytest.approx(longest, abs=0.01)
+        assert sum(map(len, steps)) == 11 - (kidnap > 0)  # every step but the carry
+        lines = ax_err.get_lines()
+        upright = [ln.get_xdata() for ln in lines if list(ln.get_ydata()) == [0, 1]]
+        marks = [x[0] for x in upright if x[0] == x[1]]
+        assert marks == ([6.5] if kidnap else [])  # between steps 6 and 7 (1-based)
