@@ -424,8 +424,8 @@ def scan_submission(plan: LabPlan, cells: list[dict]) -> tuple[dict, list[str]]:
     exercise running, if any (`grade.grade_notebook`). So an honest cell
     comparing with the library or re-running a demonstration costs no
     points, and Lab 4's ``steer`` cell reaching the library's A* (which
-    ``steer`` does not list) is refused, not accused. Machinery is flagged everywhere and
-    zeroes the exercise whose cell holds it.
+    ``steer`` does not list) is refused, not accused. Machinery is flagged
+    everywhere and zeroes the exercise whose cell holds it.
     """
     zero: dict[str, list[str]] = {}
     flags: list[str] = []
