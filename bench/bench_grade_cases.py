@@ -3,6 +3,7 @@
 python bench/bench_grade_cases.py [--lab lab2_avoidance] [--runs alone hog load]
                                   [--jobs 2] [--busy 2] [--cell-timeout 10]
                                   [--out bench/results/grade_cases_LAB.md]
+                                  [--students answered ordinary_code ...]
 
 The submissions are built by ``tests/class_cases.py`` from the lab's
 solution and release (honest layouts and mistakes, cheats, hangs, hogs, fork
@@ -67,6 +68,7 @@ def _run(subs, lab, args, records, busy):
             progress=False,
             records=records,
             regrade=True,
+            students=args.students,
         )
     finally:
         stop.set()
@@ -123,6 +125,7 @@ def main() -> None:
     parser.add_argument("--busy", type=int, default=2)
     parser.add_argument("--cell-timeout", type=float, default=10.0)
     parser.add_argument("--out", type=Path)
+    parser.add_argument("--students", nargs="+", help="grade only these cases")
     args = parser.parse_args()
     out = args.out or ROOT / "bench" / "results" / f"grade_cases_{args.lab}.md"
     out.parent.mkdir(parents=True, exist_ok=True)
@@ -132,6 +135,8 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as tmp:
         subs = Path(tmp) / "submissions"
         cases = build(args.lab, subs)
+        if args.students:
+            cases = {k: v for k, v in cases.items() if k in args.students}
         for run in args.runs:
             here = dict(cases)
             if run == "hog" and not (subs / "zz_hog").exists():
@@ -139,6 +144,8 @@ def main() -> None:
                 nb.cells.insert(2, nbformat.v4.new_code_cell(HOG))
                 (subs / "zz_hog").mkdir()
                 write_notebook(nb, subs / "zz_hog" / f"{args.lab}.ipynb")
+            if run == "hog" and args.students:
+                args.students.append("zz_hog")
             if (subs / "zz_hog").exists():
                 here["zz_hog"] = Case(
                     "zz_hog", "bench", "the hog beside", None, None, True

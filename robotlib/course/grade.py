@@ -198,8 +198,8 @@ def grade_notebook(
     result.passes = 1 + out.restarts
     result.flags += out.flags
     for function, ex, *via in out.tripwires:
-        if ex is None:
-            continue  # a cell of the student's own: refused (its error), nothing gained
+        if ex is None or not plan.lists(ex, function):
+            continue  # refused (the student's error says why): nothing gained
         name = plan.listed_as(function, ex)
         how = f" (through {via[0]})" if via and via[0] and via[0] != name else ""
         note = f"called {name}{how} (the exercise's own work) while graded"

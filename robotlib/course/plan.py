@@ -77,6 +77,17 @@ class LabPlan:
     same: dict[str, list[str]] = field(default_factory=dict)  # listed -> equals
     released: dict[str, str] = field(default_factory=dict)  # check -> `normalized`
 
+    def lists(self, exercise: str, function: str) -> bool:
+        """Return whether ``exercise`` lists ``function`` (under any of its names).
+
+        Each exercise lists the library functions its answer may not use,
+        another exercise's among them where that would do its work (Lab 4's
+        ``astar`` lists ``wavefront``); what it does not list it may use.
+        """
+        ex = next((e for e in self.exercises if e.exercise_id == exercise), None)
+        same = self.same.get(function, [function])
+        return ex is not None and any(w in same for w in ex.writes)
+
     def listed_as(self, function: str, exercise: str | None) -> str:
         """Return the name ``exercise``'s ``writes`` gives ``function``'s object.
 
@@ -405,13 +416,16 @@ def student_cells(plan: LabPlan, student: dict) -> list[dict]:
 def scan_submission(plan: LabPlan, cells: list[dict]) -> tuple[dict, list[str]]:
     """Run the static pass; return ``({exercise: [notes]}, flags)``.
 
-    A route in an exercise's cell zeroes that exercise (and is flagged).
-    Outside the exercises (cells the student added, helper modules) a listed
-    function named is nothing: if it is called, while a check runs the
-    student's functions or at the top of a cell, its tripwire refuses and
-    reports the exercise running, if any (`grade.grade_notebook`), so an honest
-    cell comparing with the library or re-running a demonstration costs no
-    points. Machinery there is flagged.
+    A route in an exercise's cell to a function that exercise lists zeroes
+    it (and is flagged). Elsewhere (cells the student added, helper modules,
+    another exercise's function) a listed function named is nothing: if it
+    is called, at the top of a cell or while a check runs the student's
+    functions, its tripwire refuses (the student sees why) and reports the
+    exercise running, if any (`grade.grade_notebook`). So an honest cell
+    comparing with the library or re-running a demonstration costs no
+    points, and Lab 4's ``steer`` cell reaching the library's A* (which
+    ``steer`` does not list) is refused, not accused. Machinery is flagged
+    everywhere and zeroes the exercise whose cell holds it.
     """
     zero: dict[str, list[str]] = {}
     flags: list[str] = []
@@ -419,7 +433,7 @@ def scan_submission(plan: LabPlan, cells: list[dict]) -> tuple[dict, list[str]]:
         for f in scan.scan_code(cell["source"], plan.aliases):
             ex = cell["exercise"]
             if f.listed:
-                if ex is None:
+                if ex is None or not plan.lists(ex, f.function):
                     continue
                 name = plan.listed_as(f.function, ex)
                 how = f.how + (f", through {f.via}" if f.via and f.via != name else "")

@@ -282,7 +282,14 @@ class Exploration:
         s = self.settings
         v, w = r.follower.command(r.pose)
         mates = self._positions(skip=r)
-        r.blocked = v > 0 and teammate_ahead(r, mates, s.keep_out)
+        # two robots each waiting for the other: the later one keeps waiting
+        # (a teammate that waits for this one is no reason to wait)
+        ahead = [
+            o.pose[:2]
+            for o in self.robots
+            if o is not r and not (o.blocked and o.index > r.index)
+        ]
+        r.blocked = v > 0 and teammate_ahead(r, np.reshape(ahead, (-1, 2)), s.keep_out)
         if r.blocked:
             r.waited += CYCLE
             return 0.0, 0.0

@@ -195,9 +195,11 @@ def clear_bodies(grid: OccupancyGrid, team, free_level: float) -> None:
     """
     k = int(math.ceil(BODY / grid.resolution))
     level = -(free_level + 0.1)
+    ny, nx = grid.shape
     for r in team:
         i, j = cell(grid, r.pose)
-        win = (slice(max(i - k, 0), i + k + 1), slice(max(j - k, 0), j + k + 1))
+        win = (slice(max(i - k, 0), min(i + k + 1, ny)),
+               slice(max(j - k, 0), min(j + k + 1, nx)))  # fmt: skip
         ii, jj = np.mgrid[win]
         cx = grid.origin[0] + (jj + 0.5) * grid.resolution
         cy = grid.origin[1] + (ii + 0.5) * grid.resolution

@@ -263,6 +263,7 @@ PARTIAL = {
 
 
 REACHES = "answer reaches the library's own version"  # a cheat's flag
+BUILT = "uses a name built at run time"  # the static scan's flag of a string route
 
 
 def _alias(listed: str, k: int) -> str:
@@ -456,6 +457,8 @@ def test_solution_full_released_zero(lab_graded):
     for name, cheated in uncheated.items():
         r, listed = rows[name], [f for f, _ in cheated.values()]
         assert r.status == "ok", (name, r.status)
+        if any(route == "string" for _, route in cheated.values()):  # the scan saw it
+            listed.append(BUILT)
         other = [f for f in r.flags if f != REACHES and not any(x in f for x in listed)]
         assert not other, (name, other)
     rel = rows["released"]

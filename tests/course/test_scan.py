@@ -17,7 +17,7 @@ from robotlib.course.answers import aliases
 from robotlib.course.notebooks import read_notebook
 from robotlib.course.plan import lab_plan, scan_submission, student_cells
 from robotlib.course.scan import scan_code
-from tests.course.test_course_grade import MEAN, TINY, by_id, with_cell
+from tests.course.test_course_grade import MEAN, SCALE, TINY, by_id, with_cell
 
 ASTAR, UPDATE, STEP = (
     "robotlib.planning.astar",
@@ -197,6 +197,11 @@ def test_in_an_exercise_cell_honest_imports_cost_nothing_and_routes_zero():
     compared = read_notebook(TINY)
     compared.cells.append(new_code_cell("from numpy import mean as m\nm([1.0])"))
     assert scan_submission(plan, student_cells(plan, compared)) == ({}, [])
+    # another exercise's library version (``scale`` does not list numpy.mean)
+    scale = by_id(read_notebook(TINY), SCALE).source
+    other = with_cell(read_notebook(TINY), SCALE, "from numpy import mean\n" + scale)
+    assert scan_submission(plan, student_cells(plan, other)) == ({}, [])
+    assert plan.lists("mean", "numpy.mean") and not plan.lists("scale", "numpy.mean")
     for route in ("m = __import__('numpy').mean", "exec(text)", "__import__('os').system(c)"):  # fmt: skip
         cheat = with_cell(read_notebook(TINY), MEAN, route + "\n" + answer)
         zero, flags = scan_submission(plan, student_cells(plan, cheat))

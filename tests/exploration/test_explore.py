@@ -13,6 +13,7 @@ from robotlib.exploration import (
     team_starts,
 )
 from robotlib.mapping import OccupancyGrid
+from robotlib.world import seeded_world
 
 
 def test_settings_and_starts_refuse_bad_input():
@@ -84,3 +85,14 @@ def test_a_team_of_two_explores_without_touching():
     assert res.explored >= 0.9
     assert res.robot_collisions == 0 and res.wall_collisions == 0
     assert np.all(res.path_lengths > 2.0)  # both robots took part
+
+
+@pytest.mark.slow
+def test_two_robots_each_waiting_for_the_other_do_not_wait_for_ever():
+    """Generated office 4: the two robots, heading for doors on either side of
+    the corridor, each saw the other ahead and waited (12 % explored at
+    400 s); the later one now waits for the earlier one only."""
+    w = seeded_world("gen-office", 4)
+    res = explore_team(w, 2, ExploreSettings(max_time=150.0, go_home=False), rng=4)
+    assert res.explored >= 0.9
+    assert res.robot_collisions == 0 and res.wall_collisions == 0

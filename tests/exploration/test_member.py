@@ -7,7 +7,13 @@ import numpy as np
 import pytest
 
 from robotlib.exploration import ExploreSettings, explore
-from robotlib.exploration.member import count_echoes, escape, keeps_clear, mark_contact
+from robotlib.exploration.member import (
+    clear_bodies,
+    count_echoes,
+    escape,
+    keeps_clear,
+    mark_contact,
+)
 from robotlib.mapping import OccupancyGrid
 from robotlib.world import seeded_world
 
@@ -91,3 +97,11 @@ def test_a_robot_that_has_seen_the_hall_is_not_left_pinned_to_a_box():
     assert res.explored > 0.99
     assert res.wall_collisions == 0
     assert res.outcome == "home"
+
+
+def test_clearing_a_body_at_the_map_edge():
+    """A drifting SLAM estimate can put a robot at the edge of the map."""
+    g, _ = _wall_at_x2()
+    r = SimpleNamespace(pose=np.array([3.98, 3.98, 0.3]))
+    clear_bodies(g, [r], 0.2)
+    assert g.logodds[-1, -1] < -0.2 and g.logodds[:, 20].min() > 0

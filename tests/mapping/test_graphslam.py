@@ -185,6 +185,23 @@ def _intel_head():
     return odo, scans, angles, times
 
 
+@pytest.mark.slow
+def test_scans_between_keyframes_are_matched_not_dead_reckoned():
+    from robotlib.mapping import heading_rms, record_drive
+
+    log = record_drive(
+        "loop", [(12.0, 1.5), (19.5, 1.5), (19.5, 8.0)], seed=51, every=2
+    )
+    m = log.laser_model
+    run = [graph_slam(log.odometry, log.laser, m.angles, m.max_range,
+                      GraphSLAMSettings(match_scans=on), mount=m.mount)
+           for on in (False, True)]  # fmt: skip
+    between = np.setdiff1d(np.arange(len(log)), run[1].keyframes)
+    dead, matched = (heading_rms(r.poses[between], log.truth[between]) for r in run)
+    assert matched < 0.6 * dead
+    np.testing.assert_array_equal(run[0].graph.poses, run[1].graph.poses)
+
+
 def test_graph_slam_on_the_head_of_the_intel_log():
     odo, scans, angles, times = _intel_head()
     rel = read_relations(DATA / "intel_head.relations")
