@@ -12,15 +12,19 @@ each sandbox from ``/proc``:
   has and how many of them are running;
 - a limit is charged ``max(CPU time, wall time - time waiting for a CPU)``:
   busy work counts by the CPU it used, sleeping or blocking counts by the
-  wall clock, and time the machine made the student wait counts for nothing.
+  wall clock, and time the machine made the student wait counts for nothing
+  (`thread_wait` lets the grader leave out its own waits too: a reply read
+  late is timed when it was written).
 
 A submission's processes share one control group per grading slot where
 the machine lets the grader make them (`Share`, cgroup v2 or v1, as root):
-equal ``cpu`` weight per submission, however many processes each forks,
-and a ``pids`` limit. Without control groups the CPU-time limits still
-hold (a process that forks CPU hogs spends its own budget faster) and the
-grader lowers the priority of a sandbox running more busy processes than
-`HOGS` (`Share.tame`).
+one core at most (a CFS quota: time throttled counts as waiting), an equal
+``cpu`` weight however many processes it forks, and a ``pids`` limit.
+Without control groups the CPU-time limits still hold (a process that forks
+CPU hogs spends its own budget faster) and the grader lowers the priority
+of a sandbox running more busy processes than `HOGS` (`Share.tame`). A
+process is busy when it is running and has used `BUSY` s of CPU: processes
+that wait for a CPU to start and then sleep (a flood of ``sleep``) are not.
 
 Imports only the standard library.
 """
@@ -32,12 +36,26 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
-__all__ = ["HOGS", "Share", "Usage", "descendants", "find_worker", "usage", "stat"]
+__all__ = [
+    "BUSY",
+    "HOGS",
+    "Share",
+    "Usage",
+    "descendants",
+    "find_worker",
+    "stat",
+    "thread_wait",
+    "usage",
+    "waited",
+]
 
 TICK = os.sysconf("SC_CLK_TCK")
 
 HOGS = 2
-"""Running processes a sandbox may have at once before it counts as forking hogs."""
+"""Busy processes a sandbox may have at once before it counts as forking hogs."""
+
+BUSY = 0.25
+"""CPU time a running process must have used to count as busy, s."""
 
 
 def stat(pid: int) -> list[bytes] | None:
@@ -112,7 +130,8 @@ class Usage:
     processes : int
         Processes in the tree.
     running : int
-        Processes in the tree running or ready to run.
+        Processes in the tree running or ready to run that have used `BUSY`
+        s of CPU time or more (busy loops, not processes starting).
     """
 
     cpu: float = 0.0
@@ -121,7 +140,7 @@ class Usage:
     running: int = 0
 
 
-def _wait(pid: int | None) -> float:
+def _wait(pid: int | str | None) -> float:
     if pid is None:
         return 0.0
     try:
@@ -129,6 +148,16 @@ def _wait(pid: int | None) -> float:
             return int(f.read().split()[1]) * 1e-9
     except (OSError, IndexError, ValueError):
         return 0.0  # no scheduler statistics: wall time counts in full
+
+
+def waited(pid: int | None) -> float:
+    """Time process ``pid``'s main thread has waited for a CPU while runnable, s."""
+    return _wait(pid)
+
+
+def thread_wait() -> float:
+    """Time the calling thread has waited for a CPU while runnable, s."""
+    return _wait("thread-self")
 
 
 def usage(pid: int, worker: int | None = None) -> Usage:
@@ -139,9 +168,10 @@ def usage(pid: int, worker: int | None = None) -> Usage:
         if fields is None:
             continue
         procs += 1
-        running += fields[0] == b"R"
         # utime, stime, cutime, cstime: fields 14-17 of stat, 12-15 here
         ticks += sum(int(x) for x in fields[11:15])
+        own = int(fields[11]) + int(fields[12])
+        running += fields[0] == b"R" and own >= BUSY * TICK
     return Usage(ticks / TICK, _wait(worker), procs, running)
 
 
@@ -175,7 +205,7 @@ def _controllers() -> list[tuple[Path, str]]:
 
 
 class Share:
-    """A grading slot's control groups: an equal CPU share and a process limit.
+    """A grading slot's control groups: one core at most, equal weight, a pid limit.
 
     Parameters
     ----------
@@ -197,8 +227,12 @@ class Share:
                 group.mkdir(exist_ok=True)
                 if kind in ("pids", "v2"):
                     (group / "pids.max").write_text(str(processes))
+                if kind == "v2":
+                    (group / "cpu.max").write_text("100000 100000")  # one core
                 if kind == "cpu":
                     (group / "cpu.shares").write_text("1024")
+                    period = (group / "cpu.cfs_period_us").read_text().strip()
+                    (group / "cpu.cfs_quota_us").write_text(period)  # one core
             except OSError:
                 continue  # not ours to change (a container): the CPU limits hold
             self.groups.append(group)
