@@ -23,8 +23,10 @@ one core at most (a CFS quota: time throttled counts as waiting), an equal
 Without control groups the CPU-time limits still hold (a process that forks
 CPU hogs spends its own budget faster) and the grader lowers the priority
 of a sandbox running more busy processes than `HOGS` (`Share.tame`). A
-process is busy when it is running and has used `BUSY` s of CPU: processes
-that wait for a CPU to start and then sleep (a flood of ``sleep``) are not.
+process is busy when it has been running (or ready to run) in every sample
+since an earlier one and has used CPU time since then (`usage`'s
+``since``): processes that wait for a CPU to start and then sleep (a flood
+of ``sleep``) are not, however long a loaded machine makes them wait.
 
 Imports only the standard library.
 """
@@ -33,11 +35,10 @@ from __future__ import annotations
 
 import os
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 __all__ = [
-    "BUSY",
     "HOGS",
     "Share",
     "Usage",
@@ -53,9 +54,6 @@ TICK = os.sysconf("SC_CLK_TCK")
 
 HOGS = 2
 """Busy processes a sandbox may have at once before it counts as forking hogs."""
-
-BUSY = 0.25
-"""CPU time a running process must have used to count as busy, s."""
 
 
 def stat(pid: int) -> list[bytes] | None:
@@ -130,14 +128,19 @@ class Usage:
     processes : int
         Processes in the tree.
     running : int
-        Processes in the tree running or ready to run that have used `BUSY`
-        s of CPU time or more (busy loops, not processes starting).
+        Busy processes of the tree: running or ready to run in this sample
+        and every one since they were first seen so, with CPU time used
+        since (busy loops, not processes waiting to start).
+    since : dict
+        Process id to its own CPU time (clock ticks) when first seen running
+        in the samples up to this one (pass it to the next `usage`).
     """
 
     cpu: float = 0.0
     wait: float = 0.0
     processes: int = 0
     running: int = 0
+    since: dict[int, int] = field(default_factory=dict)
 
 
 def _wait(pid: int | str | None) -> float:
@@ -160,9 +163,16 @@ def thread_wait() -> float:
     return _wait("thread-self")
 
 
-def usage(pid: int, worker: int | None = None) -> Usage:
-    """Sample the tree below (and including) ``pid``; ``worker``: its main process."""
-    ticks, procs, running = 0, 0, 0
+def usage(
+    pid: int, worker: int | None = None, since: dict[int, int] | None = None
+) -> Usage:
+    """Sample the tree below (and including) ``pid``; ``worker``: its main process.
+
+    ``since``: the previous sample's `Usage.since` (None: the first sample,
+    in which no process is busy yet).
+    """
+    since = since or {}
+    ticks, procs, running, now = 0, 0, 0, {}
     for p in [pid, *descendants(pid)]:
         fields = stat(p)
         if fields is None:
@@ -170,9 +180,11 @@ def usage(pid: int, worker: int | None = None) -> Usage:
         procs += 1
         # utime, stime, cutime, cstime: fields 14-17 of stat, 12-15 here
         ticks += sum(int(x) for x in fields[11:15])
-        own = int(fields[11]) + int(fields[12])
-        running += fields[0] == b"R" and own >= BUSY * TICK
-    return Usage(ticks / TICK, _wait(worker), procs, running)
+        if fields[0] == b"R":
+            own = int(fields[11]) + int(fields[12])
+            now[p] = since.get(p, own)
+            running += own > now[p]
+    return Usage(ticks / TICK, _wait(worker), procs, running, now)
 
 
 def find_worker(pid: int, argv: list[str]) -> int | None:

@@ -289,10 +289,10 @@ class Proc:
             return self.last
         if self.worker is None:
             self.worker = cpu.find_worker(self.popen.pid, self.argv)
-        u = cpu.usage(self.popen.pid, self.worker)
+        u = cpu.usage(self.popen.pid, self.worker, self.last.since)
         # a child ending between two reads can hide its time for one sample
         cpu_s, wait = max(u.cpu, self.last.cpu), max(u.wait, self.last.wait)
-        self.last = cpu.Usage(cpu_s, wait, u.processes, u.running)
+        self.last = cpu.Usage(cpu_s, wait, u.processes, u.running, u.since)
         return self.last
 
     def kill(self) -> None:
