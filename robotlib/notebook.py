@@ -24,6 +24,7 @@ from __future__ import annotations
 import json
 import os
 import random
+import re
 import sys
 import threading
 import time
@@ -186,25 +187,48 @@ def _tick(bar, every: float = 1.0) -> None:
 _BAR = "{desc}: {n}/{total} steps |{bar}| {elapsed}{postfix}"
 
 
-def _stamp_file() -> Path:
-    """Where `warm_up` notes which parts are in numba's cache for this source."""
+_JITTED = re.compile(rb"^\s*@(nb\.|numba\.)?njit\b", re.MULTILINE)
+
+
+def _warm_key(package: Path) -> str:
+    """Hash what compiled kernels depend on (names `_stamp_file`).
+
+    numba's, NumPy's and Python's versions, the kernels' sources
+    (`robotlib._kernel_cache.kernel_sources` and any other module with an
+    ``@nb.njit`` function) and what each part warms (``warmups.py``), by
+    content: a ``git pull`` that changes only other files (a docstring, a
+    plot) keeps the parts warm, so a lab's first cell does not warm them
+    again.
+    """
     import hashlib
 
     import numba
 
+    from ._kernel_cache import kernel_sources
+
+    key = hashlib.sha1(f"{numba.__version__} {np.__version__} {sys.version}".encode())
+    sources = set(kernel_sources(package)) | {package / "warmups.py"}
+    sources |= {p for p in package.rglob("*.py") if _JITTED.search(p.read_bytes())}
+    for path in sorted(p for p in sources if p.is_file()):
+        key.update(f"{path.relative_to(package)}\0".encode() + path.read_bytes())
+    return key.hexdigest()[:16]
+
+
+def _stamp_file() -> Path:
+    """Where `warm_up` notes which parts are in numba's cache for these kernels."""
+    import numba
+
     root = Path(__file__).resolve().parent
-    key = hashlib.sha1(f"{numba.__version__} {sys.version}".encode())
-    for path in sorted(root.rglob("*.py")):
-        key.update(f"{path.relative_to(root)} {path.stat().st_mtime_ns}".encode())
     base = Path(numba.config.CACHE_DIR) if numba.config.CACHE_DIR else root
-    return base / "__pycache__" / f"robotlib-warm-{key.hexdigest()[:16]}.json"
+    return base / "__pycache__" / f"robotlib-warm-{_warm_key(root)}.json"
 
 
 def warmed_parts() -> set[str]:
     """Return the parts of `WARMUPS` already compiled into numba's cache.
 
-    A part counts once `warm_up` has run it against the installed source
-    (any change to robotlib's files, numba or Python starts afresh).
+    A part counts once `warm_up` has run it against the installed kernels
+    (a change to a kernel's source, to `robotlib.warmups`, or to numba's,
+    NumPy's or Python's version starts afresh; see `_warm_key`).
     """
     try:
         return set(json.loads(_stamp_file().read_text()))

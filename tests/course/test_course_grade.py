@@ -27,6 +27,7 @@ import pytest
 
 from robotlib.course import grade as g
 from robotlib.course.notebooks import read_notebook, release_notebook, write_notebook
+from tests import contention
 from tests.sandboxing import need_sandbox, orphans_adopted, procs_with
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -239,7 +240,7 @@ def _cli(folder, out, *extra):
     cmd = [sys.executable, "-m", "robotlib.cli", "grade", str(folder), "--lab", "tiny",
            "--solution", str(TINY), "--out", str(out), "--cell-timeout",
            str(CELL_TIMEOUT), "--timeout", "90", "--jobs", "2", "--quiet", *extra]  # fmt: skip
-    return subprocess.run(cmd, capture_output=True, text=True, timeout=600)
+    return contention.run(cmd, 600)  # quiet s: tests.contention
 
 
 @pytest.fixture(scope="module")

@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import csv
 import json
-import subprocess
 import sys
 
 import nbformat
@@ -21,6 +20,7 @@ from robotlib.course import grade as g
 from robotlib.course.gradebook import Again, Records
 from robotlib.course.notebooks import read_notebook, release_notebook, write_notebook
 from robotlib.course.submissions import check_lab, pick
+from tests import contention
 from tests.course.test_course_grade import MEAN, TINY, with_cell
 from tests.sandboxing import need_sandbox
 
@@ -29,7 +29,7 @@ def _cli(subs, out, *extra):
     cmd = [sys.executable, "-m", "robotlib.cli", "grade", str(subs), "--lab", "tiny",
            "--solution", str(TINY), "--out", str(out), "--cell-timeout", "20",
            "--jobs", "2", "--quiet", *extra]  # fmt: skip
-    return subprocess.run(cmd, capture_output=True, text=True, timeout=600)
+    return contention.run(cmd, 600)  # quiet s: tests.contention
 
 
 def _rows(out):

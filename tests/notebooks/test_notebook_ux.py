@@ -396,3 +396,21 @@ def test_a_bar_left_short_by_unsolved_code_is_hidden_when_its_cell_ends(tmp_path
     assert [d for _, d in stopped] == ["none"] and "0/4" in stopped[0][0]
     assert [d for _, d in finished] == [None] and "3/3" in finished[0][0]
     assert [d for _, d in failed] == ["none"]  # the ZeroDivisionError says why
+
+
+def test_warm_stamp_follows_only_the_kernels_and_what_is_warmed(tmp_path):
+    """A docstring edited outside the kernels leaves a warm cache warm."""
+    pkg = tmp_path / "pkg"
+    (pkg / "avoidance").mkdir(parents=True)
+    (pkg / "_config.py").write_text("JIT = {}\n")
+    (pkg / "_kernels.py").write_text("@nb.njit\ndef f():\n    return 1\n")
+    (pkg / "avoidance" / "grid.py").write_text("@nb.njit(cache=True)\ndef g():\n")
+    (pkg / "warmups.py").write_text("WARMUPS = {}\n")
+    (pkg / "plot.py").write_text('"""Plots."""\n')
+    key = nb._warm_key(pkg)
+    (pkg / "plot.py").write_text('"""Plots, edited."""\nX = 1\n')
+    assert nb._warm_key(pkg) == key  # a plot or docstring: still warm
+    for changed in ("_kernels.py", "avoidance/grid.py", "warmups.py", "_config.py"):
+        (pkg / changed).write_text((pkg / changed).read_text() + "# changed\n")
+        assert nb._warm_key(pkg) != key, changed  # a kernel, or what is warmed
+        key = nb._warm_key(pkg)
