@@ -24,6 +24,8 @@ import threading
 from concurrent.futures import Future, ThreadPoolExecutor
 from pathlib import Path
 
+from tests import contention
+
 HOOK = "background_work"
 NICER = 5
 """Nice levels below the tests: a core the tests leave idle goes to the background
@@ -42,7 +44,11 @@ ENDED = threading.Event()
 
 
 def run(cmd, timeout: float, **kwargs) -> subprocess.CompletedProcess:
-    """`subprocess.run`, output captured as text, ended with the session."""
+    """`subprocess.run`, output captured as text, ended with the session.
+
+    ``timeout``: in quiet seconds (`tests.contention`), so that a loaded
+    machine does not end slow work that is not stuck.
+    """
     with _lock:
         if ENDED.is_set():
             raise RuntimeError("the test session has ended")
@@ -55,12 +61,7 @@ def run(cmd, timeout: float, **kwargs) -> subprocess.CompletedProcess:
         )
         _procs.append(proc)
 
-    try:
-        out, err = proc.communicate(timeout=timeout)
-    except subprocess.TimeoutExpired:
-        proc.kill()
-        proc.communicate()
-        raise
+    out, err = contention.communicate(proc, timeout)
     return subprocess.CompletedProcess(proc.args, proc.returncode, out, err)
 
 
@@ -118,10 +119,19 @@ def pids() -> list[int]:
 
 
 def result(module: str, timeout: float = 1800.0):
-    """What ``background_work`` of ``module`` returned (its exception re-raised)."""
+    """What ``background_work`` of ``module`` returned (its exception re-raised).
+
+    ``timeout``: how long to wait for it, in quiet seconds (`tests.contention`).
+    """
     if module not in _jobs:
         raise LookupError(f"no background work was started for {module}")
-    return _jobs[module].result(timeout=timeout)
+    clock = contention.Clock()
+    while True:
+        try:
+            return _jobs[module].result(timeout=2.0)
+        except TimeoutError:
+            if clock.elapsed() > timeout:
+                raise TimeoutError(f"{module}'s background work: {clock}") from None
 
 
 def end(grace: float = 10.0) -> None:

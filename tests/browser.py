@@ -31,6 +31,7 @@ from pathlib import Path
 
 from robotlib.course.cpu import descendants
 from tests.browser_panels import check_animations, check_panels
+from tests.contention import Clock
 
 CHROMIUM = "/usr/bin/chromium"
 
@@ -104,9 +105,10 @@ class Lab:
         self._wait_up()
 
     def _wait_up(self, timeout: float = 60.0) -> None:
+        """Wait for the server to answer (``timeout``: quiet s, `tests.contention`)."""
         url = f"http://127.0.0.1:{self.port}/api/status?token={self.token}"
-        t0 = time.monotonic()
-        while time.monotonic() - t0 < timeout:
+        clock = Clock()
+        while clock.elapsed() < timeout:
             if self.proc.poll() is not None:
                 raise RuntimeError("JupyterLab exited; see jupyterlab.log")
             try:
@@ -376,13 +378,15 @@ class _Session:
     done.
     """
 
-    OPEN_LIMIT = 150.0  # s for JupyterLab's page and a kernel, on a loaded machine
+    OPEN_LIMIT = 150.0  # quiet s (tests.contention) for JupyterLab's page and kernel
 
     def __init__(self, lab: Lab, browser: Browser, path: str, page=None):
         self.lab, self.browser, self.path = lab, browser, path
         self.run = Run(path)
         self.opened = time.monotonic()
+        self.opening = Clock()  # OPEN_LIMIT
         self.t0: float | None = None  # when Run All was asked
+        self.running: Clock | None = None  # since Run All was asked
         self._asked = 0.0  # the last time Run All was asked
         self._attempts = 0
         self._running = False
@@ -408,8 +412,11 @@ class _Session:
         if shown:
             self.run.open_s = time.monotonic() - self.opened
             return True
-        if time.monotonic() - self.opened > self.OPEN_LIMIT:
-            raise TimeoutError(f"{self.path}: JupyterLab did not open it with a kernel")
+        if self.opening.elapsed() > self.OPEN_LIMIT:
+            raise TimeoutError(
+                f"{self.path}: JupyterLab did not open it with a kernel in "
+                f"{self.opening}"
+            )
         return False
 
     def start(self) -> None:
@@ -418,6 +425,7 @@ class _Session:
         _menu(self.page, "Run", "Run All Cells")
         self._asked = time.monotonic()
         self.t0 = self.t0 or self._asked
+        self.running = self.running or Clock()
         self._attempts += 1
 
     def poll(self) -> bool:
@@ -509,7 +517,7 @@ def run_notebooks(
     feedback_bound: float = 1.0,
     stop: threading.Event | None = None,
 ) -> list[Run]:
-    """Open each notebook, Run All Cells, wait (``timeout`` s each), check, save.
+    """Open each notebook, Run All Cells, wait (``timeout`` quiet s each), check, save.
 
     Up to ``at_once`` notebooks run at the same time (one kernel per core),
     in the order given, and the next one's page opens meanwhile: as soon as
@@ -539,7 +547,7 @@ def run_notebooks(
             opening.append(_Session(lab, browser, todo.pop(0), page))
         start_ready()
         for session in list(running):
-            late = time.monotonic() - session.t0 > timeout
+            late = session.running.elapsed() > timeout  # quiet s: tests.contention
             if session.poll() or late:
                 running.remove(session)
                 start_ready()  # the freed kernel's successor runs during the checks

@@ -15,6 +15,7 @@ import time
 from pathlib import Path
 
 from tests import browser_feedback as in_page
+from tests.contention import Clock
 
 _LOOK = """(root, moved) => {
   // the panel's images (a hash of each one's pixels, kept per image and source,
@@ -105,11 +106,12 @@ def _move(page, panel, handle, slider, bound: float, stem: str, twice=True) -> d
     panel.screenshot(path=f"{stem}-before.png")
     handle.focus()
     in_page.watch(panel, slider)
-    t0 = time.monotonic()
+    clock = Clock()  # the bound in quiet seconds (tests.contention)
+    t0 = clock.start
     page.keyboard.press(key)
-    feedback = redraw = error = None
+    feedback = redraw = error = quiet = None
     page_times, busy = None, None
-    while time.monotonic() - t0 < bound:
+    while (elapsed := clock.elapsed()) < bound:
         now = time.monotonic() - t0
         look = panel.evaluate(_LOOK, slider)  # one round trip for all of it
         if feedback is None and look["outside"] != before_text:
@@ -119,7 +121,7 @@ def _move(page, panel, handle, slider, bound: float, stem: str, twice=True) -> d
             break
         pixels = look["pixels"]
         if pixels not in (before_pixels, "") and "loading" not in pixels:
-            redraw = now
+            redraw, quiet = now, elapsed
             feedback = now if feedback is None else feedback  # the answer itself
             break
         status = look["status"]
@@ -138,7 +140,8 @@ def _move(page, panel, handle, slider, bound: float, stem: str, twice=True) -> d
         page.wait_for_timeout(300)
         panel.screenshot(path=f"{stem}-after.png")
     return {"key": key, "settle_s": settled, "feedback_s": feedback,
-            "redraw_s": redraw, "error": error, "in_page": page_times,
+            "redraw_s": redraw, "redraw_quiet_s": quiet, "error": error,
+            "in_page": page_times,
             "busy": busy, "status_line": before_status is not None}  # fmt: skip
 
 

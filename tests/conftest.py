@@ -7,7 +7,15 @@ way on every machine. An example that once failed stays in its test as an
 
 Modules with slow subprocess work start it when the session starts, beside
 the tests, and run their tests last (`tests.background`).
+
+SIGTERM (a CI runner stopping the job) ends the run as Ctrl-C does: the
+session stops at once, its background work is ended and its folders are
+removed (`tests.background.end`), and pytest exits with status 2. A
+grading in the foreground turns SIGTERM into its own clean stop first
+(`robotlib.course.grade.grade`), then the session ends the same way.
 """
+
+import signal
 
 import pytest
 from hypothesis import settings
@@ -16,6 +24,20 @@ from tests import background
 
 settings.register_profile("robotlib", derandomize=True, print_blob=True)
 settings.load_profile("robotlib")
+
+
+def _terminated(signum, frame):
+    """SIGTERM: end the session as Ctrl-C does (once: a second one waits for it)."""
+    signal.signal(signal.SIGTERM, lambda *_: None)
+    raise KeyboardInterrupt(f"signal {signum}")
+
+
+def pytest_configure(config):
+    signal.signal(signal.SIGTERM, _terminated)
+
+
+def pytest_unconfigure(config):
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
 
 
 @pytest.hookimpl(trylast=True)  # after the selection by -m and -k

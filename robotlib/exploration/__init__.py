@@ -4,9 +4,10 @@
   cells next to unknown ones on an occupancy grid, grouped in `Frontier`
   regions with a size and a centroid; `open_frontier` drops those facing
   only a small closed pocket (the inside of a box).
-- `known_space`, `frontier_costs`, `information_gain`, `utility`,
-  `discount`, `choose`: path costs on the known map (unknown cells as
-  obstacles), Burgard et al.'s utility and its coordination of a team.
+- `known_space`, `frontier_costs`, `departure`, `information_gain`,
+  `utility`, `discount`, `choose`: path costs on the known map (unknown
+  cells as obstacles, the turn before setting off counted), Burgard et
+  al.'s utility and its coordination of a team.
 - `ExploreSettings`, `Exploration`, `explore`: the loop (map with the
   robot's own laser or sonar from the true pose or SLAM's, choose, plan with
   A*, follow, avoid, re-plan, go home); `Member`: one robot in it, its
@@ -21,6 +22,7 @@ Nothing here plots: `robotlib.plotting.exploration` draws what it returns.
 from .choice import (
     STRATEGIES,
     choose,
+    departure,
     discount,
     frontier_costs,
     information_gain,
@@ -61,6 +63,7 @@ __all__ = [
     "Member",
     "choose",
     "classify",
+    "departure",
     "discount",
     "explore",
     "explore_team",

@@ -5,7 +5,8 @@
   seen), occupied cells inflated by the robot's radius, teammates' bodies
   blocked when asked.
 - `frontier_costs`: each frontier's reachable target and the path cost to
-  it (Dijkstra from the robot over the known space, `cost_field`).
+  it (Dijkstra from the robot over the known space, `cost_field`), with the
+  turn in place before the robot can set off along it (`departure`).
 - `information_gain`: the unknown area around each target, m^2.
 - `utility`: gain minus ``beta`` times cost (Burgard et al., 2005).
 - `discount`: the coordination rule: once a teammate has chosen a target,
@@ -31,6 +32,7 @@ __all__ = [
     "STRATEGIES",
     "known_space",
     "frontier_costs",
+    "departure",
     "information_gain",
     "utility",
     "discount",
@@ -118,7 +120,13 @@ def _cells(xy, origin, resolution, shape) -> np.ndarray:
 
 
 def frontier_costs(
-    cs: CSpace, start, frontiers: list[Frontier], field=None, min_distance: float = 0.4
+    cs: CSpace,
+    start,
+    frontiers: list[Frontier],
+    field=None,
+    min_distance: float = 0.4,
+    heading: float | None = None,
+    turn: float = 0.0,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Path cost from ``start`` to each frontier, and the point to drive to.
 
@@ -135,6 +143,14 @@ def frontier_costs(
     min_distance : float
         Cells nearer ``start`` than this are no target (m): the robot is
         there already.
+    heading : float, optional
+        The robot's heading, rad. With it and ``turn``, each cost also
+        counts the turn in place before the robot sets off along the path
+        (`departure`): a robot that must turn round first is that much
+        further from the target.
+    turn : float
+        Cost of that turn, m per rad (a robot turning at ``w_max`` could
+        drive ``speed / w_max`` m in the time of a radian).
 
     Returns
     -------
@@ -146,10 +162,15 @@ def frontier_costs(
         Each region's reachable cell nearest its centroid, m (its
         `Frontier.target` when none is reachable).
     """
-    if field is None:
+    turning = heading is not None and turn > 0
+    parent = None
+    if field is None and turning:
+        field, parent = cost_field(cs, start, parents=True)
+    elif field is None:
         field = cost_field(cs, start)
     costs = np.full(len(frontiers), np.inf)
     targets = np.zeros((len(frontiers), 2))
+    cells = np.zeros((len(frontiers), 2), dtype=np.int64)
     here = np.asarray(start, dtype=float)[:2]
     for k, f in enumerate(frontiers):
         c = field[f.cells[:, 0], f.cells[:, 1]]
@@ -161,8 +182,56 @@ def frontier_costs(
         centres = cs.to_metres(f.cells[ok])
         near = int(np.argmin(np.sum((centres - f.centroid) ** 2, axis=1)))
         targets[k] = centres[near]
+        cells[k] = f.cells[ok][near]
         costs[k] = c[ok][near]
+    if turning:
+        if parent is None:
+            raise ValueError("heading needs the field's parents: leave field None")
+        go = np.isfinite(costs)
+        way = departure(cs, parent, here, cells[go])
+        off = np.abs((way - heading + np.pi) % (2 * np.pi) - np.pi)
+        costs[go] += turn * off
     return costs, targets
+
+
+def departure(cs: CSpace, parent, start, cells, reach: float = 0.5) -> np.ndarray:
+    """Return the way each path leaves ``start``, rad.
+
+    Parameters
+    ----------
+    cs : CSpace
+        The space the paths were planned in.
+    parent : numpy.ndarray of int64, shape (ny, nx)
+        Each cell's next cell towards ``start`` (`cost_field` with
+        ``parents``).
+    start : array_like, shape (2,)
+        Where the paths begin, m.
+    cells : array_like of int, shape (K, 2)
+        The paths' ends ``(i, j)``, reachable.
+    reach : float
+        The direction is taken to the path's last cell (walking back from
+        its end) at least this far from ``start``, m.
+
+    Returns
+    -------
+    numpy.ndarray, shape (K,)
+        Bearing from ``start`` to that cell, rad.
+    """
+    cells = np.asarray(cells, dtype=np.int64).reshape(-1, 2)
+    nx = parent.shape[1]
+    flat = parent.ravel()
+    here = np.asarray(start, dtype=float)[:2]
+    at = cells[:, 0] * nx + cells[:, 1]
+    for _ in range(flat.size):  # walk back while the next cell is far enough
+        nxt = flat[at]
+        go = nxt >= 0
+        xy = cs.to_metres(np.column_stack([nxt[go] // nx, nxt[go] % nx]))
+        go[go] = np.hypot(*(xy - here).T) >= reach
+        if not go.any():
+            break
+        at = np.where(go, nxt, at)
+    xy = cs.to_metres(np.column_stack([at // nx, at % nx]))
+    return np.arctan2(xy[:, 1] - here[1], xy[:, 0] - here[0])
 
 
 def information_gain(state, origin, resolution: float, targets, radius: float):

@@ -12,11 +12,16 @@ on one shared log-odds map. Each 100 ms cycle:
    re-plans; a robot that reached its target, whose target is no longer a
    frontier, or that waited too long for a teammate, gets a new target
    (`robotlib.exploration.choose`: nearest, utility, or coordinated among
-   the team); with no reachable frontier left it drives home;
+   the team, gains discounted near the targets teammates drive to and near
+   where they stand, which their sensors see; path costs count the turn in
+   place before a robot can set off); with no reachable frontier left it
+   drives home;
 3. every robot follows its A* path (planned on the inflated known map,
    unknown cells blocked) with pure pursuit, as fast as it can still stop
    short of the known walls, the near sonar echoes and its teammates
-   (`robotlib.exploration.member.keeps_clear`), else turning in place, or
+   (`robotlib.exploration.member.keeps_clear`), else creeping along the
+   path itself, else turning in place (one way until it can drive; the
+   laser returns that stopped it are blocked for the next plan), or
    backing off a wall it came too near; a robot stops while a teammate is
    close ahead of it and, after ``wait_time``, re-plans around its
    teammates;
@@ -55,6 +60,7 @@ from .member import (
     escape,
     keeps_clear,
     mark_contact,
+    mark_stuck,
     teammate_ahead,
 )
 from .metrics import ExplorationResult, explored_fraction, reachable_area
@@ -65,6 +71,13 @@ __all__ = ["Exploration", "explore"]
 SLOWER = (1.0, 0.5, 0.25)
 """The shares of pure pursuit's speed tried, in turn, when the next arc
 does not keep clear (`keeps_clear`) before the robot stops to turn."""
+
+NEAR = 0.2
+"""Look-ahead (m) along the path when pure pursuit's own arc does not keep
+clear (`Exploration._hug_path`)."""
+
+CREEP = 0.15
+"""Speed (m/s) along the path at `NEAR` look-ahead."""
 
 POCKET = 1.0
 """Unknown pieces smaller than this (m^2), their rim all known, are not
@@ -209,7 +222,13 @@ class Exploration:
                 )
         if not needy:
             return
-        taken = [r.target for r in self.robots if r not in needy and r.mode == EXPLORE]
+        # what teammates will see: where they drive to, and where they stand
+        taken = [
+            r.target
+            for r in self.robots
+            if r not in needy and r.mode == EXPLORE and r.target is not None
+        ]
+        taken += [r.pose[:2] for r in self.robots if r not in needy]
         centroids = np.array([f.centroid for f in regions]).reshape(-1, 2)
         gains = information_gain(
             state, g.origin, g.resolution, centroids, s.gain_radius
@@ -220,7 +239,9 @@ class Exploration:
             start = _start(c, r.pose)
             targets.append(np.array([f.target for f in regions]).reshape(-1, 2))
             if start is not None and regions:
-                costs[n], targets[n] = frontier_costs(c, start, regions)
+                costs[n], targets[n] = frontier_costs(
+                    c, start, regions, heading=r.pose[2], turn=s.speed / s.w_max
+                )
         pick = (
             np.asarray(
                 self.chooser(
@@ -281,6 +302,9 @@ class Exploration:
             return 0.0, 0.0
         s = self.settings
         v, w = r.follower.command(r.pose)
+        if v == 0.0 and w != 0.0:  # turning in place: keep the way it began
+            r.turn = r.turn or math.copysign(1.0, w)
+            w = math.copysign(abs(w), r.turn)
         mates = self._positions(skip=r)
         # two robots each waiting for the other: the later one keeps waiting
         # (a teammate that waits for this one is no reason to wait)
@@ -309,7 +333,7 @@ class Exploration:
                     self.grid, s.occupied_level, self.echoes, r.pose, f * v, f * w,
                     mates, speed, r.returns,
                 ):  # fmt: skip
-                    v, w = f * v, f * w
+                    v, w, r.turn = f * v, f * w, 0.0
                     break
             else:
                 r.stuck += CYCLE
@@ -320,11 +344,33 @@ class Exploration:
                 if off is not None:  # too near a wall: back off it first
                     r.backing = True
                     return off
-                return 0.0, math.copysign(s.w_max / 2, w)  # turn towards the path
+                return self._hug_path(r, mates, speed)
         if r.follower.done:
             if r.mode == HOME:
                 r.stop()
         return v, w
+
+    def _hug_path(self, r: Member, mates, speed: float) -> tuple[float, float]:
+        """Creep along the path itself when pure pursuit's arc does not keep clear.
+
+        The look-ahead point cuts corners (out of a door into a corridor,
+        round a jamb); the planned path keeps its distance from the walls.
+        The robot steers at `CREEP` speed to the point `NEAR` ahead on its
+        path, or turns in place towards it (towards where the path goes, so
+        the turn does not flip as the far point's bearing crosses zero).
+        """
+        s = self.settings
+        p = r.follower
+        v, w = p.law(r.pose, p.point_at(p.s + NEAR), CREEP, s.w_max)
+        if v > 0 and keeps_clear(
+            self.grid, s.occupied_level, self.echoes, r.pose, v, w, mates, speed,
+            r.returns,
+        ):  # fmt: skip
+            r.turn = 0.0
+            return v, w
+        mark_stuck(self.echoes, self.grid, r, mates)
+        r.turn = r.turn or math.copysign(1.0, w)
+        return 0.0, math.copysign(s.w_max / 2, r.turn)
 
     # -- the loop -----------------------------------------------------------
     def step(self) -> None:

@@ -10,6 +10,9 @@ and from the shared map, every cycle:
   (the laser and sonar see teammates; they are not walls);
 - `count_echoes`: near echoes of the forward sonars, per cell (posts the
   laser's beams pass between);
+- `mark_contact`, `mark_stuck`: block on the map's twin (``echoes``) the
+  cell a robot ran into, or the laser returns too near a robot that cannot
+  move on;
 - `teammate_ahead`: a teammate closer ahead than the stopping distance;
 - `keeps_clear`: whether a command keeps the robot clear of the known walls,
   the echoes and the teammates for half a second.
@@ -41,10 +44,12 @@ from .settings import ExploreSettings
 
 __all__ = [
     "Member",
+    "look_round",
     "cell",
     "clear_bodies",
     "count_echoes",
     "mark_contact",
+    "mark_stuck",
     "teammate_ahead",
     "keeps_clear",
     "escape",
@@ -78,6 +83,10 @@ BACK_OFF = 0.1
 """A robot backing off a wall (`escape`) stops when it is this much (m)
 further than `keeps_clear` wants: at the limit itself, the first turn
 towards its path would bring it back."""
+
+STUCK_REACH = ROBOT_RADIUS + CLEARANCE + 0.1
+"""Returns nearer than this (m) to a robot no command keeps clear are
+blocked for planning (`mark_stuck`)."""
 
 AWAY = 0.3
 """A robot nearer a blocked cell than `keeps_clear` wants may drive only
@@ -116,7 +125,8 @@ class Member:
         self.follower: PurePursuit | None = None
         self.waited = 0.0
         self.stuck = 0.0
-        self.spin = 2 * math.pi  # a look round first: the laser sees only ahead
+        self.spin = look_round(index, settings.sensor)
+        self.turn = 0.0  # the way it turns in place (rad/s sign), 0 when not
         self.blocked = False
         self.backing = False  # backing off a wall it came too near
         self.stalled = False
@@ -162,7 +172,7 @@ class Member:
             path, settings.lookahead, settings.speed, settings.w_max,
             settings.goal_tolerance,
         )  # fmt: skip
-        self.waited = self.stuck = 0.0
+        self.waited = self.stuck = self.turn = 0.0
 
     def stop(self, mode: str = DONE) -> None:
         """Drop the target and path; take ``mode``."""
@@ -177,6 +187,19 @@ class Member:
         p = self.follower
         k = int(np.searchsorted(p.cum, p.s, side="right")) - 1
         return p.path[max(k, 0) :]
+
+
+def look_round(index: int, sensor: str) -> float:
+    """How far (rad) a team's robot ``index`` turns in place before it starts.
+
+    The first robot looks round: half a turn with the laser (its 180 degree
+    field sees every direction by then), a whole turn with the sonar ring
+    (its cones leave gaps). Its teammates, started beside it facing the same
+    way, see ahead at once and drive off while it looks behind them.
+    """
+    if index > 0:
+        return 0.0
+    return math.pi if sensor == "laser" else 2 * math.pi
 
 
 def cell(grid: OccupancyGrid, xy) -> tuple[int, int]:
@@ -289,6 +312,28 @@ def mark_contact(echoes: np.ndarray, grid: OccupancyGrid, r: Member, v: float) -
         spot = r.near[ahead][k]
     i, j = cell(grid, spot)
     echoes[i, j] = 100
+
+
+def mark_stuck(echoes: np.ndarray, grid: OccupancyGrid, r: Member, others) -> None:
+    """Block the cells of ``r``'s laser returns that keep it from moving on.
+
+    A robot that no command along its path keeps clear of (`keeps_clear`)
+    stands too near returns the map does not hold: a door jamb's end or a
+    box's corner, in a cell the beams passing by keep free. The plan led
+    there through that cell and would lead there again. The returns within
+    `STUCK_REACH` of the robot, but not on a teammate at ``others`` (K, 2),
+    are blocked in ``echoes`` so the next plan keeps its distance.
+    """
+    if not len(r.returns):
+        return
+    d = np.hypot(*(r.returns - r.pose[:2]).T)
+    pts = r.returns[d < STUCK_REACH]
+    if len(others) and len(pts):
+        gap = np.hypot(*(pts[:, None, :] - others[None, :, :]).transpose(2, 0, 1))
+        pts = pts[gap.min(axis=1) > BODY + 0.1]
+    for x, y in pts:
+        i, j = cell(grid, (x, y))
+        echoes[i, j] = 100
 
 
 def teammate_ahead(r: Member, others, keep_out: float) -> bool:

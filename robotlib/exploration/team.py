@@ -5,7 +5,8 @@
 is unloaded in one place); `explore_team` runs them in one simulator with
 `robotlib.exploration.Exploration`: one shared map, the coordinated
 frontier choice (a robot's utility is discounted near the frontiers its
-teammates already chose), a robot stopping for a teammate ahead and
+teammates already chose and near where they stand), only the first robot
+looking round before the start, a robot stopping for a teammate ahead and
 re-planning around it when it waits too long. Imports the loop; never plots.
 """
 

@@ -13,8 +13,7 @@ import math
 
 import numpy as np
 
-from .motion import _particles
-from .resampling import _weights
+from .resampling import _cloud
 
 __all__ = ["mode_estimate"]
 
@@ -43,10 +42,7 @@ def mode_estimate(particles, weights, cell: float = 1.0, radius: float = 0.75):
     numpy.ndarray, shape (3,)
         ``(x, y, theta)``, m and rad.
     """
-    p = _particles(particles)
-    w = _weights(weights)
-    if len(w) != len(p):
-        raise ValueError("particles and weights differ in length")
+    p, w = _cloud(particles, weights)
     ij = np.floor((p[:, :2] - p[:, :2].min(axis=0)) / cell).astype(np.int64)
     nx, ny = ij.max(axis=0) + 1
     heap = np.bincount(ij[:, 0] * ny + ij[:, 1], weights=w, minlength=nx * ny)

@@ -27,7 +27,7 @@ from ..sensing import SonarModel
 from ..world import World
 from .cones import ConeTable, expected_readings
 from .motion import _particles, sample_motion_odometry
-from .resampling import _weights, multinomial_resample
+from .resampling import _cloud, multinomial_resample
 from .sensors import innovation_loglik
 
 __all__ = [
@@ -253,8 +253,7 @@ def check_particles(
     weights : numpy.ndarray, shape (N,)
     n_regenerated : int
     """
-    p = _particles(particles).copy()
-    w = _weights(weights).copy()
+    p, w = (a.copy() for a in _cloud(particles, weights))
     bad = ~admissible(world, p, radius, resolution)
     k = int(bad.sum())
     if k:
@@ -278,10 +277,7 @@ def estimate(particles, weights) -> np.ndarray:
     numpy.ndarray, shape (3,)
         ``(x, y, theta)``, m and rad.
     """
-    p = _particles(particles)
-    w = _weights(weights)
-    if len(w) != len(p):
-        raise ValueError("particles and weights differ in length")
+    p, w = _cloud(particles, weights)
     w = w / w.sum()
     heading = math.atan2(w @ np.sin(p[:, 2]), w @ np.cos(p[:, 2]))
     return np.array([w @ p[:, 0], w @ p[:, 1], heading])

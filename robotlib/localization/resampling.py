@@ -18,6 +18,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._random import as_rng
+from .motion import _particles
 
 __all__ = [
     "effective_sample_size",
@@ -36,6 +37,15 @@ def _weights(weights) -> np.ndarray:
     if not (np.all(w >= 0) and w.sum() > 0):
         raise ValueError("weights must be non-negative with a positive sum")
     return w
+
+
+def _cloud(particles, weights) -> tuple[np.ndarray, np.ndarray]:
+    """Return a weighted cloud as checked arrays ``(N, 3)`` and ``(N,)``, or raise."""
+    p = _particles(particles)
+    w = _weights(weights)
+    if len(w) != len(p):
+        raise ValueError("particles and weights differ in length")
+    return p, w
 
 
 def _search(weights: np.ndarray, positions: np.ndarray) -> np.ndarray:

@@ -20,8 +20,9 @@ Angles (the heading, bearings) are averaged on the circle and their
 differences wrapped. Like the EKF, the belief is unimodal: no global
 localization, no recovery from a kidnapping without identities.
 
-Imports numpy, the world's angle wrap, the laser model and the motion
-model; never plots.
+Imports numpy, scipy's chi-square quantile, the world's angle wrap, the
+laser model, the motion model and the EKF's update and map cost; never
+plots.
 """
 
 from __future__ import annotations
@@ -29,9 +30,11 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from scipy.special import chdtri
 
 from ..sensing.laser import LaserModel, expected_laser
 from ..world import wrap_angle
+from .ekf import _map_cost, _update, laser_sigma
 from .motion import DEFAULT_ALPHAS, noise_std, odometry_increment
 
 __all__ = [
@@ -239,34 +242,71 @@ def ukf_laser_update(
     walls,
     model: LaserModel | None = None,
     beams=None,
-    sigma: float = 0.05,
-    gate: float = 3.0,
+    sigma: float | None = None,
+    gate: float = 2.0,
+    iterations: int = 10,
+    refuse: float = 1e-3,
 ):
     """Update the belief with laser beams against the map's walls (unscented).
 
     The arguments and results are those of
-    `robotlib.localization.ekf.laser_update`. A beam is used only if it and
-    its expectation at every sigma point are echoes (below the maximum
-    range), its range is nearly linear across the sigma points (opposite
-    points' ranges average to the centre's within ``sigma``: no corner or
-    other wall in between), and its innovation is within ``gate`` predicted
-    standard deviations.
+    `robotlib.localization.ekf.laser_update`, and so is the cause of their
+    care: a range is far from linear over a prior's few centimetres. One
+    unscented step spreads its sigma points over the prior and, at the
+    sensor's 5.8 mm, trusts a fit through points that reach other walls.
+    This is the iterated posterior linearisation (Garcia-Fernandez, Svensson,
+    Morelande and Sarkka 2015): at each iterate the sigma points of the
+    current posterior give a linear fit of the ranges, ``z ~ A x + b``, and
+    its residual covariance ``Omega`` (the nonlinearity over that spread);
+    the prior is updated with the fit, its noise ``sigma**2 + Omega``, and
+    the result is the next iterate, until it moves less than 1 um or 1 urad.
+    A beam is used only if it and its expectation at every sigma point are
+    echoes (below the maximum range) and its innovation is within ``gate``
+    predicted standard deviations. The update is refused (the prior kept) as
+    the EKF's is: no beam left, a worse fit of the map than the prior's mean,
+    or an NIS beyond the chi-square's ``refuse`` tail.
     """
     mu, P = _belief(mu, P)
     model = LaserModel() if model is None else model
     z = np.asarray(scan, dtype=float).reshape(-1)
     if z.shape != (model.n_beams,):
         raise ValueError(f"scan must have {model.n_beams} ranges, got {z.shape}")
+    if iterations < 1:
+        raise ValueError(f"iterations must be at least 1, got {iterations}")
+    sigma = laser_sigma(model) if sigma is None else float(sigma)
+    if not sigma > 0:
+        raise ValueError(f"sigma must be positive, got {sigma}")
     beams = np.arange(0, model.n_beams, 10) if beams is None else np.asarray(beams)
-
-    def measure(X):
-        return expected_laser(walls, X, model)[:, beams]
-
-    def select(Z, zhat, nu, S):
-        echo = (Z < model.max_range).all(axis=0) & (z[beams] < model.max_range)
-        n = (len(Z) - 1) // 2  # opposite points: a corner between bends the range
-        bend = np.abs(Z[1 : n + 1] + Z[n + 1 :] - 2 * Z[0]).max(axis=0)
-        return echo & (bend <= sigma) & (np.abs(nu) <= gate * np.sqrt(np.diag(S)))
-
-    R = np.eye(len(beams)) * sigma**2
-    return ukf_update(mu, P, measure, z[beams], R, (), select)
+    zb, x, Px, fit, cap = z[beams], mu, P, None, None
+    for _ in range(iterations):
+        X, wm, wc = sigma_points(x, Px)
+        Z = expected_laser(walls, X, model)[:, beams]
+        zhat = wm @ Z
+        DZ, DX = Z - zhat, _deviations(X, x, (2,))
+        A = np.linalg.solve(Px, (DX * wc[:, None]).T @ DZ).T  # (beams, 3)
+        omega = (DZ * wc[:, None]).T @ DZ - A @ Px @ A.T
+        off = mu - x
+        off[2] = wrap_angle(off[2])
+        nu = zb - zhat - A @ off
+        R = omega + np.eye(len(beams)) * sigma**2
+        spread = np.sqrt(np.einsum("bi,ij,bj->b", A, P, A) + np.diag(R))
+        echo = (Z < model.max_range).all(axis=0) & (zb < model.max_range)
+        if cap is None:  # the robust cost's cut: the gate about the prior
+            cap = np.where(echo, gate * spread, 0.0)
+        ok = echo & (np.abs(nu) <= gate * spread)
+        if not ok.any():  # no beam agrees with this iterate: it went astray
+            return mu, P, 0.0, 0
+        fit = _update(mu, P, nu[ok], A[ok], R[np.ix_(ok, ok)])
+        step = fit[0] - x
+        step[2] = wrap_angle(step[2])
+        x, Px = fit[0], fit[1]
+        if np.abs(step).max() < 1e-6:
+            break
+    used = int(ok.sum())
+    if iterations > 1:
+        costs = _map_cost(walls, mu, P, np.array([mu, x]), zb, model, beams, sigma, cap)
+        if costs[1] > costs[0]:  # the beams fit the prior's mean better
+            return mu, P, 0.0, 0
+    if refuse > 0 and fit[2] > chdtri(used, refuse):  # a fit the beams contradict
+        return mu, P, 0.0, 0
+    return *fit, used

@@ -183,13 +183,21 @@ def dijkstra(
     return _search(cs, start, goal, connectivity, 0.0, use_cost, record)
 
 
-def cost_field(cs: CSpace, goal, connectivity: int = 8, use_cost: bool = True):
+def cost_field(
+    cs: CSpace,
+    goal,
+    connectivity: int = 8,
+    use_cost: bool = True,
+    parents: bool = False,
+):
     """Optimal cost from ``goal`` to every cell (Dijkstra to exhaustion).
 
     Moves are symmetric except for the cost factor of the cell entered, so
     this is the cost-to-come from the goal; with ``use_cost`` False it is also
     every cell's cost-to-go. Returns (ny, nx) float64, ``inf`` where
-    unreachable.
+    unreachable; with ``parents`` also (ny, nx) int64, each reached cell's
+    flat index one step nearer ``goal`` on its optimal path (-1 at ``goal``
+    and at unreached cells).
     """
     c8 = _connect8(connectivity)
     g = cs.node(goal, "goal")
@@ -201,6 +209,8 @@ def cost_field(cs: CSpace, goal, connectivity: int = 8, use_cost: bool = True):
         cs.blocked, cost, g, -1, 0.0, c8, cs.resolution, gcost, parent,
         np.empty(0, np.int64),
     )  # fmt: skip
+    if parents:
+        return gcost.reshape(cs.shape), parent.reshape(cs.shape)
     return gcost.reshape(cs.shape)
 
 

@@ -11,13 +11,13 @@ from __future__ import annotations
 
 import copy
 import csv
-import subprocess
 import sys
 from pathlib import Path
 
 import pytest
 
 from robotlib.course.notebooks import read_notebook, release_notebook, write_notebook
+from tests import contention
 from tests.sandboxing import need_sandbox, procs_with
 
 pytestmark = pytest.mark.slow  # a class graded on a Dask cluster
@@ -54,7 +54,7 @@ def test_grade_on_a_local_dask_cluster(tmp_path, adopting):
         "--lab", "tiny", "--solution", str(TINY), "--out", str(out),
         "--scheduler", "local", "--jobs", "2", "--cell-timeout", "4", "--quiet",
     ]  # fmt: skip
-    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
+    proc = contention.run(cmd, 600)  # quiet s: tests.contention
     assert proc.returncode == 0, proc.stderr[-3000:]
     rows = {r["student"]: r for r in csv.DictReader(out.open())}
     assert set(rows) == set(subs)

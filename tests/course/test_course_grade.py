@@ -27,6 +27,7 @@ import pytest
 
 from robotlib.course import grade as g
 from robotlib.course.notebooks import read_notebook, release_notebook, write_notebook
+from tests import contention
 from tests.sandboxing import need_sandbox, orphans_adopted, procs_with
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -239,7 +240,7 @@ def _cli(folder, out, *extra):
     cmd = [sys.executable, "-m", "robotlib.cli", "grade", str(folder), "--lab", "tiny",
            "--solution", str(TINY), "--out", str(out), "--cell-timeout",
            str(CELL_TIMEOUT), "--timeout", "90", "--jobs", "2", "--quiet", *extra]  # fmt: skip
-    return subprocess.run(cmd, capture_output=True, text=True, timeout=600)
+    return contention.run(cmd, 600)  # quiet s: tests.contention
 
 
 @pytest.fixture(scope="module")
@@ -312,6 +313,7 @@ def test_statuses_and_reasons(graded):
     assert "wrong result: expected" in rows["constant_mean"]["notes"]
     assert "assertion failed" in rows["patched"]["notes"]
     assert "reads notebooks" in rows["escape"]["flags"]
+    assert "processes at once (the limit is 256)" in rows["exhaust"]["flags"]
 
 
 @pytest.mark.slow
@@ -374,6 +376,8 @@ def test_records_resume_and_manual_scores(graded):
     t0 = time.monotonic()
     proc = _cli(folder, out, "--manual", str(manual))
     assert proc.returncode == 0, proc.stderr
+    said = proc.stderr  # nothing graded is not "graded 17"
+    assert "graded 0 submissions" in said and "kept from earlier runs" in said, said
     with open(out, newline="") as f:
         again = {r["student"]: r for r in csv.DictReader(f)}
     assert again["solution"]["total"] == "5" and again["solution"]["why"] == "1"

@@ -11,16 +11,17 @@ from __future__ import annotations
 
 import csv
 import json
-import subprocess
 import sys
 
 import nbformat
 import pytest
 
 from robotlib.course import grade as g
+from robotlib.course.cache import reference_key
 from robotlib.course.gradebook import Again, Records
 from robotlib.course.notebooks import read_notebook, release_notebook, write_notebook
 from robotlib.course.submissions import check_lab, pick
+from tests import contention
 from tests.course.test_course_grade import MEAN, TINY, with_cell
 from tests.sandboxing import need_sandbox
 
@@ -29,7 +30,7 @@ def _cli(subs, out, *extra):
     cmd = [sys.executable, "-m", "robotlib.cli", "grade", str(subs), "--lab", "tiny",
            "--solution", str(TINY), "--out", str(out), "--cell-timeout", "20",
            "--jobs", "2", "--quiet", *extra]  # fmt: skip
-    return subprocess.run(cmd, capture_output=True, text=True, timeout=600)
+    return contention.run(cmd, 600)  # quiet s: tests.contention
 
 
 def _rows(out):
@@ -110,3 +111,12 @@ def test_wrong_lab_unknown_student_and_missing_lab_say_what_to_do(tmp_path):
     with pytest.raises(g.GradeError, match="labs: .*lab4_navigation"):
         g.solution_path("lab4")
     assert json.loads(paths[0].read_text())["metadata"]["robotlib"]["lab"] == "lab2"
+
+
+def test_the_reference_run_is_kept_by_the_solution_s_content():
+    """A saved reference run is reused while the solution is the same text."""
+    text = TINY.read_text(encoding="utf-8")
+    key = reference_key(text, "tiny")
+    assert reference_key(text, "tiny") == key
+    assert reference_key(text.replace("def add", "def add ", 1), "tiny") != key
+    assert reference_key(text, "tiny2") != key

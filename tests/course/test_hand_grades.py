@@ -10,7 +10,6 @@ and what was typed into it survives every later run, with or without
 from __future__ import annotations
 
 import csv
-import subprocess
 import sys
 
 import pytest
@@ -31,6 +30,7 @@ from robotlib.course.notebooks import (
     release_notebook,
     write_notebook,
 )
+from tests import contention
 from tests.course.test_course_grade import TINY
 from tests.sandboxing import need_sandbox
 
@@ -122,12 +122,13 @@ def test_a_run_without_manual_keeps_the_hand_grades(tmp_path):
            "--jobs", "2", "--quiet"]  # fmt: skip
 
     def run():
-        proc = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
+        proc = contention.run(cmd, 600)  # quiet s: tests.contention
         assert proc.returncode == 0, proc.stderr
         return {r["student"]: r for r in _rows(out)}, proc.stderr
 
     rows, said = run()
     assert rows["ann"]["why"] == "" and "written answers to grade" in said
+    assert "1 of 2 have full marks on the automatic checks" in said, said
     sheet = out.with_name("gb-manual.csv")
     lines = _rows(sheet)
     assert [r["score"] for r in lines] == ["", ""]

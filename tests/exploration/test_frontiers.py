@@ -12,6 +12,7 @@ from robotlib.exploration import (
     UNKNOWN,
     choose,
     classify,
+    departure,
     discount,
     frontier_cells,
     frontier_costs,
@@ -20,6 +21,7 @@ from robotlib.exploration import (
     known_space,
     open_frontier,
 )
+from robotlib.planning import cost_field
 from tests import naive_exploration as naive
 
 states = arrays(
@@ -117,6 +119,50 @@ def test_path_costs_treat_unknown_as_obstacle():
     assert cs.blocked[state == UNKNOWN].all()
     gain = information_gain(state, (0.0, 0.0), 0.1, [[1.95, 1.0], [0.35, 1.0]], 0.5)
     assert gain[0] > 5 * gain[1]
+
+
+def _corridor():
+    """A known corridor 4 m long, unknown beyond both ends; its known space."""
+    state = np.full((10, 60), UNKNOWN, np.int8)
+    state[2:8, 10:50] = FREE
+    state[1, 10:50] = state[8, 10:50] = OCCUPIED
+    return state, known_space(state, (0.0, 0.0), 0.1, 0.1)
+
+
+def test_path_costs_count_the_turn_before_setting_off():
+    state, cs = _corridor()
+    regions = frontier_regions(frontier_cells(state), (0.0, 0.0), 0.1, 3)
+    assert len(regions) == 2
+    here = (3.0, 0.5)  # the middle, facing east (+x)
+    plain, targets = frontier_costs(cs, here, regions)
+    east = int(np.argmax(targets[:, 0]))
+    west = 1 - east
+    turned, same = frontier_costs(cs, here, regions, heading=0.0, turn=0.5)
+    np.testing.assert_array_equal(same, targets)
+    # setting off east costs (almost) nothing more, west half a turn more
+    assert turned[east] - plain[east] == pytest.approx(0.0, abs=0.06)
+    assert turned[west] - plain[west] == pytest.approx(0.5 * np.pi, abs=0.06)
+    with pytest.raises(ValueError):  # a given field has no parents to walk
+        frontier_costs(cs, here, regions, cost_field(cs, here), heading=0.0, turn=0.5)
+
+
+def test_departure_matches_walking_the_parents():
+    state, cs = _corridor()
+    state[2:6, 30] = OCCUPIED  # a wall across but for its top: paths bend
+    cs = known_space(state, (0.0, 0.0), 0.1, 0.1)
+    here = (2.0, 0.45)
+    field, parent = cost_field(cs, here, parents=True)
+    ends = np.argwhere(np.isfinite(field))[::37]
+    got = departure(cs, parent, here, ends, 0.5)
+    for (i, j), a in zip(ends, got, strict=True):  # one cell after another
+        at = (int(i), int(j))
+        while True:
+            nxt = divmod(int(parent[at]), parent.shape[1])
+            if parent[at] < 0 or np.hypot(*(cs.to_metres(nxt) - here)) < 0.5:
+                break
+            at = nxt
+        x, y = cs.to_metres(at)
+        assert a == pytest.approx(np.arctan2(y - here[1], x - here[0]))
 
 
 def test_open_frontier_drops_what_faces_a_closed_pocket_only():

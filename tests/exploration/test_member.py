@@ -12,7 +12,9 @@ from robotlib.exploration.member import (
     count_echoes,
     escape,
     keeps_clear,
+    look_round,
     mark_contact,
+    mark_stuck,
 )
 from robotlib.mapping import OccupancyGrid
 from robotlib.world import seeded_world
@@ -67,6 +69,28 @@ def test_a_stall_blocks_the_nearest_return_on_the_side_driven_to():
     before = echoes.copy()
     mark_contact(echoes, g, r, 0.0)  # not driving: no contact to place
     assert (echoes == before).all()
+
+
+def test_only_the_first_robot_looks_round_and_half_a_turn_does_with_a_laser():
+    assert look_round(0, "laser") == pytest.approx(math.pi)  # 180 degree field
+    assert look_round(0, "sonar") == pytest.approx(2 * math.pi)
+    assert look_round(1, "laser") == look_round(2, "sonar") == 0.0
+
+
+def test_a_stuck_robot_blocks_the_returns_that_stopped_it_but_not_a_teammate():
+    g, echoes = _wall_at_x2()
+    r = SimpleNamespace(
+        pose=np.array([1.0, 1.0, 0.0]),
+        returns=np.array([[1.32, 1.05], [1.05, 1.35], [1.9, 1.05], [0.75, 0.95]]),
+    )
+    mark_stuck(echoes, g, r, np.array([[0.45, 0.95]]))  # a teammate behind
+    assert echoes[10, 13] >= 2 and echoes[13, 10] >= 2  # within reach: blocked
+    assert echoes[10, 19] == 0  # 0.9 m off: not what stopped it
+    assert echoes[9, 7] == 0  # on the teammate's body: no wall
+    assert int((echoes > 0).sum()) == 2
+    r.returns = np.zeros((0, 2))
+    mark_stuck(echoes, g, r, np.zeros((0, 2)))  # nothing seen: nothing marked
+    assert int((echoes > 0).sum()) == 2
 
 
 def test_an_echo_the_laser_sees_past_marks_nothing():

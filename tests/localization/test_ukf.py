@@ -127,3 +127,26 @@ def test_ukf_tracks_the_office_and_is_not_overconfident(laser):
     errs, ne = _run(log, log.truth[0] + np.array([0.2, -0.2, 0.05]), P, laser, 3)
     assert errs.mean() < 0.10
     assert np.mean(ne <= nis_band(3)[1]) >= 0.9
+
+
+def test_laser_update_iterates_to_the_truth_where_one_unscented_step_does_not():
+    """Office drive 10's first scan from (-0.33, -0.22, -0.08) off the truth.
+
+    One unscented step (at 5 cm per beam, the earlier default, or at the
+    sensor's 5.8 mm) ends 0.43 m off, its covariance sure of it; the iterated
+    posterior linearisation lands within a centimetre, consistently.
+    """
+    log = record_drive("office", seed=10, every=5, laser=True)
+    truth, scan = log.truth[0], log.laser[0]
+    start = truth + np.random.default_rng(10).normal(size=3) * [0.3, 0.3, 0.1]
+    P = np.diag([0.09, 0.09, 0.01])
+    one, P1, _, _ = ukf_laser_update(
+        start, P, scan, log.world, log.laser_model, iterations=1, refuse=0.0
+    )
+    assert math.hypot(*(one[:2] - truth[:2])) > 0.3
+    assert nees(one, P1, truth) > nis_band(3)[1]
+    mu, P2, _, used = ukf_laser_update(start, P, scan, log.world, log.laser_model)
+    assert math.hypot(*(mu[:2] - truth[:2])) < 0.01 and abs(mu[2] - truth[2]) < 0.005
+    assert used >= 10 and nees(mu, P2, truth) < nis_band(3)[1]
+    with pytest.raises(ValueError, match="iterations"):
+        ukf_laser_update(start, P, scan, log.world, log.laser_model, iterations=0)

@@ -202,6 +202,7 @@ def test_scans_between_keyframes_are_matched_not_dead_reckoned():
     np.testing.assert_array_equal(run[0].graph.poses, run[1].graph.poses)
 
 
+@pytest.mark.slow  # ~17 s: 400 scans matched into a pose graph
 def test_graph_slam_on_the_head_of_the_intel_log():
     odo, scans, angles, times = _intel_head()
     rel = read_relations(DATA / "intel_head.relations")

@@ -20,7 +20,6 @@ from __future__ import annotations
 import json
 import os
 import re
-import subprocess
 import sys
 import sysconfig
 import zipfile
@@ -29,7 +28,7 @@ from pathlib import Path
 import pytest
 
 from robotlib.course.bundle import build_wheel
-from tests import background
+from tests import background, contention
 
 ROOT = Path(__file__).resolve().parents[2]
 LAB0 = "lab0_getting_started.ipynb"
@@ -38,14 +37,8 @@ pytestmark = pytest.mark.slow
 
 
 def _run(cmd, cwd, env, timeout=600):
-    proc = subprocess.run(
-        [str(c) for c in cmd],
-        cwd=cwd,
-        env=env,
-        capture_output=True,
-        text=True,
-        timeout=timeout,
-    )
+    """Run ``cmd`` (``timeout`` in quiet seconds: `tests.contention`); its output."""
+    proc = contention.run(cmd, timeout, cwd=cwd, env=env)
     assert proc.returncode == 0, f"{cmd}\n{proc.stdout[-4000:]}\n{proc.stderr[-4000:]}"
     return proc.stdout
 
@@ -169,17 +162,15 @@ def test_course_folder_then_lab0_headless(student, prepared):
     assert "compiling kernels" in first.stderr
     listing = _run([robotlib_cmd, "warmup", "--list"], cwd=course, env=env)
     parts = [line.split(":")[0] for line in listing.splitlines()]
-    warm = subprocess.run(
-        [robotlib_cmd, "warmup"], cwd=course, env=env, capture_output=True,
-        text=True, timeout=900,
-    )  # fmt: skip
+    warm = contention.run([robotlib_cmd, "warmup"], 900, cwd=course, env=env)
     assert warm.returncode == 0 and "compiling kernels" not in warm.stderr
     timed = [line.split()[0] for line in warm.stdout.splitlines()]
     assert timed == [*parts, "all"], warm.stdout
     (course / "pytest.ini").write_text("[pytest]\n")
     nbval = [
         python, "-m", "pytest", "-p", "nbval.plugin", "-p", "no:cacheprovider",
-        "--nbval-lax", "--nbval-current-env", "--nbval-cell-timeout=120",
+        "--nbval-lax", "--nbval-current-env",
+        f"--nbval-cell-timeout={120 * contention.factor():.0f}",  # 120 quiet s
         "-c", course / "pytest.ini", f"--rootdir={course}", "-q", LAB0,
     ]  # fmt: skip
     report = _run(nbval, cwd=course, env=env, timeout=900)

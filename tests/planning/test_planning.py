@@ -174,6 +174,26 @@ def test_octile_is_admissible(case):
         assert field[cell] == pytest.approx(free_ref.get(cell, math.inf), abs=1e-9)
 
 
+@SETTINGS
+@given(grids(max_side=8))
+def test_cost_field_parents_lead_down_to_the_goal(case):
+    cs, _, g = case
+    field, parent = cost_field(cs, centre(cs, g), 8, parents=True)
+    nx = cs.shape[1]
+    assert parent[g] == -1
+    for cell in np.ndindex(cs.shape):
+        if not np.isfinite(field[cell]):
+            assert parent[cell] == -1
+            continue
+        at, steps = cell, 0
+        while at != g:  # each step is to a neighbour nearer the goal
+            nxt = divmod(int(parent[at]), nx)
+            assert max(abs(nxt[0] - at[0]), abs(nxt[1] - at[1])) == 1
+            assert field[nxt] < field[at]
+            at, steps = nxt, steps + 1
+            assert steps <= field.size
+
+
 @settings(max_examples=40, deadline=None)
 @given(st.integers(0, 2**32 - 1), st.floats(0.0, 4.0))
 def test_inflate_matches_reference(seed, r):
