@@ -12,15 +12,21 @@ each sandbox from ``/proc``:
   has and how many of them are running;
 - a limit is charged ``max(CPU time, wall time - time waiting for a CPU)``:
   busy work counts by the CPU it used, sleeping or blocking counts by the
-  wall clock, and time the machine made the student wait counts for nothing.
+  wall clock, and time the machine made the student wait counts for nothing
+  (`thread_wait` lets the grader leave out its own waits too: a reply read
+  late is timed when it was written).
 
 A submission's processes share one control group per grading slot where
 the machine lets the grader make them (`Share`, cgroup v2 or v1, as root):
-equal ``cpu`` weight per submission, however many processes each forks,
-and a ``pids`` limit. Without control groups the CPU-time limits still
-hold (a process that forks CPU hogs spends its own budget faster) and the
-grader lowers the priority of a sandbox running more busy processes than
-`HOGS` (`Share.tame`).
+one core at most (a CFS quota: time throttled counts as waiting), an equal
+``cpu`` weight however many processes it forks, and a ``pids`` limit.
+Without control groups the CPU-time limits still hold (a process that forks
+CPU hogs spends its own budget faster) and the grader lowers the priority
+of a sandbox running more busy processes than `HOGS` (`Share.tame`). A
+process is busy when it has been running (or ready to run) in every sample
+since an earlier one and has used CPU time since then (`usage`'s
+``since``): processes that wait for a CPU to start and then sleep (a flood
+of ``sleep``) are not, however long a loaded machine makes them wait.
 
 Imports only the standard library.
 """
@@ -29,15 +35,25 @@ from __future__ import annotations
 
 import os
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
-__all__ = ["HOGS", "Share", "Usage", "descendants", "find_worker", "usage", "stat"]
+__all__ = [
+    "HOGS",
+    "Share",
+    "Usage",
+    "descendants",
+    "find_worker",
+    "stat",
+    "thread_wait",
+    "usage",
+    "waited",
+]
 
 TICK = os.sysconf("SC_CLK_TCK")
 
 HOGS = 2
-"""Running processes a sandbox may have at once before it counts as forking hogs."""
+"""Busy processes a sandbox may have at once before it counts as forking hogs."""
 
 
 def stat(pid: int) -> list[bytes] | None:
@@ -112,16 +128,22 @@ class Usage:
     processes : int
         Processes in the tree.
     running : int
-        Processes in the tree running or ready to run.
+        Busy processes of the tree: running or ready to run in this sample
+        and every one since they were first seen so, with CPU time used
+        since (busy loops, not processes waiting to start).
+    since : dict
+        Process id to its own CPU time (clock ticks) when first seen running
+        in the samples up to this one (pass it to the next `usage`).
     """
 
     cpu: float = 0.0
     wait: float = 0.0
     processes: int = 0
     running: int = 0
+    since: dict[int, int] = field(default_factory=dict)
 
 
-def _wait(pid: int | None) -> float:
+def _wait(pid: int | str | None) -> float:
     if pid is None:
         return 0.0
     try:
@@ -131,18 +153,38 @@ def _wait(pid: int | None) -> float:
         return 0.0  # no scheduler statistics: wall time counts in full
 
 
-def usage(pid: int, worker: int | None = None) -> Usage:
-    """Sample the tree below (and including) ``pid``; ``worker``: its main process."""
-    ticks, procs, running = 0, 0, 0
+def waited(pid: int | None) -> float:
+    """Time process ``pid``'s main thread has waited for a CPU while runnable, s."""
+    return _wait(pid)
+
+
+def thread_wait() -> float:
+    """Time the calling thread has waited for a CPU while runnable, s."""
+    return _wait("thread-self")
+
+
+def usage(
+    pid: int, worker: int | None = None, since: dict[int, int] | None = None
+) -> Usage:
+    """Sample the tree below (and including) ``pid``; ``worker``: its main process.
+
+    ``since``: the previous sample's `Usage.since` (None: the first sample,
+    in which no process is busy yet).
+    """
+    since = since or {}
+    ticks, procs, running, now = 0, 0, 0, {}
     for p in [pid, *descendants(pid)]:
         fields = stat(p)
         if fields is None:
             continue
         procs += 1
-        running += fields[0] == b"R"
         # utime, stime, cutime, cstime: fields 14-17 of stat, 12-15 here
         ticks += sum(int(x) for x in fields[11:15])
-    return Usage(ticks / TICK, _wait(worker), procs, running)
+        if fields[0] == b"R":
+            own = int(fields[11]) + int(fields[12])
+            now[p] = since.get(p, own)
+            running += own > now[p]
+    return Usage(ticks / TICK, _wait(worker), procs, running, now)
 
 
 def find_worker(pid: int, argv: list[str]) -> int | None:
@@ -175,7 +217,7 @@ def _controllers() -> list[tuple[Path, str]]:
 
 
 class Share:
-    """A grading slot's control groups: an equal CPU share and a process limit.
+    """A grading slot's control groups: one core at most, equal weight, a pid limit.
 
     Parameters
     ----------
@@ -197,8 +239,12 @@ class Share:
                 group.mkdir(exist_ok=True)
                 if kind in ("pids", "v2"):
                     (group / "pids.max").write_text(str(processes))
+                if kind == "v2":
+                    (group / "cpu.max").write_text("100000 100000")  # one core
                 if kind == "cpu":
                     (group / "cpu.shares").write_text("1024")
+                    period = (group / "cpu.cfs_period_us").read_text().strip()
+                    (group / "cpu.cfs_quota_us").write_text(period)  # one core
             except OSError:
                 continue  # not ours to change (a container): the CPU limits hold
             self.groups.append(group)

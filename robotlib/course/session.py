@@ -23,7 +23,9 @@ time not spent waiting for a CPU, so a busy machine or a classmate's CPU
 hogs cost a student nothing. Wall time only bounds it from behind
 (``Options.backstop`` times each limit): a submission that reaches it
 is "overloaded" (to grade again), never scored. A student process running
-more than `cpu.HOGS` busy processes at once is flagged and slowed down.
+more than `cpu.HOGS` busy processes at once is flagged; its slot's control
+group holds it to one core (without one, it is slowed down). One that runs
+up to its process limit (a fork bomb, a flood of processes) is flagged.
 
 Killing a sandbox's first process ends every process in it (PID namespace);
 without the sandbox every process carrying the job's id is killed.
@@ -100,7 +102,7 @@ def run_submission(
     gids = [c["gid"] for c in plan.check_specs]
     share = cpu.Share(slot, 2 * opts.limits.processes + 64, opts.sandbox)
     made: list[Proc] = []  # every process started, for the CPU time spent
-    hog = {"seen": 0, "flagged": False}
+    hog = {"seen": 0, "flagged": False, "crowd": False}
 
     def start_student():
         gen["student"] += 1
@@ -185,9 +187,9 @@ def run_submission(
         return f"timed out after {limit:.0f} s of CPU time ({slower})"
 
     def forward(item):
-        header, payload, _ = item
-        base = check_time(time.monotonic())  # the check's time before this call
-        st["pending"] = (header, payload, base, Clock.start(procs["student"]))
+        header, payload, sent = item
+        base = check_time(sent)  # the check's time before this call
+        st["pending"] = (header, payload, base, Clock.start(procs["student"]), sent)
         if not procs["student"].post(header, payload):
             student_died("the process of your code had ended")
 
@@ -207,7 +209,10 @@ def run_submission(
             out.checks.setdefault(gid, {"status": "failed", "error": _OVERLOADED})
 
     def watch_hogs(proc: Proc | None, final: bool = False):
-        """Flag (once) and slow down a student process running CPU hogs.
+        """Flag (once) a student process running CPU hogs; slow it down if need be.
+
+        Its slot's control group holds it to one core already; without one
+        its processes get the lowest priority (`cpu.Share.tame`).
 
         Seen in two samples after its first second (the sandbox's wrappers
         start it), or still running when the process is ended (``final``:
@@ -221,14 +226,25 @@ def run_submission(
             return  # its last sample, counted already
         hog["seen"] += 2 if final else 1
         if hog["seen"] >= 2:
-            if proc.alive:
+            if proc.alive and not share.groups:
                 cpu.Share.tame(proc.popen.pid)
             if not hog["flagged"]:
                 hog["flagged"] = True
+                how = "held to one core" if share.groups else "slowed down"
                 out.flags.append(
                     f"ran {proc.last.running} busy processes at once "
-                    "(CPU hogs): slowed down, their CPU time charged to it"
+                    f"(CPU hogs): {how}, their CPU time charged to it"
                 )
+
+    def watch_processes(proc: Proc | None):
+        """Flag (once) a student process tree that ran up to its process limit."""
+        most = opts.limits.processes
+        if proc is None or proc.last.processes < 0.9 * most or hog["crowd"]:
+            return
+        hog["crowd"] = True
+        out.flags.append(
+            f"started {proc.last.processes} processes at once (the limit is {most})"
+        )
 
     sampled = weighed = 0.0
     try:
@@ -245,6 +261,7 @@ def run_submission(
                     if p is not None:
                         p.sample()
                 watch_hogs(procs["student"])
+                watch_processes(procs["student"])
             if now - weighed >= 1.0 and procs["student"] is not None:
                 weighed = now
                 p = procs["student"]
@@ -301,7 +318,7 @@ def run_submission(
                 start_check(nxt)
                 continue
             try:
-                role, g, header, payload = events.get(timeout=0.2)
+                role, g, header, payload, arrived = events.get(timeout=0.2)
             except queue.Empty:
                 continue
             if g != gen[role] or procs[role] is None:
@@ -322,7 +339,7 @@ def run_submission(
                         item, st["queued"] = st["queued"], None
                         # the wait for the restart is not the check's time
                         ck["clock"] = Clock.start(procs["check"])
-                        forward(item)
+                        forward((*item[:2], time.monotonic()))
                 elif op == "tripwire":
                     hit = (
                         str(header.get("function")),
@@ -332,9 +349,11 @@ def run_submission(
                     if hit not in out.tripwires:
                         out.tripwires.append(hit)
                 elif op == "result" and st["pending"] is not None:
-                    call = st["pending"][3]
-                    ck["clock"].paused += time.monotonic() - call.wall
-                    ck["calls"] += call.charged(time.monotonic())
+                    call, sent = st["pending"][3:]
+                    # the check waits from its call's frame to this reply's
+                    # relay; the student is charged until it wrote the reply
+                    ck["clock"].paused += time.monotonic() - sent
+                    ck["calls"] += call.charged(arrived)
                     st["pending"] = None
                     procs["check"].post(
                         {
@@ -354,12 +373,12 @@ def run_submission(
                     ck["clock"] = Clock.start(procs["check"])
                     ck["calls"] = 0.0
                 elif op == "end":
-                    header["cpu"] = round(check_time(time.monotonic()), 3)
+                    header["cpu"] = round(check_time(arrived), 3)
                     out.checks.setdefault(str(header.get("gid")), header)
                     ck["cur"], ck["clock"] = None, Clock.start(procs["check"])
                     ck["calls"] = 0.0
                 elif op in ("call", "get"):
-                    item = (header, payload, time.monotonic())
+                    item = (header, payload, arrived)
                     if procs["student"] is None:
                         procs["check"].post(
                             {
@@ -372,7 +391,7 @@ def run_submission(
                     elif st["ready"]:
                         forward(item)
                     else:  # its time so far kept; the wait not charged
-                        ck["calls"] = check_time(time.monotonic())
+                        ck["calls"] = check_time(arrived)
                         st["queued"] = item
                 elif op == "done":
                     ck["done"] = True
@@ -401,6 +420,7 @@ def run_submission(
             if p is not None:
                 p.kill()
         watch_hogs(procs["student"], final=True)
+        watch_processes(procs["student"])
         share.close()
         out.cpu = sum(p.last.cpu for p in made)
         logf.close()

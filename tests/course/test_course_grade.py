@@ -313,6 +313,7 @@ def test_statuses_and_reasons(graded):
     assert "wrong result: expected" in rows["constant_mean"]["notes"]
     assert "assertion failed" in rows["patched"]["notes"]
     assert "reads notebooks" in rows["escape"]["flags"]
+    assert "processes at once (the limit is 256)" in rows["exhaust"]["flags"]
 
 
 @pytest.mark.slow
@@ -375,6 +376,8 @@ def test_records_resume_and_manual_scores(graded):
     t0 = time.monotonic()
     proc = _cli(folder, out, "--manual", str(manual))
     assert proc.returncode == 0, proc.stderr
+    said = proc.stderr  # nothing graded is not "graded 17"
+    assert "graded 0 submissions" in said and "kept from earlier runs" in said, said
     with open(out, newline="") as f:
         again = {r["student"]: r for r in csv.DictReader(f)}
     assert again["solution"]["total"] == "5" and again["solution"]["why"] == "1"

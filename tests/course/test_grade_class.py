@@ -17,6 +17,7 @@ import nbformat
 import pytest
 
 from robotlib.course import grade as g
+from robotlib.course.cache import reference_key
 from robotlib.course.gradebook import Again, Records
 from robotlib.course.notebooks import read_notebook, release_notebook, write_notebook
 from robotlib.course.submissions import check_lab, pick
@@ -110,3 +111,12 @@ def test_wrong_lab_unknown_student_and_missing_lab_say_what_to_do(tmp_path):
     with pytest.raises(g.GradeError, match="labs: .*lab4_navigation"):
         g.solution_path("lab4")
     assert json.loads(paths[0].read_text())["metadata"]["robotlib"]["lab"] == "lab2"
+
+
+def test_the_reference_run_is_kept_by_the_solution_s_content():
+    """A saved reference run is reused while the solution is the same text."""
+    text = TINY.read_text(encoding="utf-8")
+    key = reference_key(text, "tiny")
+    assert reference_key(text, "tiny") == key
+    assert reference_key(text.replace("def add", "def add ", 1), "tiny") != key
+    assert reference_key(text, "tiny2") != key

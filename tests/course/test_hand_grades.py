@@ -128,6 +128,7 @@ def test_a_run_without_manual_keeps_the_hand_grades(tmp_path):
 
     rows, said = run()
     assert rows["ann"]["why"] == "" and "written answers to grade" in said
+    assert "1 of 2 have full marks on the automatic checks" in said, said
     sheet = out.with_name("gb-manual.csv")
     lines = _rows(sheet)
     assert [r["score"] for r in lines] == ["", ""]
