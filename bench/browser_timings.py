@@ -382,6 +382,25 @@ def table(timings: list[Timing], silent: float = 5.0) -> str:
     return out
 
 
+def report(timings, args, run: str, warm_s, warm_load, t_all) -> str:
+    """The whole report (written to ``--out``, with its JSON, if given)."""
+    text = (
+        f"# What a student waits for, in JupyterLab in headless Chromium\n\n"
+        f"`bench/browser_timings.py`, commit {run}, "
+        f"{time.monotonic() - t_all:.0f} s in all; `robotlib warmup` first: "
+        f"{warm_s:.1f} s (load {warm_load:.1f}). One notebook at a time; times from "
+        "opening the notebook (first figure: kernel start included) or from Run All; "
+        "silent: the longest a running cell's output area did not change; CPU s: "
+        "the kernel's CPU time over the same stretch; load: 1-minute average.\n\n"
+        + table(timings, args.silent)
+    )
+    if args.out:
+        args.out.write_text(text)
+        rows = [vars(t) for t in timings]
+        args.out.with_suffix(".json").write_text(json.dumps(rows, indent=1))
+    return text
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", type=Path, help="write the Markdown table here too")
@@ -427,26 +446,13 @@ def main(argv: list[str] | None = None) -> int:
                         lab, browser, page, path, args.timeout, compiled, args.shots
                     )
                     timings.append(tm)
-                    print(table([tm]).splitlines()[-1], flush=True)
+                    print(table([tm]).splitlines()[2], flush=True)
+                    report(timings, args, commit, warm_s, warm_load, t_all)  # so far
             finally:
                 browser.close()
         finally:
             lab.close()
-    text = (
-        f"# What a student waits for, in JupyterLab in headless Chromium\n\n"
-        f"`bench/browser_timings.py`, commit {commit}, started {began}, "
-        f"{time.monotonic() - t_all:.0f} s in all; `robotlib warmup` first: "
-        f"{warm_s:.1f} s (load {warm_load:.1f}). One notebook at a time; times from "
-        "opening the notebook (first figure: kernel start included) or from Run All; "
-        "silent: the longest a running cell's output area did not change; CPU s: "
-        "the kernel's CPU time over the same stretch; load: 1-minute average.\n\n"
-        + table(timings, args.silent)
-    )
-    print(text)
-    if args.out:
-        args.out.write_text(text)
-        rows = [vars(t) for t in timings]
-        args.out.with_suffix(".json").write_text(json.dumps(rows, indent=1))
+    print(report(timings, args, f"{commit}, started {began}", warm_s, warm_load, t_all))
     return 0
 
 

@@ -344,3 +344,98 @@ def fit_curvature(L, origin, res, pose, mount, angles, ranges, max_range, h):
         + score(x - h, y - h)
     ) / (4 * h**2)  # fmt: skip
     return np.array([cxx, cxy, cyy])
+
+
+def field_score(L, origin, res, pose, points, normals, occ, sigma, p_rand):
+    """Likelihood-field log-likelihood of robot-frame end points (B, 2) at pose.
+
+    Each end point: the nearest occupied cell centre (log-odds above ``occ``)
+    among the whole grid's cells whose row and column are within one of the
+    end point's; the distance along the end point's normal (B, 2; robot
+    frame), or whole where the normal is (0, 0).
+    """
+    gx, gy = cell_centres(L.shape, origin, res)
+    rows, cols = np.indices(L.shape)
+    x, y, th = pose
+    c, s = math.cos(th), math.sin(th)
+    total = 0.0
+    for (bx, by), (nx, ny) in zip(points, normals, strict=True):
+        px, py = x + c * bx - s * by, y + s * bx + c * by
+        i = math.floor((py - origin[1]) / res)
+        j = math.floor((px - origin[0]) / res)
+        near = (abs(rows - i) <= 1) & (abs(cols - j) <= 1) & (L > occ)
+        if nx == 0 and ny == 0:
+            d2 = (gx - px) ** 2 + (gy - py) ** 2
+        else:
+            d2 = ((gx - px) * (c * nx - s * ny) + (gy - py) * (s * nx + c * ny)) ** 2
+        d2 = d2[near]
+        p = math.exp(-d2.min() / (2 * sigma**2)) if d2.size else 0.0
+        total += math.log(p_rand + (1 - p_rand) * p)
+    return total
+
+
+def scan_normals(mount, angles, ranges, max_range, bend):
+    """Each return's end point and normal (robot frame), one beam at a time."""
+    pts, nrm = [], []
+    ends = [
+        (
+            mount[0] + z * math.cos(mount[2] + a),
+            mount[1] + z * math.sin(mount[2] + a),
+        )
+        for a, z in zip(angles, ranges, strict=True)
+    ]
+    for r, z in enumerate(ranges):
+        if z >= max_range:
+            continue
+        pts.append(ends[r])
+        n = (0.0, 0.0)
+        if 0 < r < len(ranges) - 1 and max(ranges[r - 1], ranges[r + 1]) < max_range:
+            (ax, ay), (bx, by) = ends[r - 1], ends[r + 1]
+            length = math.hypot(bx - ax, by - ay)
+            if 0 < length < 2.0:
+                cand = (-(by - ay) / length, (bx - ax) / length)
+                px, py = ends[r]
+                if abs((px - ax) * cand[0] + (py - ay) * cand[1]) <= bend:
+                    n = cand
+        nrm.append(n)
+    return np.array(pts), np.array(nrm)
+
+
+def motion_log_prior(q, u, sig):
+    """Gaussian log-density (less its constant) of pose q about u, u's frame."""
+    dx, dy = q[0] - u[0], q[1] - u[1]
+    along = math.cos(u[2]) * dx + math.sin(u[2]) * dy
+    across = -math.sin(u[2]) * dx + math.cos(u[2]) * dy
+    turn = math.atan2(math.sin(q[2] - u[2]), math.cos(q[2] - u[2]))
+    z = np.array([along, across, turn]) / np.asarray(sig)
+    return -0.5 * float(z @ z)
+
+
+def fit_pose(
+    L, origin, res, pred, points, normals, field, temperature, sig, steps, levels
+):
+    """Hill-climb ``pred`` on ``temperature * field_score + motion_log_prior``.
+
+    ``field = (occ, sigma, p_rand)``; the kernel's rule: the best of six
+    moves while one raises the objective (at most 20), then halve the steps.
+    """
+
+    def objective(p):
+        ll = field_score(L, origin, res, p, points, normals, *field)
+        return temperature * ll + motion_log_prior(p, pred, sig)
+
+    p = [float(v) for v in pred]
+    best = temperature * field_score(L, origin, res, p, points, normals, *field)
+    sxy, sth = steps
+    for _ in range(levels):
+        for _ in range(20):
+            moves = [(sxy, 0, 0), (-sxy, 0, 0), (0, sxy, 0), (0, -sxy, 0)]
+            moves += [(0, 0, sth), (0, 0, -sth)]
+            cands = [[p[0] + dx, p[1] + dy, p[2] + dt] for dx, dy, dt in moves]
+            vals = [objective(q) for q in cands]
+            k = int(np.argmax(vals))
+            if vals[k] <= best:
+                break
+            best, p = vals[k], cands[k]
+        sxy, sth = sxy / 2, sth / 2
+    return np.array([p[0], p[1], math.atan2(math.sin(p[2]), math.cos(p[2]))])

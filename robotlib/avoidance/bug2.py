@@ -4,9 +4,11 @@ The m-line runs from where the robot starts (its first odometry pose) to the
 goal. Bug2 drives along it towards the goal until the front sonars see an
 obstacle (the hit point), then follows the obstacle's boundary (a
 `WallFollower`, the obstacle on the left) until it meets the m-line again
-nearer the goal than the hit point, and leaves the boundary there. If it
-comes back to the hit point without leaving, the goal is unreachable and it
-reports a local minimum.
+nearer the goal than the hit point, with the way to the goal open, and
+leaves the boundary there. If it comes back to the hit point without
+leaving, having followed the boundary for at least ``round_trip`` m (not
+just turned about in a pocket), the goal is unreachable and it reports a
+local minimum.
 
 Imports: `robotlib.avoidance.base` and `reactive`; never plotting.
 """
@@ -38,6 +40,10 @@ class Bug2(Controller):
         Speed along the m-line, m/s.
     follow_distance : float
         Distance kept from the boundary, m.
+    round_trip : float
+        Boundary followed, m, before a return to the hit point counts as
+        having gone round the obstacle (3.0: in a U-trap's pocket the wall
+        follower turned about within 2 m and came back past the hit point).
     tolerance, max_speed, max_turn : float
         See `Controller`.
 
@@ -58,6 +64,7 @@ class Bug2(Controller):
         line_tolerance: float = 0.15,
         speed: float = 0.4,
         follow_distance: float = 0.6,
+        round_trip: float = 3.0,
         tolerance: float = 0.3,
         max_speed: float = 0.5,
         max_turn: float = math.radians(90.0),
@@ -65,6 +72,7 @@ class Bug2(Controller):
         self.hit = float(hit)
         self.line_tolerance = float(line_tolerance)
         self.speed = float(speed)
+        self.round_trip = float(round_trip)
         self.follower = WallFollower(
             side="left",
             distance=follow_distance,
@@ -80,6 +88,8 @@ class Bug2(Controller):
         self.start = None
         self.hit_point = None
         self._left_hit = False
+        self._followed = 0.0
+        self._last = None
         self.follower.reset()
 
     def _on_m_line(self, xy: np.ndarray) -> bool:
@@ -98,29 +108,49 @@ class Bug2(Controller):
         bearing, dist = self.goal_direction(pose)
         ahead = min(sonar[2], sonar[3], sonar[4], sonar[5])
         if self.mode == "goal":
-            if ahead < self.hit and abs(bearing) < math.pi / 2:
+            # an echo beyond the goal does not block the way to it
+            if ahead < min(self.hit, dist - 0.1) and abs(bearing) < math.pi / 2:
                 self.mode = "follow"
                 self.hit_point = xy.copy()
                 self._hit_dist = dist
                 self._left_hit = False
+                self._followed, self._last = 0.0, xy.copy()
                 self.follower.reset()
             else:
                 w = 1.5 * bearing
                 v = self.speed * max(0.0, math.cos(bearing)) * min(1.0, dist)
                 return v, w
         # following the boundary
+        self._followed += float(np.hypot(*(xy - self._last)))
+        self._last = xy.copy()
         away = float(np.hypot(*(xy - self.hit_point)))
         if away > 0.5:
             self._left_hit = True
-        elif self._left_hit and away < 0.3:
+        elif self._left_hit and away < 0.3 and self._followed > self.round_trip:
             self.status = LOCAL_MINIMUM  # round the obstacle and back: no way
             return 0.0, 0.0
         if (
             self._left_hit
             and dist < self._hit_dist - 0.3
             and self._on_m_line(xy)
-            and abs(bearing) < math.pi / 2
+            and self._goal_side_free(sonar, bearing)
         ):
             self.mode = "goal"
             return 0.0, 1.5 * bearing
         return self.follower.command(sonar, pose)
+
+    def _goal_side_free(self, sonar, bearing: float) -> bool:
+        """Whether the robot can turn from the boundary towards the goal.
+
+        The boundary is on the left: a goal to the right (or behind) lies
+        away from it, and rounding an obstacle the robot meets the m-line
+        again with the goal square to its right (at -90 degrees, where a
+        test on ``|bearing| < 90`` degrees failed about half the time and
+        sent it round the obstacle back to the hit point). A goal ahead or
+        to the left needs the sonars facing it (within 25 degrees) clear
+        beyond ``hit``; one further round to the left, no sonar sees.
+        """
+        if bearing <= 0.0:
+            return True
+        facing = np.abs(self.sensors[:, 2] - bearing) <= math.radians(25.0)
+        return bool(facing.any() and np.all(sonar[facing] > self.hit))

@@ -28,8 +28,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.description = "Seeded navigation runs in the office with unmapped boxes."
     parser.add_argument("--runs", type=int, default=10)
     parser.add_argument(
-        "--avoider", choices=["stop", "vfh"], default="stop",
-        help="StopAndTurn (navigate's default) or robotlib.avoidance.VFH",
+        "--avoider", choices=["stop", "vfh"], default="vfh",
+        help="robotlib.avoidance.VFH (navigate's default) or StopAndTurn",
     )  # fmt: skip
     parser.add_argument("--json", metavar="FILE", help="write the results here")
 

@@ -8,7 +8,9 @@ Each particle is a pose and a log-odds occupancy grid of its own. A step
 2. weigh it by the scan's likelihood in its own map (`weigh_laser`: the
    end-point model; `weigh_sonar`: a beam model, the echo against the
    nearest confirmed wall in the cone; both raised to a ``temperature``
-   because beams are not independent);
+   because beams are not independent); with the laser and
+   ``proposal="gaussian"``, GMapping's scan-matched proposal
+   (`GridFastSLAM.propose_laser`, `robotlib.mapping.proposal`) does 1 and 2;
 3. when the effective sample size falls below ``resample_below * N``,
    resample (low-variance) and copy the survivors' maps over the maps of
    the particles that died, in place, so the filter holds exactly N maps
@@ -36,10 +38,23 @@ from ..localization.resampling import effective_sample_size, systematic_resample
 from ..sensing import SonarModel
 from ..sensing.laser import LaserModel, laser_poses
 from ..world import World
-from . import _kernels, _kernels_copy, _kernels_match, _kernels_window
+from . import (
+    _kernels,
+    _kernels_copy,
+    _kernels_match,
+    _kernels_proposal,
+    _kernels_window,
+)
 from .fastslam_settings import FastSLAMSettings
-from .motion import sample_arc_motion
+from .motion import apply_arc, arc_increment, arc_noise_cov, sample_arc_motion
 from .occupancy import OccupancyGrid
+from .proposal import (
+    gaussian_draw,
+    motion_log_prior,
+    proposal_offsets,
+    scan_normals,
+    to_map_frame,
+)
 from .resampling import normalise_log_weights, resample_maps, resample_parents
 from .sharing import MapDiff
 from .sonar_walls import incidence_marks, sonar_groups, update_sonar_marks
@@ -278,6 +293,43 @@ class GridFastSLAM:
         )
         return constrained_fit(poses, out, curv, s.match_degenerate)
 
+    def propose_laser(self, odo_prev, odo_now, scan) -> np.ndarray:
+        """Draw every particle's pose from GMapping's proposal; return ``log eta``.
+
+        Moves `particles` (`robotlib.mapping.proposal`: the odometry's
+        prediction, fitted to the scan in the particle's own map with the
+        motion prior, then a draw from the Gaussian about the fit). Returns
+        the log weight factors (N,): the proposal's normalisers, the
+        likelihood's temperature included.
+        """
+        s = self.settings
+        ds, dth = arc_increment(odo_prev, odo_now)
+        pred = apply_arc(self.particles, ds, dth)
+        sd = np.sqrt(np.diag(arc_noise_cov(ds, dth, s.motion, s.inflate)))
+        fxy, fth = s.proposal_floor
+        sig = np.array([max(sd[0], fxy), max(sd[0], fxy), max(sd[1], fth)])
+        pts, nrm = scan_normals(
+            self.laser.mount, self._angles(), scan, self.laser.max_range, s.beam_step
+        )  # fmt: skip
+        ends = tuple(np.ascontiguousarray(v) for v in (*pts.T, *nrm.T))
+        field = (*ends, 0.0, s.proposal_sigma, s.p_rand)  # occupied: log-odds > 0
+        fits = np.empty_like(pred)
+        self._kernel("fit_pose_many", _kernels_proposal)(
+            self.maps, *self._geometry(), pred, *field, s.temperature, sig,
+            *s.match_step, s.match_levels, fits,
+        )  # fmt: skip
+        offsets = proposal_offsets(sig)
+        cands = np.ascontiguousarray(to_map_frame(fits, offsets))
+        ll = np.empty(cands.shape[:2])
+        self._kernel("field_loglik_many", _kernels_proposal)(
+            self.maps, *self._geometry(), cands, *field, ll
+        )
+        log_tau = s.temperature * ll + motion_log_prior(cands, pred, sig)
+        normals = self.rng.standard_normal((self.n, 3))
+        draw = gaussian_draw(fits, offsets, log_tau, sig / 4, normals)
+        self.particles = draw[0]
+        return draw[1]
+
     def update_maps(self, scan, poses=None, maps=None) -> None:
         """Add a reading to every particle's map at the particle's pose.
 
@@ -388,19 +440,24 @@ class GridFastSLAM:
         s = self.settings
         parents = np.arange(self.n)
         if self._odo is not None:
-            self.particles = sample_arc_motion(
-                self.particles, self._odo, odo, s.motion, s.inflate, self.rng
-            )
-            if self.sensor == "laser":
-                if self.match:
-                    self.particles = self.match_laser(self.particles, scan)
-                ll = self.weigh_laser(self.particles, scan)
-            elif self.window:
-                self._push_window(scan)
-                ll = self._window_step(scan)
+            if self.match and s.proposal == "gaussian":
+                # the proposal's normaliser, its likelihood tempered already
+                ll = tempered = self.propose_laser(self._odo, odo, scan)
             else:
-                ll = self.weigh_sonar(self.particles, scan)
-            self.logw = self.logw + s.temperature * ll
+                self.particles = sample_arc_motion(
+                    self.particles, self._odo, odo, s.motion, s.inflate, self.rng
+                )
+                if self.sensor == "laser":
+                    if self.match:
+                        self.particles = self.match_laser(self.particles, scan)
+                    ll = self.weigh_laser(self.particles, scan)
+                elif self.window:
+                    self._push_window(scan)
+                    ll = self._window_step(scan)
+                else:
+                    ll = self.weigh_sonar(self.particles, scan)
+                tempered = s.temperature * ll
+            self.logw = self.logw + tempered
             self.path_loglik = self.path_loglik + ll
             self.logw -= self.logw.max()
             if effective_sample_size(self.weights) < s.resample_below * self.n:

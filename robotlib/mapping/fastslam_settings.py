@@ -37,6 +37,7 @@ _CHOICES = {
     "best_by": ("weight", "path"),
     "sonar_range_to": ("entry", "centre"),
     "estimate": ("best", "mean"),
+    "proposal": ("fit", "gaussian"),
 }
 
 
@@ -92,6 +93,25 @@ class FastSLAMSettings:
         (generated rings, 10 seeds, in the issue-31 note); on the loop world,
         whose doors pin the fit along its corridors, it costs accuracy
         (RMS 0.037 to 0.2 m), hence off by default.
+    proposal : {"fit", "gaussian"}
+        Laser only, with ``match``: how a particle's new pose is drawn.
+        "fit" (the default): the motion's sample, hill-climbed on the map
+        (above), weighed by `GridFastSLAM.weigh_laser` there. "gaussian":
+        GMapping's improved proposal (`robotlib.mapping.proposal`): the
+        odometry's prediction fitted by the scan's likelihood field (every
+        ``beam_step``-th return, each scored by its distance to the nearest
+        occupied cell along its surface's normal) plus the motion prior, a
+        draw from the Gaussian of the posterior about that fit, the weight
+        times the proposal's normaliser.
+    proposal_sigma : float
+        "gaussian": standard deviation of a return's end point about the
+        nearest occupied cell centre (along its normal), m (0.05).
+    proposal_floor : tuple of float
+        "gaussian": ``(m, rad)``, the least standard deviations of the motion
+        prior (for a robot standing still) along and across its heading and
+        in heading ((0.005, 0.005)); the proposal's grid is spaced by the
+        prior's deviations and its draw's deviations are at least a quarter
+        of them.
     sonar_likelihood : {"beam", "endpoint"}
         Sonar weighing: the beam model (`_kernels.sonar_beam_loglik`) or the
         end-point model over the arc, as the laser's ("beam").
@@ -149,6 +169,9 @@ class FastSLAMSettings:
     match_beam_step: int = 4
     match_prior: tuple[float, float] = (300.0, 300.0)
     match_degenerate: float = 0.0
+    proposal: str = "fit"
+    proposal_sigma: float = 0.05
+    proposal_floor: tuple[float, float] = (0.005, 0.005)
     sonar_likelihood: str = "beam"
     sonar_sigma: float = 0.15
     sonar_occ: float = 2.0
@@ -180,11 +203,13 @@ class FastSLAMSettings:
         put = object.__setattr__
         for name in ("inflate", "p_rand", "temperature", "resample_below",
                      "sonar_sigma", "sonar_occ", "sonar_unknown",
-                     "match_degenerate"):  # fmt: skip
+                     "match_degenerate", "proposal_sigma"):  # fmt: skip
             put(self, name, float(getattr(self, name)))
         for name in ("beam_step", "match_levels", "match_beam_step", "window"):
             put(self, name, int(getattr(self, name)))
-        for name in ("match_step", "match_prior"):
+        if not (self.proposal_sigma > 0 and min(self.proposal_floor) > 0):
+            raise ValueError("proposal_sigma and proposal_floor must be positive")
+        for name in ("match_step", "match_prior", "proposal_floor"):
             a, b = getattr(self, name)
             put(self, name, (float(a), float(b)))
         put(self, "match", bool(self.match))

@@ -26,17 +26,19 @@ never sleeps (each poll of the robot is its 100 ms cycle).
 from __future__ import annotations
 
 import math
+from collections import deque
 
 import numpy as np
 
 from .._random import as_rng
+from ..avoidance import VFH
 from ..localization import BEST, MCL
 from ..p3dx import ROBOT_LENGTH_REAR, ROBOT_RADIUS, ROBOT_WIDTH
 from ..sensing import expected_ranges
-from ..world import World, compose, relative
+from ..world import World, compose, relative, wrap_angle
 from .aliasing import look_alike, map_symmetries
 from .cspace import CSpace, configuration_space
-from .follow import PathFollower, PurePursuit, StopAndTurn, cross_track, sonar_points
+from .follow import PathFollower, PurePursuit, cross_track, sonar_points
 from .grid import astar, path_length
 from .navigation import AVOID, FOLLOW, LOCALIZE, MODES, Navigation, NavSettings
 
@@ -66,6 +68,13 @@ def _spread(mcl: MCL) -> tuple[float, float]:
     return pos, head
 
 
+def _share_near(mcl: MCL, pose, radius: float) -> float:
+    """Share of the particles' weight within ``radius`` m of ``pose``."""
+    p, w = mcl.particles, mcl.weights
+    near = np.hypot(p[:, 0] - pose[0], p[:, 1] - pose[1]) < radius
+    return float(w[near].sum() / w.sum())
+
+
 class Navigator:
     """Drive a robot to ``goal`` in the mapped ``world``: localize, plan, follow, avoid.
 
@@ -92,7 +101,8 @@ class Navigator:
         Seeds the default filter.
     avoider : object, optional
         A controller with ``reset()`` and ``command(sonar, pose)`` (default
-        `StopAndTurn`); e.g. ``robotlib.avoidance.VFH``.
+        Lab 2's `robotlib.avoidance.VFH`, with its default settings); e.g.
+        `robotlib.planning.StopAndTurn`.
     cspace : CSpace, optional
         The configuration space (default: `configuration_space` of the map
         with `TURN_MARGIN`).
@@ -144,7 +154,7 @@ class Navigator:
         self.mcl, self.second = mcl, second
         # turns that map the walls onto themselves: no sensor tells them apart
         self.symmetries = map_symmetries(world) if second is not None else []
-        self.avoider = StopAndTurn() if avoider is None else avoider
+        self.avoider = VFH() if avoider is None else avoider
         self.planner, self.law = planner, law
         self.mode, self.outcome = LOCALIZE, ""
         self.localized_at = float("nan")
@@ -155,14 +165,14 @@ class Navigator:
         """Enter LOCALIZE: turn in place from ``now``, no follower, no marks."""
         self.avoider.reset()
         self.mode, self._steps = LOCALIZE, 0
+        self._window = deque(maxlen=self.settings.window)
         self._spin_start, self._wander_until = now, -1.0
         self._follower, self._hits, self._hits_dirty = None, [], False
 
     def _localize(self, z, pose, now: float) -> tuple[float, float]:
         """LOCALIZE: spin (or wander) until the cloud is tight, then FOLLOW."""
         s = self.settings
-        pos, head = _spread(self.mcl)
-        if self._steps >= s.min_filter_steps and pos < s.spread and head < 0.15:
+        if self._steps >= s.min_filter_steps and self._settled():
             self.mode, self._need_plan, self._agree = FOLLOW, True, 1.0
             self._since = len(self._rec["est"])
             self._best_left, self._best_time = np.inf, now
@@ -184,7 +194,7 @@ class Navigator:
         ok = np.abs(z - expected) < 0.25 + 0.1 * expected
         self._agree += 0.025 * (float(ok.mean()) - self._agree)
         if np.hypot(*(pose[:2] - self.goal)) < s.goal_tolerance:
-            if self._confirmed(pose):
+            if self._settled() and self._confirmed(pose):
                 self.outcome = "ambiguous" if self._aliased() else "reached"
                 return 0.0, 0.0
             # the second filter sees it elsewhere: start again, both
@@ -215,6 +225,35 @@ class Navigator:
         v, w = self._follower.command(z, pose, expected)
         self.mode = AVOID if self._follower.avoiding else FOLLOW
         return v, w
+
+    def _note_belief(self, estimate, odometry) -> None:
+        """Record after a filter step whether the cloud is tight and unimodal."""
+        s = self.settings
+        pos, head = _spread(self.mcl)
+        share = _share_near(self.mcl, estimate, s.mode_radius)
+        tight = pos < s.spread and head < 0.15 and share >= s.mode_share
+        self._window.append((tight, estimate.copy(), odometry.copy()))
+
+    def _settled(self) -> bool:
+        """Whether the belief is unimodal and consistent over the window.
+
+        The last ``window`` filter steps all had a tight cloud with at least
+        ``mode_share`` of its weight near the estimate, and every one of
+        their estimates, carried forward by the odometry since, lands within
+        ``consistent`` m (and 0.1 rad) of the newest: a filter that jumped
+        from one place to another in that time has not settled
+        (`NavSettings`).
+        """
+        s = self.settings
+        if len(self._window) < s.window or not all(t for t, _, _ in self._window):
+            return False
+        _, est, odo = self._window[-1]
+        for _, e, o in self._window:
+            p = compose(e, relative(o, odo))
+            off = math.hypot(p[0] - est[0], p[1] - est[1])
+            if off > s.consistent or abs(wrap_angle(p[2] - est[2])) > 0.1:
+                return False
+        return True
 
     def _confirmed(self, pose) -> bool:
         """Whether the second filter is tight and within ``confirm`` of ``pose``."""
@@ -297,6 +336,7 @@ class Navigator:
                     self._second_at = self.second.step(odo_filter, odo, z)
                 odo_filter, odo_at = odo.copy(), odo.copy()
                 self._steps += 1
+                self._note_belief(np.asarray(est_at, dtype=float), odo_at)
             self._odo_at, self._odo = odo_at, odo
             pose = compose(est_at, relative(odo_at, odo))
             v = w = 0.0
@@ -393,9 +433,11 @@ def _plan(cs0: CSpace, hits, pose, goal, planner=None) -> np.ndarray | None:
     attempts = []
     if hits:
         h = np.asarray(hits)
-        keep = (np.hypot(*(h - pose[:2]).T) > cs0.radius + 0.15) & (
-            np.hypot(*(h - goal).T) > cs0.radius + 0.15
-        )
+        # the marks are grown from their cells' centres: a mark 0.15 m
+        # beyond the radius, rounded to its cell and the goal to its own,
+        # blocked the goal's cell on a 10 cm grid (ValueError from A*)
+        clear = cs0.radius + 0.15 + 1.5 * cs0.resolution
+        keep = (np.hypot(*(h - pose[:2]).T) > clear) & (np.hypot(*(h - goal).T) > clear)
         attempts.append(cs0.with_points(h[keep]))
     attempts.append(cs0)
     for cs in attempts:

@@ -35,6 +35,15 @@ class NavSettings:
         this, m (and the heading spread below 0.15 rad) (0.15).
     min_filter_steps : int
         Filter steps before convergence is trusted (15).
+    window, consistent, mode_share, mode_radius : int or float
+        The belief must be settled over the last ``window`` filter steps
+        (10) before the robot leaves LOCALIZE and before it says "reached":
+        at every one of them the cloud was tight (``spread``) and unimodal
+        (``mode_share`` of its weight within ``mode_radius`` m of the
+        estimate: 0.95 and 0.5; the spread alone lets 9 % lie beyond 0.5 m),
+        and each step's estimate, carried forward by the odometry since,
+        lies within ``consistent`` m (0.25) and 0.1 rad of the newest. At
+        the goal without it, the robot localizes again.
     spin : float
         Turn rate while localizing, rad/s (0.5).
     hit_range, unexplained : float
@@ -70,6 +79,10 @@ class NavSettings:
     filter_every: int = 2
     spread: float = 0.15
     min_filter_steps: int = 15
+    window: int = 10
+    consistent: float = 0.25
+    mode_share: float = 0.95
+    mode_radius: float = 0.5
     spin: float = 0.5
     hit_range: float = 1.5
     unexplained: float = 0.3
@@ -82,6 +95,8 @@ class NavSettings:
     def __post_init__(self):
         if int(self.filter_every) < 1 or int(self.min_filter_steps) < 0:
             raise ValueError("filter_every must be >= 1 and min_filter_steps >= 0")
+        if int(self.window) < 1 or not 0.0 <= self.mode_share <= 1.0:
+            raise ValueError("window must be >= 1 and mode_share in [0, 1]")
         if self.confirm < 0:
             raise ValueError(f"confirm must be >= 0, got {self.confirm!r}")
         for name in ("speed", "lookahead", "goal_tolerance", "spread", "spin"):

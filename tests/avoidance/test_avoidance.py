@@ -313,6 +313,17 @@ def test_bug2_follows_a_wall_round_a_box():
     assert ep.collisions == 0
 
 
+def test_bug2_leaves_the_boundary_towards_a_goal_on_its_free_side():
+    bug = Bug2(goal=(5.0, 0.0))
+    blocked = OPEN.copy()
+    blocked[2:6] = 0.4  # something close ahead
+    # the boundary is on the left: a goal square to the right lies away from it
+    assert bug._goal_side_free(blocked, -math.pi / 2)
+    assert bug._goal_side_free(OPEN, 0.3)
+    assert not bug._goal_side_free(blocked, 0.3)  # ahead-left, and blocked
+    assert not bug._goal_side_free(OPEN, 2.5)  # round to the left: unseen
+
+
 def test_the_same_controller_drives_a_simrobot():
     sim = Simulator(load_world("clutter"), seed=0)
     pair = start_goal_pairs("clutter", 1, seed=0)[0]

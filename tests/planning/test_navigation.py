@@ -20,10 +20,10 @@ from robotlib.planning import (
     office_with_boxes,
     pure_pursuit,
 )
-from robotlib.planning.navigate import TURN_MARGIN
+from robotlib.planning.navigate import TURN_MARGIN, _spread
 from robotlib.robot import robot
 from robotlib.sim import OdometryNoise, SimRobot, Simulator
-from robotlib.world import load_world
+from robotlib.world import compose, load_world
 
 
 def test_pure_pursuit_law():
@@ -171,6 +171,41 @@ def test_navigator_confirms_the_goal_with_a_second_filter_of_its_own(office):
     assert alone.second is None
     with pytest.raises(ValueError, match="confirm"):
         NavSettings(confirm=-1.0)
+
+
+class _Cloud:
+    """A stand-in filter: just the particles and weights `Navigator` reads."""
+
+    def __init__(self, particles):
+        self.particles = np.asarray(particles, dtype=float)
+        self.weights = np.full(len(self.particles), 1.0 / len(self.particles))
+
+
+def test_navigator_trusts_only_a_belief_settled_over_its_window(office):
+    nav = Navigator(office, (2.5, 3.0), mcl=MCL.best(office, rng=0, n=300))
+    nav._start_localizing(0.0)
+    rng = np.random.default_rng(0)
+    here = np.array([2.0, 2.0, 0.3])
+    tight = here + rng.normal(0.0, [0.03, 0.03, 0.01], (500, 3))
+    nav.mcl = _Cloud(tight)
+    odo = np.zeros(3)
+    for k in range(nav.settings.window):
+        assert not nav._settled()  # not yet a whole window
+        step = np.array([0.02 * k, 0.0, 0.0])
+        nav._note_belief(compose(here, step), compose(odo, step))
+    assert nav._settled()
+    # a jump of the estimate that the odometry does not explain
+    nav._note_belief(compose(here, [3.0, 0.0, 0.0]), compose(odo, [0.5, 0.0, 0.0]))
+    assert not nav._settled()
+    # tight by its spread (under 0.15 m), but 6 % of it 0.6 m off: not unimodal
+    nav._start_localizing(0.0)
+    split = tight.copy()
+    split[:30, 0] += 0.6
+    nav.mcl = _Cloud(split)
+    assert _spread(nav.mcl)[0] < nav.settings.spread
+    for _ in range(nav.settings.window):
+        nav._note_belief(here, odo)
+    assert not nav._settled()
 
 
 def test_false_reached_is_judged_by_the_truth():
