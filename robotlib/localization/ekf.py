@@ -262,18 +262,10 @@ def laser_update(
     used : int
         Beams used.
     """
-    mu, P = _belief(mu, P)
-    model = LaserModel() if model is None else model
-    z = np.asarray(scan, dtype=float).reshape(-1)
-    if z.shape != (model.n_beams,):
-        raise ValueError(f"scan must have {model.n_beams} ranges, got {z.shape}")
-    if iterations < 1:
-        raise ValueError(f"iterations must be at least 1, got {iterations}")
-    sigma = laser_sigma(model) if sigma is None else float(sigma)
-    if not sigma > 0:
-        raise ValueError(f"sigma must be positive, got {sigma}")
-    beams = np.arange(0, model.n_beams, 10) if beams is None else np.asarray(beams)
-    zb, x, fit = z[beams], mu, None
+    mu, P, model, zb, beams, sigma = _laser_inputs(
+        mu, P, scan, model, beams, sigma, iterations
+    )
+    x, fit = mu, None
     for i in range(iterations):
         zhat, H, smooth = _slopes(walls, x, model, beams)
         off = mu - x
@@ -292,8 +284,51 @@ def laser_update(
         x = fit[0]
         if np.abs(step).max() < 1e-6:
             break
-    if iterations > 1:
-        costs = _map_cost(walls, mu, P, np.array([mu, x]), zb, model, beams, sigma, cap)
+    return _accepted(
+        fit, used, mu, P, walls, zb, model, beams, sigma, cap, iterations > 1, refuse
+    )
+
+
+def _laser_inputs(mu, P, scan, model, beams, sigma, iterations):
+    """Check a laser update's arguments and fill in their defaults.
+
+    Returns
+    -------
+    mu, P : numpy.ndarray
+        Copies of the belief, shapes (3,) and (3, 3).
+    model : LaserModel
+    zb : numpy.ndarray, shape (n,)
+        The ranges of the beams used, m.
+    beams : numpy.ndarray of int, shape (n,)
+    sigma : float
+        Range noise per beam, m.
+    """
+    mu, P = _belief(mu, P)
+    model = LaserModel() if model is None else model
+    z = np.asarray(scan, dtype=float).reshape(-1)
+    if z.shape != (model.n_beams,):
+        raise ValueError(f"scan must have {model.n_beams} ranges, got {z.shape}")
+    if iterations < 1:
+        raise ValueError(f"iterations must be at least 1, got {iterations}")
+    sigma = laser_sigma(model) if sigma is None else float(sigma)
+    if not sigma > 0:
+        raise ValueError(f"sigma must be positive, got {sigma}")
+    beams = np.arange(0, model.n_beams, 10) if beams is None else np.asarray(beams)
+    return mu, P, model, z[beams], beams, sigma
+
+
+def _accepted(fit, used, mu, P, walls, zb, model, beams, sigma, cap, iterated, refuse):
+    """Return a laser update's ``(mu, P, nis, used)``, or the prior if it is refused.
+
+    Refused (the prior ``mu, P`` kept, no beam used) when, after iterating,
+    the beams fit the map worse at the result than at the prior's mean
+    (`_map_cost`), or when the NIS is beyond the chi-square's ``refuse``
+    tail for ``used`` beams.
+    """
+    if iterated:
+        costs = _map_cost(
+            walls, mu, P, np.array([mu, fit[0]]), zb, model, beams, sigma, cap
+        )
         if costs[1] > costs[0]:  # the beams fit the prior's mean better
             return mu, P, 0.0, 0
     if refuse > 0 and fit[2] > chdtri(used, refuse):  # a fit the beams contradict

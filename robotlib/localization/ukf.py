@@ -30,11 +30,10 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy.special import chdtri
 
 from ..sensing.laser import LaserModel, expected_laser
 from ..world import wrap_angle
-from .ekf import _map_cost, _update, laser_sigma
+from .ekf import _accepted, _belief, _laser_inputs, _update
 from .motion import DEFAULT_ALPHAS, noise_std, odometry_increment
 
 __all__ = [
@@ -49,14 +48,6 @@ ALPHA, BETA = 1.0, 2.0
 """The unscented transform's spread and weights (``alpha = 1`` with ``kappa =
 3 - n``: points at ``sqrt(3)`` standard deviations, which matches a
 Gaussian's fourth moment; ``beta = 2``: optimal for a Gaussian)."""
-
-
-def _belief(mu, P):
-    mu = np.asarray(mu, dtype=float).reshape(3).copy()
-    P = np.asarray(P, dtype=float).reshape(3, 3).copy()
-    if not (np.isfinite(mu).all() and np.isfinite(P).all()):
-        raise ValueError("mu and P must be finite")
-    return mu, P
 
 
 def sigma_points(
@@ -266,18 +257,10 @@ def ukf_laser_update(
     the EKF's is: no beam left, a worse fit of the map than the prior's mean,
     or an NIS beyond the chi-square's ``refuse`` tail.
     """
-    mu, P = _belief(mu, P)
-    model = LaserModel() if model is None else model
-    z = np.asarray(scan, dtype=float).reshape(-1)
-    if z.shape != (model.n_beams,):
-        raise ValueError(f"scan must have {model.n_beams} ranges, got {z.shape}")
-    if iterations < 1:
-        raise ValueError(f"iterations must be at least 1, got {iterations}")
-    sigma = laser_sigma(model) if sigma is None else float(sigma)
-    if not sigma > 0:
-        raise ValueError(f"sigma must be positive, got {sigma}")
-    beams = np.arange(0, model.n_beams, 10) if beams is None else np.asarray(beams)
-    zb, x, Px, fit, cap = z[beams], mu, P, None, None
+    mu, P, model, zb, beams, sigma = _laser_inputs(
+        mu, P, scan, model, beams, sigma, iterations
+    )
+    x, Px, fit, cap = mu, P, None, None
     for _ in range(iterations):
         X, wm, wc = sigma_points(x, Px)
         Z = expected_laser(walls, X, model)[:, beams]
@@ -303,10 +286,6 @@ def ukf_laser_update(
         if np.abs(step).max() < 1e-6:
             break
     used = int(ok.sum())
-    if iterations > 1:
-        costs = _map_cost(walls, mu, P, np.array([mu, x]), zb, model, beams, sigma, cap)
-        if costs[1] > costs[0]:  # the beams fit the prior's mean better
-            return mu, P, 0.0, 0
-    if refuse > 0 and fit[2] > chdtri(used, refuse):  # a fit the beams contradict
-        return mu, P, 0.0, 0
-    return *fit, used
+    return _accepted(
+        fit, used, mu, P, walls, zb, model, beams, sigma, cap, iterations > 1, refuse
+    )
