@@ -287,19 +287,7 @@ def match_laser(
 
     p = [float(v) for v in pose]
     best = score(p)
-    sxy, sth = steps
-    for _ in range(levels):
-        for _ in range(20):
-            moves = [(sxy, 0, 0), (-sxy, 0, 0), (0, sxy, 0), (0, -sxy, 0)]
-            moves += [(0, 0, sth), (0, 0, -sth)]
-            cands = [[p[0] + dx, p[1] + dy, p[2] + dt] for dx, dy, dt in moves]
-            vals = [score(q) for q in cands]
-            k = int(np.argmax(vals))
-            if vals[k] <= best:
-                break
-            best, p = vals[k], cands[k]
-        sxy, sth = sxy / 2, sth / 2
-    return np.array([p[0], p[1], math.atan2(math.sin(p[2]), math.cos(p[2]))])
+    return _hill_climb(score, p, best, steps, levels)
 
 
 def points_box(xs, ys, origin, res, shape):
@@ -426,6 +414,15 @@ def fit_pose(
 
     p = [float(v) for v in pred]
     best = temperature * field_score(L, origin, res, p, points, normals, *field)
+    return _hill_climb(objective, p, best, steps, levels)
+
+
+def _hill_climb(objective, p, best, steps, levels):
+    """Return the pose the kernels' hill climb reaches from ``p``, angle wrapped.
+
+    The best of six moves while one raises ``objective`` above ``best`` (at
+    most 20), then halve ``steps = (xy, theta)``; ``levels`` times.
+    """
     sxy, sth = steps
     for _ in range(levels):
         for _ in range(20):
