@@ -12,9 +12,7 @@ each sandbox from ``/proc``:
   has and how many of them are running;
 - a limit is charged ``max(CPU time, wall time - time waiting for a CPU)``:
   busy work counts by the CPU it used, sleeping or blocking counts by the
-  wall clock, and time the machine made the student wait counts for nothing
-  (`thread_wait` lets the grader leave out its own waits too: a reply read
-  late is timed when it was written).
+  wall clock, and time the machine made the student wait counts for nothing.
 
 A submission's processes share one control group per grading slot where
 the machine lets the grader make them (`Share`, cgroup v2 or v1, as root):
@@ -45,9 +43,7 @@ __all__ = [
     "descendants",
     "find_worker",
     "stat",
-    "thread_wait",
     "usage",
-    "waited",
 ]
 
 TICK = os.sysconf("SC_CLK_TCK")
@@ -151,16 +147,6 @@ def _wait(pid: int | str | None) -> float:
             return int(f.read().split()[1]) * 1e-9
     except (OSError, IndexError, ValueError):
         return 0.0  # no scheduler statistics: wall time counts in full
-
-
-def waited(pid: int | None) -> float:
-    """Time process ``pid``'s main thread has waited for a CPU while runnable, s."""
-    return _wait(pid)
-
-
-def thread_wait() -> float:
-    """Time the calling thread has waited for a CPU while runnable, s."""
-    return _wait("thread-self")
 
 
 def usage(

@@ -2,8 +2,8 @@
 
 - `Options`: how each submission runs (limits in charged time, see `cpu`).
 - `Proc`: one sandboxed worker (student or check process), its pipes, a
-  thread reading its frames (each event carries when its frame arrived, the
-  reader's own waits for a CPU left out), its CPU time (`Proc.sample`).
+  thread reading its frames (each event carries when its frame arrived),
+  its CPU time (`Proc.sample`).
 - `Clock`: the time charged to one cell, call or check: CPU time, or wall
   time not spent waiting for a CPU.
 - `kill_job`: end every process carrying a job's id (without the sandbox).
@@ -163,13 +163,10 @@ class Clock:
     def charged(self, now: float) -> float:
         """Return the time charged: CPU time, or wall time not waiting for a CPU, s.
 
-        The CPU time is the last sample's (`Proc.sample`); the wait is read
-        now, so a call shorter than the sampling period is not charged the
-        time it waited for a CPU (a busy machine, a slowed-down process).
+        Both from the last sample (`Proc.sample`).
         """
         u = self.proc.last
-        wait = max(u.wait, self.proc.waited())
-        return max(u.cpu - self.cpu, self.elapsed(now) - (wait - self.wait))
+        return max(u.cpu - self.cpu, self.elapsed(now) - (u.wait - self.wait))
 
 
 class Proc:
@@ -254,26 +251,14 @@ class Proc:
         threading.Thread(target=self._read, args=(events,), daemon=True).start()
 
     def _read(self, events: queue.Queue) -> None:
-        """Queue each frame with when it arrived: ``(role, gen, header, payload, t)``.
-
-        ``t`` leaves out the time this thread waited for a CPU while reading
-        it: on a busy machine the grader reads a reply late, and the student
-        (blocked meanwhile) must not be charged for it.
-        """
-        before = cpu.thread_wait()
+        """Queue each frame with when it arrived: ``(role, gen, header, data, t)``."""
         while True:
             try:
                 header, payload = recv(self.fin)
             except (EOFError, ValueError, OSError, UnicodeDecodeError):
                 events.put((self.role, self.gen, {"op": "eof"}, b"", time.monotonic()))
                 return
-            now, waited = time.monotonic(), cpu.thread_wait()
-            events.put((self.role, self.gen, header, payload, now - (waited - before)))
-            before = cpu.thread_wait()
-
-    def waited(self) -> float:
-        """Time the worker's main thread has waited for a CPU so far, s (read now)."""
-        return cpu.waited(self.worker) if self.alive else self.last.wait
+            events.put((self.role, self.gen, header, payload, time.monotonic()))
 
     def post(self, header: dict, payload: bytes = b"") -> bool:
         """Send a frame; False if the process has gone."""
