@@ -73,6 +73,8 @@ def test_release_of_every_lab_is_well_formed():
         assert check_cells(lab, path.stem), f"{path.name} has no graded checks"
         first = next(c for c in sol.cells if c.cell_type == "code")
         assert "robotlib.notebook.setup(" in first.source
+        loads = first.source.index("robotlib.notebook.loading()")  # a line that moves
+        assert loads < first.source.index("import matplotlib"), path.name
         assert "NotImplementedError" in notebook_text(lab)
 
 
