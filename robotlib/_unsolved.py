@@ -15,7 +15,8 @@ the notebook file when the kernel knows it (``JPY_SESSION_NAME``, set by
 Jupyter), else from a notebook in the working directory that defines the
 function. A ``NameError`` for a name an exercise asks for (one no code cell
 of the notebook binds, written in backticks after an exercise's heading) or
-for one a cell above binds but did not get to is said as plainly. Any other
+for one a cell above binds but did not get to is said as plainly (the first
+shown as the exercise's ``NotImplementedError``, `_shown_type`). Any other
 error keeps IPython's traceback; the cell still fails.
 
 `Demo` (``with robotlib.notebook.demo():``) wraps a demonstration that calls
@@ -59,9 +60,27 @@ def _handler(shell, etype, value, tb, tb_offset=None):
     pyplot = sys.modules.get("matplotlib.pyplot")
     if lines is not None and pyplot is not None:
         pyplot.close("all")  # the cell's empty axes would show under the message
-    stb = _formatted(shell, etype, value, tb, tb_offset, lines)
-    shell._showtraceback(etype, value, stb)
+    shown = _shown_type(etype, lines)
+    stb = _formatted(shell, shown, value, tb, tb_offset, lines)
+    if shown is not etype:
+        value = shown(lines[0])
+    shell._showtraceback(shown, value, stb)
     return None
+
+
+def _shown_type(etype: type, lines: list[str] | None) -> type:
+    """Return the error's type as the cell shows it: an undone exercise's is one.
+
+    A check that reads a name an exercise defines (a matrix, a constant)
+    fails with a ``NameError`` while the exercise's cell still ends in
+    ``raise NotImplementedError()``; it reads "NotImplementedError: Exercise
+    N is not done yet", as a check calling an unsolved function does, and
+    not like a typing mistake. A name a cell above binds (a cell that
+    stopped early, or was not run) stays a ``NameError``.
+    """
+    if etype is NameError and lines and " is not done yet" in lines[0]:
+        return NotImplementedError
+    return etype
 
 
 def structured_traceback(shell, etype, value, tb, tb_offset=None) -> list[str]:
@@ -71,7 +90,9 @@ def structured_traceback(shell, etype, value, tb, tb_offset=None) -> list[str]:
     IPython's own traceback. A panel that runs a cell's function on a worker
     thread shows an error with these lines, as the kernel's thread would.
     """
-    return _formatted(shell, etype, value, tb, tb_offset, _message(shell, value, tb))
+    lines = _message(shell, value, tb)
+    shown = _shown_type(etype, lines)
+    return _formatted(shell, shown, value, tb, tb_offset, lines)
 
 
 def _message(shell, value, tb) -> list[str] | None:

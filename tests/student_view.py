@@ -4,9 +4,9 @@ Shared by `tests.notebooks.test_unsolved_labs` (headless) and the
 real-browser test (the notebook JupyterLab saved): only cells that fail
 until solved (tagged ``raises-exception`` by the release, so Run All goes
 past them) show an error, and that error is the short "not done yet"
-message; a cell that draws (by its source) shows a figure, a widget or
-HTML, or says in one line which of the student's code it needs
-(``with robotlib.notebook.demo():``).
+message, never a ``NameError``; a cell that draws (by its source) shows a
+figure, a widget or HTML, or says in one line which of the student's code it
+needs (``with robotlib.notebook.demo():``).
 """
 
 from __future__ import annotations
@@ -45,7 +45,8 @@ def unsolved_problems(cells: list) -> list[str]:
         errors = [o for o in outputs if o.get("output_type") == "error"]
         for e in errors:
             lines = _plain("\n".join(e.get("traceback", []))).splitlines()
-            if "is not done yet" not in "\n".join(lines) or len(lines) > SHORT:
+            plain = "is not done yet" in "\n".join(lines) and len(lines) <= SHORT
+            if not plain or e.get("ename") == "NameError":  # reads as a typo
                 found.append(f"{where}: {e.get('ename')} ({len(lines)} lines)")
         tags = cell.get("metadata", {}).get("tags", [])
         if errors and "raises-exception" not in tags:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import threading
 import time
 
@@ -335,8 +336,9 @@ def test_a_demonstration_of_unsolved_code_says_what_it_needs_and_goes_on(tmp_pat
         " cell, then run this one again.\n"
     ]
     assert "`points`, which a cell above makes" in said[2][0]
-    (check,) = out[5]
-    assert check.output_type == "error" and check.ename == "NameError"
+    (check,) = out[5]  # the exercise's error, as a check calling unsolved code gets
+    assert check.output_type == "error" and check.ename == "NotImplementedError"
+    assert check.traceback[0].startswith("\x1b[31m\x1b[1mNotImplementedError")
     assert "Exercise 2 is not done yet: define `GAINS`" in check.traceback[0]
     assert len(check.traceback) <= 4
     (other,) = out[6]
@@ -414,3 +416,32 @@ def test_warm_stamp_follows_only_the_kernels_and_what_is_warmed(tmp_path):
         (pkg / changed).write_text((pkg / changed).read_text() + "# changed\n")
         assert nb._warm_key(pkg) != key, changed  # a kernel, or what is warmed
         key = nb._warm_key(pkg)
+
+
+def test_a_first_cell_shows_a_line_that_moves_until_setup_ends_it(tmp_path):
+    """Seconds and the package importing now, redrawn while the cell loads."""
+    (tmp_path / "slowpackage.py").write_text("import time\ntime.sleep(0.6)\n")
+    book = _execute(
+        [
+            ("code", "import robotlib.notebook as nb\nnb.loading(every=0.05)\n"
+                     "shown, update = [], nb._LOADING[0].handle.update\n"
+                     "nb._LOADING[0].handle.update = lambda data, **kw: ("
+                     "shown.append(data['text/plain']), update(data, **kw))\n"
+                     "import slowpackage\nnb._loading_now('a step')\n"
+                     "import time\ntime.sleep(0.3)\nnb.setup(warm=(), style=False)\n"
+                     "time.sleep(0.2)"),
+            ("code", "print('\\n'.join(shown))"),
+            ("code", "nb.loading(every=0.05)\n1 / 0"),
+        ],
+        tmp_path,
+    )  # fmt: skip
+    (line,) = book.cells[0].outputs  # one line, redrawn in place
+    ready = r"Ready \(\d+\.\d s of imports and set-up\)\."
+    assert re.fullmatch(ready, line.data["text/plain"])
+    shown = book.cells[1].outputs[0].text.splitlines()
+    importing = [s for s in shown if s.endswith(": importing slowpackage ...")]
+    assert len(set(importing)) >= 3  # it moved: 0.6 s of it, every 0.05 s
+    assert any(s.endswith(": a step ...") for s in shown)
+    assert re.fullmatch(ready, shown[-1])  # and nothing after it
+    stopped = book.cells[2].outputs[0].data["text/plain"]
+    assert re.fullmatch(r"stopped after \d+\.\d s\.", stopped)
