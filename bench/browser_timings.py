@@ -69,6 +69,7 @@ from tests.browser import (  # noqa: E402
     _menu,
     _prompts,
     _read_saved,
+    notebook,
 )
 from tests.student_view import unsolved_problems  # noqa: E402
 
@@ -119,28 +120,13 @@ SHOWING = """(path) => {
 }"""
 """``path`` is the notebook shown, and its kernel has started and is idle."""
 
-WARM_UP = {
-    "cells": [
-        {
-            "cell_type": "code",
-            "metadata": {},
-            "outputs": [],
-            "execution_count": None,
-            "id": "warm",
-            "source": "import matplotlib.pyplot as plt\nimport robotlib.notebook\n"
-            "robotlib.notebook.setup(warm=())\nplt.plot([0, 1]);",
-        }
-    ],
-    "metadata": {
-        "kernelspec": {
-            "name": "python3",
-            "display_name": "Python 3",
-            "language": "python",
-        }
-    },
-    "nbformat": 4,
-    "nbformat_minor": 5,
-}
+WARM_UP = notebook(
+    [
+        "import matplotlib.pyplot as plt\nimport robotlib.notebook\n"
+        "robotlib.notebook.setup(warm=())\nplt.plot([0, 1]);"
+    ]
+)
+"""A kernel start and robotlib's imports, before the first lab is timed."""
 
 
 @dataclass

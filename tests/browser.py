@@ -55,6 +55,31 @@ LAB_SETTINGS = {
 }
 
 
+def notebook(sources: list[str]) -> dict:
+    """A notebook (nbformat 4, as JSON data) of code cells with these sources.
+
+    For a test or bench to write beside the labs and open in the page.
+    """
+    cells = [
+        {
+            "cell_type": "code",
+            "metadata": {},
+            "outputs": [],
+            "execution_count": None,
+            "id": f"c{i}",
+            "source": source,
+        }
+        for i, source in enumerate(sources)
+    ]
+    kernel = {"name": "python3", "display_name": "Python 3", "language": "python"}
+    return {
+        "cells": cells,
+        "metadata": {"kernelspec": kernel},
+        "nbformat": 4,
+        "nbformat_minor": 5,
+    }
+
+
 def _free_port() -> int:
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))

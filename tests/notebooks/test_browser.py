@@ -36,6 +36,7 @@ from tests.browser import (
     Browser,
     Lab,
     have_browser,
+    notebook,
     run_notebook,
     run_notebooks,
     unexplained_console_errors,
@@ -224,51 +225,30 @@ def test_every_notebook_in_a_real_browser(ran):
     assert not found, json.dumps(found, indent=1)
 
 
-SELFTEST = {
-    "cells": [
-        {
-            "cell_type": "code",
-            "metadata": {},
-            "outputs": [],
-            "execution_count": None,
-            "id": f"c{i}",
-            "source": src,
-        }  # fmt: skip
-        for i, src in enumerate(
-            [
-                "import io\n\nimport ipywidgets as w\nfrom matplotlib.figure import"
-                " Figure\n\n\ndef png(v):\n    fig = Figure(figsize=(3, 2))\n"
-                "    fig.add_subplot().plot([0, 1], [0, v])\n    buf = io.BytesIO()\n"
-                "    fig.savefig(buf, format='png')\n    return buf.getvalue()\n\n\n"
-                "def panel(live):\n    s = w.FloatSlider(value=1.0, min=0, max=5,"
-                " step=0.1, continuous_update=False)\n"
-                "    img = w.Image(value=png(1.0))\n"
-                "    label = w.Label('ready')\n\n    def changed(c):\n"
-                "        label.value = 'running'\n        if live:\n"
-                "            img.value = png(c['new'])\n\n"
-                "    s.observe(changed, names='value')\n"
-                "    return w.VBox([s, label, img])",
-                "panel(live=True)",
-                "panel(live=False)  # a panel that stopped redrawing",
-                "from IPython.display import Image, display\n\n\n"
-                "def broken(v=1.0):  # a panel whose redraw fails\n"
-                "    if v != 1.0:\n        raise ValueError('the panel broke')\n"
-                "    display(Image(data=png(v)))\n\n\n"
-                "w.interact(broken, v=w.FloatSlider(value=1.0, min=0, max=5, step=0.1,"
-                " continuous_update=False));",
-            ]
-        )
-    ],
-    "metadata": {
-        "kernelspec": {
-            "name": "python3",
-            "display_name": "Python 3",
-            "language": "python",
-        }
-    },
-    "nbformat": 4,
-    "nbformat_minor": 5,
-}
+SELFTEST = notebook(
+    [
+        "import io\n\nimport ipywidgets as w\nfrom matplotlib.figure import"
+        " Figure\n\n\ndef png(v):\n    fig = Figure(figsize=(3, 2))\n"
+        "    fig.add_subplot().plot([0, 1], [0, v])\n    buf = io.BytesIO()\n"
+        "    fig.savefig(buf, format='png')\n    return buf.getvalue()\n\n\n"
+        "def panel(live):\n    s = w.FloatSlider(value=1.0, min=0, max=5,"
+        " step=0.1, continuous_update=False)\n"
+        "    img = w.Image(value=png(1.0))\n"
+        "    label = w.Label('ready')\n\n    def changed(c):\n"
+        "        label.value = 'running'\n        if live:\n"
+        "            img.value = png(c['new'])\n\n"
+        "    s.observe(changed, names='value')\n"
+        "    return w.VBox([s, label, img])",
+        "panel(live=True)",
+        "panel(live=False)  # a panel that stopped redrawing",
+        "from IPython.display import Image, display\n\n\n"
+        "def broken(v=1.0):  # a panel whose redraw fails\n"
+        "    if v != 1.0:\n        raise ValueError('the panel broke')\n"
+        "    display(Image(data=png(v)))\n\n\n"
+        "w.interact(broken, v=w.FloatSlider(value=1.0, min=0, max=5, step=0.1,"
+        " continuous_update=False));",
+    ]
+)
 
 
 def test_the_browser_test_fails_when_a_panel_stops_redrawing(ran):
