@@ -19,6 +19,7 @@ import importlib.util
 import json
 import os
 import re
+import secrets
 import shutil
 import socket
 import subprocess
@@ -105,7 +106,7 @@ class Lab:
             path = settings / name
             path.parent.mkdir(parents=True, exist_ok=True)
             path.write_text(json.dumps(value))
-        self.port, self.token = _free_port(), "robotlib-browser-test"
+        self.token = secrets.token_hex(16)  # another suite's server refuses it
         env = {
             **os.environ,
             "JUPYTERLAB_SETTINGS_DIR": str(settings),
@@ -114,20 +115,29 @@ class Lab:
             "MPLBACKEND": "module://matplotlib_inline.backend_inline",
             **(env or {}),  # the kernels inherit it
         }
-        cmd = [
-            sys.executable, "-m", "jupyterlab", "--no-browser", "--allow-root",
-            "--ip", "127.0.0.1", f"--port={self.port}",
-            f"--ServerApp.token={self.token}", f"--ServerApp.root_dir={self.root}",
-            "--LabApp.news_url=", "--ServerApp.open_browser=False",
-            # window.jupyterapp: a page that has loaded JupyterLab opens the
-            # next notebook itself (no second load of the whole application)
-            "--LabApp.expose_app_in_browser=True",
-        ]  # fmt: skip
         self.log = open(Path(tmp) / "jupyterlab.log", "w")  # noqa: SIM115
-        self.proc = subprocess.Popen(
-            cmd, env=env, stdout=self.log, stderr=subprocess.STDOUT
-        )
-        self._wait_up()
+        for attempt in range(3):  # a port taken since it was found free: another
+            self.port = _free_port()
+            cmd = [
+                sys.executable, "-m", "jupyterlab", "--no-browser", "--allow-root",
+                "--ip", "127.0.0.1", f"--port={self.port}",
+                # on that port or not at all (never another suite's server's)
+                "--ServerApp.port_retries=0",
+                f"--ServerApp.token={self.token}", f"--ServerApp.root_dir={self.root}",
+                "--LabApp.news_url=", "--ServerApp.open_browser=False",
+                # window.jupyterapp: a page that has loaded JupyterLab opens the
+                # next notebook itself (no second load of the whole application)
+                "--LabApp.expose_app_in_browser=True",
+            ]  # fmt: skip
+            self.proc = subprocess.Popen(
+                cmd, env=env, stdout=self.log, stderr=subprocess.STDOUT
+            )
+            try:
+                self._wait_up()
+                return
+            except RuntimeError:
+                if attempt == 2:
+                    raise
 
     def _wait_up(self, timeout: float = 60.0) -> None:
         """Wait for the server to answer (``timeout``: quiet s, `tests.contention`)."""
