@@ -94,7 +94,9 @@ def start(modules: dict) -> None:
         if module.__name__ in _jobs:
             continue
         if _pool is None:  # a thread each: they mostly wait for their processes
-            _pool = ThreadPoolExecutor(max_workers=8, thread_name_prefix="background")
+            _pool = ThreadPoolExecutor(
+                max_workers=max(8, len(modules)), thread_name_prefix="background"
+            )
         _selected[module.__name__] = list(items)
         folder = Path(tempfile.mkdtemp(prefix="robotlib-bg-"))
         _folders.append(folder)

@@ -6,7 +6,8 @@ way on every machine. An example that once failed stays in its test as an
 ``@example``.
 
 Modules with slow subprocess work start it when the session starts, beside
-the tests, and run their tests last (`tests.background`).
+the tests, and run their tests last (`tests.background`). Gradings of the
+same lab share one reference run of its solution (`tests.references`).
 
 SIGTERM (a CI runner stopping the job) ends the run as Ctrl-C does: the
 session stops at once, its background work is ended and its folders are
@@ -20,7 +21,7 @@ import signal
 import pytest
 from hypothesis import settings
 
-from tests import background
+from tests import background, references
 
 settings.register_profile("robotlib", derandomize=True, print_blob=True)
 settings.load_profile("robotlib")
@@ -34,10 +35,12 @@ def _terminated(signum, frame):
 
 def pytest_configure(config):
     signal.signal(signal.SIGTERM, _terminated)
+    references.start()
 
 
 def pytest_unconfigure(config):
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    references.end()
 
 
 @pytest.hookimpl(trylast=True)  # after the selection by -m and -k

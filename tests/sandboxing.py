@@ -12,11 +12,22 @@ is never seen, nor the session's own background work (`tests.background`:
 a lab grading beside the tests, in a process that adopts its own orphans).
 Afterwards the test process stops adopting and reaps the
 adopted processes that have ended, so no zombies pile up in the session.
+
+A grading run started as background work (`tests.background`) runs in a
+process of its own that adopts in the same way (`run_adopting`): when the
+run ends, that process records the command lines of whatever is left below
+it, for the tests to look at, and then ends them.
 """
 
 import contextlib
 import ctypes
+import json
 import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
 
 import pytest
 
@@ -106,3 +117,53 @@ def procs_with(needle: bytes, below: int | None = None) -> list[int]:
             except OSError:
                 pass
     return out
+
+
+def run_adopting(cmd, report: Path, timeout: float) -> subprocess.CompletedProcess:
+    """Run ``cmd`` as background work, in a process that adopts what it leaves.
+
+    That process (this module run as a script) is a child subreaper, so the
+    processes ``cmd`` leaves behind (escaped ones too) stay below it; when
+    ``cmd`` has ended it writes their command lines (``\\0``-separated
+    arguments, as in ``/proc/PID/cmdline``) to ``report`` and ends them. Read
+    them with `left_behind`. ``timeout``: in quiet seconds (`tests.contention`).
+    """
+    wrapper = [sys.executable, "-m", __name__, report, *cmd]
+    return background.run(wrapper, timeout, cwd=Path(__file__).parents[1])
+
+
+def left_behind(report: Path) -> list[bytes]:
+    """The command lines `run_adopting` found below it after its command ended."""
+    return [c.encode("latin-1") for c in json.loads(report.read_text())]
+
+
+def _adopt_and_report(report: Path, cmd: list[str]) -> int:
+    """Run ``cmd`` adopting its orphans; report, then end, what is left."""
+    with orphans_adopted():
+        proc = subprocess.Popen(cmd)
+        signal.signal(signal.SIGTERM, lambda *_: proc.terminate())
+        status = proc.wait()
+        left: dict[int, bytes] = {}
+        for _ in range(20):  # what is still ending gets 2 s, as in a test after it
+            _reap_ended_children()
+            left = {}
+            for pid in _descendants(os.getpid()):
+                with contextlib.suppress(OSError):  # a zombie's command line is empty
+                    if cmdline := Path(f"/proc/{pid}/cmdline").read_bytes():
+                        left[pid] = cmdline
+            if not left:
+                break
+            time.sleep(0.1)
+        report.write_text(json.dumps([c.decode("latin-1") for c in left.values()]))
+        for pid in left:
+            with contextlib.suppress(OSError):
+                os.kill(pid, signal.SIGKILL)
+        deadline = time.monotonic() + 10
+        while _descendants(os.getpid()) and time.monotonic() < deadline:
+            _reap_ended_children()
+            time.sleep(0.05)
+    return status
+
+
+if __name__ == "__main__":  # run_adopting's own process
+    sys.exit(_adopt_and_report(Path(sys.argv[1]), sys.argv[2:]))

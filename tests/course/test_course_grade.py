@@ -1,8 +1,9 @@
 # ruff: noqa: E501
 """Grading end to end on a tiny lab, in the sandbox, against adversarial submissions.
 
-One module-scoped grading run (the CLI, two at a time) covers the classes of
-attack of issue 12: answers reached through the library (alias, string,
+One grading run (the CLI, two at a time, started with the session beside
+the other tests: `tests.background`; this module's tests run last) covers
+the classes of attack of issue 12: answers reached through the library (alias, string,
 run-time lookup), forged or edited checks, patched builtins and modules,
 secrets and other students' files, processes that outlive their kernel
 (setsid, double fork, a cleaned environment), signals, memory, disk and
@@ -27,8 +28,14 @@ import pytest
 
 from robotlib.course import grade as g
 from robotlib.course.notebooks import read_notebook, release_notebook, write_notebook
-from tests import contention
-from tests.sandboxing import need_sandbox, orphans_adopted, procs_with
+from tests import background, contention
+from tests.references import records_of, shared
+from tests.sandboxing import (
+    left_behind,
+    need_sandbox,
+    procs_with,
+    run_adopting,
+)
 
 ROOT = Path(__file__).resolve().parents[2]
 DATA = Path(__file__).parents[1] / "data" / "course"
@@ -236,30 +243,47 @@ def make_submissions(folder: Path, outside: Path) -> dict[str, dict]:
     return subs
 
 
+def _command(folder, out, *extra) -> list:
+    return [sys.executable, "-m", "robotlib.cli", "grade", str(folder), "--lab", "tiny",
+            "--solution", str(TINY), "--out", str(out), "--cell-timeout",
+            str(CELL_TIMEOUT), "--timeout", "90", "--jobs", "2", "--quiet", *extra]  # fmt: skip
+
+
 def _cli(folder, out, *extra):
-    cmd = [sys.executable, "-m", "robotlib.cli", "grade", str(folder), "--lab", "tiny",
-           "--solution", str(TINY), "--out", str(out), "--cell-timeout",
-           str(CELL_TIMEOUT), "--timeout", "90", "--jobs", "2", "--quiet", *extra]  # fmt: skip
-    return contention.run(cmd, 600)  # quiet s: tests.contention
+    return contention.run(_command(folder, out, *extra), 600)  # quiet s
 
 
-@pytest.fixture(scope="module")
-def graded(tmp_path_factory):
+def background_work(root: Path):
+    """Grade the class with the CLI beside the other tests (`tests.background`).
+
+    Only when a selected test uses its gradebook (`graded`). The CLI runs in a
+    process that adopts whatever escapes it and records what is left when the
+    CLI has ended (`tests.sandboxing.run_adopting`).
+    """
+    if not any("graded" in it.fixturenames for it in background.selected(__name__)):
+        return None
     need_sandbox()
-    root = tmp_path_factory.mktemp("grade")
     folder, outside = root / "subs", root / "outside"
     folder.mkdir()
     outside.mkdir()
     expected = make_submissions(folder, outside)
-    out = root / "gradebook.csv"
-    with orphans_adopted():  # escaped processes stay below this test (procs_with)
+    out, report = root / "gradebook.csv", root / "left.json"
+    with shared("tiny", TINY, records_of(out)):
         t0 = time.monotonic()
-        proc = _cli(folder, out)
+        proc = run_adopting(_command(folder, out), report, 600)  # quiet s
         elapsed = time.monotonic() - t0
-        assert proc.returncode == 0, proc.stderr
-        with open(out, newline="") as f:
-            rows = {r["student"]: r for r in csv.DictReader(f)}
-        yield rows, expected, out, elapsed, root, folder
+    left = left_behind(report) if report.exists() else None
+    return proc, expected, out, elapsed, root, folder, left
+
+
+@pytest.fixture(scope="module")
+def graded():
+    proc, expected, out, elapsed, root, folder, left = background.result(__name__)
+    assert proc.returncode == 0, proc.stderr
+    assert left is not None, proc.stderr
+    with open(out, newline="") as f:
+        rows = {r["student"]: r for r in csv.DictReader(f)}
+    return rows, expected, out, elapsed, root, folder, left
 
 
 @pytest.mark.slow
@@ -326,8 +350,8 @@ def test_nobody_was_harmed(graded):
     assert "x" not in TINY.read_text()[-5:]
     assert "x" not in (folder / "solution" / "tiny.ipynb").read_text()[-5:]
     needles = (b"sleep\x00987", b"sleep\x00988", b"989", b"sleep\x00991", b"robotlib.course.worker")  # fmt: skip
-    for needle in needles:
-        assert procs_with(needle) == [], needle
+    for needle in needles:  # below the grading's own process when it had ended
+        assert [c for c in graded[6] if needle in c] == [], needle
 
 
 @pytest.mark.slow
@@ -360,7 +384,7 @@ def test_feedback_teaches_and_never_collides(graded):
 
 @pytest.mark.slow
 def test_records_resume_and_manual_scores(graded):
-    rows, expected, out, _, root, folder = graded
+    rows, expected, out, _, root, folder, _ = graded
     manual = out.with_name("gradebook-manual.csv")
     with open(manual, newline="") as f:
         answers = list(csv.DictReader(f))
@@ -425,21 +449,22 @@ def test_interrupt_leaves_no_process(tmp_path, sig, adopting):
     # Ctrl-C's default action in the CLI even when this run inherited SIGINT
     # ignored (a job started in the background by a shell without job control):
     # Python keeps an ignored SIGINT ignored, and the CLI would never see it
-    proc = subprocess.Popen(
-        cmd,
-        stderr=subprocess.PIPE,
-        text=True,
-        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
-    )
-    deadline = time.monotonic() + 120
-    while (
-        time.monotonic() < deadline
-        and len(procs_with(b"robotlib.course.worker", below=proc.pid)) < 3
-    ):
-        time.sleep(0.2)
-    time.sleep(1.0)
-    proc.send_signal(getattr(signal, sig))  # in the middle of the class
-    proc.wait(timeout=60)
+    with shared("tiny", TINY, records_of(tmp_path / "gb.csv")):
+        proc = subprocess.Popen(
+            cmd,
+            stderr=subprocess.PIPE,
+            text=True,
+            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
+        )
+        deadline = time.monotonic() + 120
+        while (
+            time.monotonic() < deadline
+            and len(procs_with(b"robotlib.course.worker", below=proc.pid)) < 3
+        ):
+            time.sleep(0.2)
+        time.sleep(1.0)
+        proc.send_signal(getattr(signal, sig))  # in the middle of the class
+        proc.wait(timeout=60)
     assert proc.returncode == 130, proc.stderr.read()
     time.sleep(0.5)
     assert procs_with(b"robotlib.course.worker") == []
@@ -580,7 +605,10 @@ def test_a_submission_out_of_restarts_is_graded_not_a_grader_error(tmp_path):
     (tmp_path / "subs" / "hang").mkdir(parents=True)
     write_notebook(hang, tmp_path / "subs" / "hang" / "tiny.ipynb")
     opts = g.Options(cell_timeout=CELL_TIMEOUT, timeout=120, restarts=0)
-    results, _ = g.grade(tmp_path / "subs", "tiny", TINY, jobs=1, opts=opts, progress=False)  # fmt: skip
+    records = tmp_path / "records"
+    with shared("tiny", TINY, records):
+        results, _ = g.grade(tmp_path / "subs", "tiny", TINY, jobs=1, opts=opts,
+                             progress=False, records=records)  # fmt: skip
     (r,) = results
     assert not r.status.startswith("grader error"), r.status
     assert r.points["mean"] == 0 and r.points["scale"] == 0, r.points

@@ -41,6 +41,7 @@ from robotlib.course.notebooks import (
 )
 from robotlib.course.plan import lab_plan
 from tests import background
+from tests.references import shared
 from tests.sandboxing import need_sandbox, orphans_adopted
 
 pytestmark = pytest.mark.slow  # every lab graded whole in the sandbox
@@ -394,9 +395,10 @@ def background_work(folder: Path) -> dict[str, tuple | str]:
 def _grade_labs(folder: Path, labs: list[str]) -> None:
     """Grade ``labs`` two at a time (two submissions each), heaviest first.
 
-    Each grading starts with its reference run, in one sandbox; with two labs
-    at once the other core grades the other lab meanwhile, and no lab's last
-    submission runs alone. Each lab's outcome goes to ``folder/LAB.pickle``.
+    Each grading starts with its reference run, in one sandbox (or from the
+    session's, `tests.references`: Lab 0's is also the class cases'); with two
+    labs at once the other core grades the other lab meanwhile, and no lab's
+    last submission runs alone. Each lab's outcome goes to ``folder/LAB.pickle``.
     SIGTERM (the session ended early) ends every grading's processes.
     """
     runs, ending = [], threading.Event()
@@ -408,9 +410,12 @@ def _grade_labs(folder: Path, labs: list[str]) -> None:
             return
         try:
             plans = _submissions(lab, folder / lab / "subs")
-            results, items = g.grade(
-                folder / lab / "subs", lab, jobs=2, opts=opts, progress=False
-            )
+            records = folder / lab / "records"
+            with shared(lab, ROOT / "solutions" / f"{lab}.ipynb", records):
+                results, items = g.grade(
+                    folder / lab / "subs", lab, jobs=2, opts=opts, progress=False,
+                    records=records,
+                )  # fmt: skip
             out = (results, items, plans)
         except BaseException:
             out = traceback.format_exc()

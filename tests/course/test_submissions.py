@@ -27,6 +27,7 @@ from tests.course.test_course_grade import (
     solution,
     with_cell,
 )
+from tests.references import shared
 from tests.sandboxing import need_sandbox
 
 
@@ -100,7 +101,10 @@ def test_a_helper_module_is_graded_with_its_notebook(tmp_path):
         write_notebook(uses, subs / name / "tiny.ipynb")
         (subs / name / "helpers.py").write_text(helper)
     opts = g.Options(cell_timeout=20, timeout=120)
-    results, _ = g.grade(subs, "tiny", TINY, jobs=2, opts=opts, progress=False)
+    records = tmp_path / "records"
+    with shared("tiny", TINY, records):
+        results, _ = g.grade(subs, "tiny", TINY, jobs=2, opts=opts, progress=False,
+                             records=records)  # fmt: skip
     rows = {r.student: r for r in results}
     assert rows["honest"].points == {k: float(v) for k, v in FULL.items()}
     assert rows["honest"].flags == [], rows["honest"].flags
