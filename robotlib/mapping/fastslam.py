@@ -68,10 +68,36 @@ __all__ = [
     "PARALLEL_MIN",
     "GridFastSLAM",
     "constrained_fit",
+    "pinned_directions",
     "normalise_log_weights",
     "resample_maps",
     "resample_parents",
 ]
+
+
+def pinned_directions(curvature, ratio: float) -> tuple[np.ndarray, np.ndarray]:
+    """Return a fit's principal position directions and which of them it pins.
+
+    Parameters
+    ----------
+    curvature : array_like, shape (N, 3)
+        ``(cxx, cxy, cyy)``: a score's (or a match's information's) curvature
+        in position, per m^2 (any common scale).
+    ratio : float
+        A direction counts as pinned when its curvature is positive and at
+        least this share of the largest one's.
+
+    Returns
+    -------
+    vec : numpy.ndarray, shape (N, 2, 2)
+        Unit directions as columns, the weaker first.
+    keep : numpy.ndarray of bool, shape (N, 2)
+        Whether each direction is pinned.
+    """
+    c = np.asarray(curvature, dtype=float).reshape(-1, 3)
+    h = np.stack([c[:, [0, 1]], c[:, [1, 2]]], axis=1)
+    lam, vec = np.linalg.eigh(h)  # ascending: the weaker direction first
+    return vec, (lam > 0) & (lam >= ratio * lam[:, 1:])
 
 
 def constrained_fit(poses, fits, curvature, ratio: float) -> np.ndarray:
@@ -97,10 +123,7 @@ def constrained_fit(poses, fits, curvature, ratio: float) -> np.ndarray:
         its fit drifts towards the cells the map has seen most often; there
         the sample (the odometry's increment with its noise) is kept.
     """
-    c = np.asarray(curvature, dtype=float)
-    h = np.stack([c[:, [0, 1]], c[:, [1, 2]]], axis=1)
-    lam, vec = np.linalg.eigh(h)  # ascending: the weaker direction first
-    keep = (lam > 0) & (lam >= ratio * lam[:, 1:])
+    vec, keep = pinned_directions(curvature, ratio)
     d = fits[:, :2] - poses[:, :2]
     along = np.einsum("nk,nkj->nj", d, vec) * keep  # components in the eigenbasis
     out = np.array(fits, dtype=float)

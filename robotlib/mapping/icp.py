@@ -45,7 +45,15 @@ class ICPResult:
         rad: the reference point ``q`` matching a scan point ``p`` is about
         ``R(theta) p + (x, y)``.
     covariance : numpy.ndarray, shape (3, 3)
-        Its covariance, m^2, m rad, rad^2.
+        Its covariance, m^2, m rad, rad^2 (NaN where `information` is
+        singular).
+    information : numpy.ndarray, shape (3, 3)
+        The Gauss-Newton information ``J^T J / s**2`` of the final pairs,
+        per m^2, m rad, rad^2 (zeros when fewer than 3 pair). Point to line,
+        its position block is ``sum(n n^T) / s**2`` over the pairs' normals
+        ``n``: along a blank corridor the direction along the walls gets
+        almost nothing. Point to point it is ``pairs / s**2`` in every
+        direction, which never shows such a direction.
     rms : float
         RMS distance of the inlier pairs at the end, m.
     inliers : float
@@ -58,6 +66,7 @@ class ICPResult:
 
     pose: np.ndarray
     covariance: np.ndarray
+    information: np.ndarray
     rms: float
     inliers: float
     iterations: int
@@ -219,6 +228,7 @@ def _finish(ref, cur, pose, tree, normals, gate, iterations, converged, to_line)
     ok = np.isfinite(dist)
     n_in = int(ok.sum())
     cov = np.full((3, 3), np.nan)
+    info = np.zeros((3, 3))
     rms = math.inf
     if n_in >= 3:
         p, q = moved[ok], ref[idx[ok]]
@@ -238,8 +248,8 @@ def _finish(ref, cur, pose, tree, normals, gate, iterations, converged, to_line)
             res = (p - q).ravel()
             dof = max(2 * n_in - 3, 1)
         s2 = max(float(res @ res) / dof, 1e-6)
-        info = jac.T @ jac
+        info = jac.T @ jac / s2
         if np.linalg.cond(info) < 1e12:
-            cov = s2 * np.linalg.inv(info)
+            cov = np.linalg.inv(info)
         rms = float(np.sqrt(np.mean(np.sum((p - q) ** 2, axis=1))))
-    return ICPResult(pose, cov, rms, n_in / len(cur), iterations, converged)
+    return ICPResult(pose, cov, info, rms, n_in / len(cur), iterations, converged)

@@ -10,7 +10,7 @@ import pytest
 
 from robotlib.logs import read_log
 from robotlib.mapping.graphslam import GraphSLAMSettings, graph_slam
-from robotlib.mapping.icp import icp, transform_points
+from robotlib.mapping.icp import icp, scan_to_points, transform_points
 from robotlib.mapping.posegraph import (
     PoseGraph,
     compose,
@@ -87,6 +87,57 @@ def test_icp_recovers_a_known_motion(to_line):
     assert r.rms < 0.03
     sd = np.sqrt(np.diag(r.covariance))
     assert np.all(np.linalg.eigvalsh(r.covariance) > 0) and np.all(sd < 0.01)
+
+
+def _corridor(pilaster: bool):
+    """Two walls 2 m apart along x, and a 0.3 x 0.2 m pilaster on the left one."""
+    walls = [(-20.0, -1.0, 20.0, -1.0), (-20.0, 1.0, 20.0, 1.0)]
+    if pilaster:
+        walls += [(3.0, 1.0, 3.0, 0.8), (3.0, 0.8, 3.3, 0.8), (3.3, 0.8, 3.3, 1.0)]
+    return np.array(walls)
+
+
+@pytest.mark.parametrize("to_line", [False, True])
+def test_icp_information_shows_a_blank_corridor_only_point_to_line(to_line):
+    from robotlib.sensing.laser import LaserModel, expected_laser
+
+    model = LaserModel(mount=(0.0, 0.0, 0.0))
+    ref, cur = (
+        scan_to_points(z, model.angles, model.max_range)
+        for z in expected_laser(_corridor(False), [(0.0, 0.0, 0.0), (0.2, 0.0, 0.0)])
+    )
+    r = icp(ref, cur, init=(0.2, 0.0, 0.0), point_to_line=to_line)
+    lam = np.linalg.eigvalsh(r.information[:2, :2])
+    if to_line:  # next to nothing says where along the walls the scan lies
+        assert lam[0] < 0.01 * lam[1]
+    else:  # point to point pins every direction alike, corridor or not
+        np.testing.assert_allclose(lam[0], lam[1], rtol=1e-9)
+        np.testing.assert_allclose(np.linalg.inv(r.information), r.covariance)
+
+
+def test_a_keyframe_match_keeps_the_odometry_along_what_icp_barely_pins():
+    from robotlib.sensing.laser import LaserModel, expected_laser
+
+    model = LaserModel()
+    truth = np.array([[0.0, 0.0, 0.0], [0.25, 0.0, 0.0]])
+    odometry = np.array([[0.0, 0.0, 0.0], [0.35, 0.0, 0.0]])  # 0.1 m long
+    scans = expected_laser(_corridor(True), truth, model)
+    placed = {}
+    for ratio in (0.0, 0.1):
+        settings = GraphSLAMSettings(match_degenerate=ratio, match_scans=False)
+        r = graph_slam(odometry, scans, model.angles, model.max_range, settings,
+                       mount=model.mount)  # fmt: skip
+        ((_, _, z, info, kind),) = r.graph.edges
+        assert kind == "scan" and abs(z[1]) < 0.01 and abs(z[2]) < 0.01
+        placed[ratio] = z[0], info
+    # whole: a few points of the pilaster's faces move the match along x
+    assert abs(placed[0.0][0] - 0.25) < 0.03
+    # pinned: along x the edge is the odometry's, with the odometry's weight
+    z, info = placed[0.1]
+    assert z == pytest.approx(0.35, abs=0.005)
+    sigma = GraphSLAMSettings().odometry_sigma[0]
+    assert np.linalg.inv(info)[0, 0] == pytest.approx(sigma**2, rel=0.1)
+    assert info[1, 1] > 20 * info[0, 0]
 
 
 def test_icp_rejects_bad_input():
