@@ -10,9 +10,12 @@ each sandbox from ``/proc``:
   ``cutime``), how long the worker's main thread waited for a CPU while it
   was ready to run (``/proc/PID/schedstat``), how many processes the tree
   has and how many of them are running;
-- a limit is charged ``max(CPU time, wall time - time waiting for a CPU)``:
-  busy work counts by the CPU it used, sleeping or blocking counts by the
-  wall clock, and time the machine made the student wait counts for nothing.
+- a student's cell or call is charged ``max(CPU time, wall time - time
+  waiting for a CPU)`` (`processes.Clock`): busy work counts by the CPU it
+  used, sleeping or blocking counts by the wall clock, and time the machine
+  made the student wait counts for nothing. The CPU time is read when the
+  time is charged; the wall time only between samples (`Usage.time`), so
+  the grader's own delays in relaying a short call are never charged.
 
 A submission's processes share one control group per grading slot where
 the machine lets the grader make them (`Share`, cgroup v2 or v1, as root):
@@ -20,11 +23,17 @@ one core at most (a CFS quota: time throttled counts as waiting), an equal
 ``cpu`` weight however many processes it forks, and a ``pids`` limit.
 Without control groups the CPU-time limits still hold (a process that forks
 CPU hogs spends its own budget faster) and the grader lowers the priority
-of a sandbox running more busy processes than `HOGS` (`Share.tame`). A
-process is busy when it has been running (or ready to run) in every sample
-since an earlier one and has used CPU time since then (`usage`'s
-``since``): processes that wait for a CPU to start and then sleep (a flood
-of ``sleep``) are not, however long a loaded machine makes them wait.
+of a sandbox running more busy processes than `HOGS` (`Share.tame`).
+
+A process is busy when, since a sample first saw it running (or ready to
+run), it has been so in every sample, has never slept (no voluntary context
+switch, ``/proc/PID/status``), and has either used `BUSY_CPU` of CPU time
+or been given a CPU `BUSY_TURNS` times (``/proc/PID/schedstat``). A loaded
+machine, or a slot's quota shared by four loops, gives a busy loop little
+CPU time but many short turns, so it is seen as soon as on a quiet one;
+a process that waits to start and then sleeps (a flood of ``sleep``: about
+1 ms of CPU time each) stops being runnable after a turn or two, however
+long it waited for it.
 
 Imports only the standard library.
 """
@@ -37,6 +46,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 __all__ = [
+    "BUSY_CPU",
+    "BUSY_TURNS",
     "HOGS",
     "Share",
     "Usage",
@@ -50,6 +61,12 @@ TICK = os.sysconf("SC_CLK_TCK")
 
 HOGS = 2
 """Busy processes a sandbox may have at once before it counts as forking hogs."""
+
+BUSY_CPU = 0.01
+"""CPU time a process must use, never sleeping, to count as busy, s."""
+
+BUSY_TURNS = 5
+"""Or times it must be given a CPU, never sleeping, to count as busy."""
 
 
 def stat(pid: int) -> list[bytes] | None:
@@ -124,19 +141,23 @@ class Usage:
     processes : int
         Processes in the tree.
     running : int
-        Busy processes of the tree: running or ready to run in this sample
-        and every one since they were first seen so, with CPU time used
-        since (busy loops, not processes waiting to start).
+        Busy processes of the tree (see the module's text): busy loops, not
+        processes waiting to start.
     since : dict
-        Process id to its own CPU time (clock ticks) when first seen running
-        in the samples up to this one (pass it to the next `usage`).
+        Process id to its CPU time (s), turns on a CPU and voluntary context
+        switches when a sample first saw it running without sleeping since,
+        for each process running in every sample since (pass it to the next
+        `usage`).
+    time : float
+        When ``wait`` was read (`time.monotonic`), s.
     """
 
     cpu: float = 0.0
     wait: float = 0.0
     processes: int = 0
     running: int = 0
-    since: dict[int, int] = field(default_factory=dict)
+    since: dict[int, tuple[float, int, int]] = field(default_factory=dict)
+    time: float = 0.0
 
 
 def _wait(pid: int | str | None) -> float:
@@ -149,8 +170,31 @@ def _wait(pid: int | str | None) -> float:
         return 0.0  # no scheduler statistics: wall time counts in full
 
 
+def _turns(pid: int, own: float) -> tuple[float, int, int]:
+    """Return a running process's CPU time (s), turns on a CPU and sleeps so far.
+
+    ``own``: its CPU time from ``stat`` (clock ticks, every thread). Turns
+    and sleeps are its main thread's; 0 without scheduler statistics (then
+    only the CPU time tells a busy process).
+    """
+    try:
+        with open(f"/proc/{pid}/schedstat") as f:
+            ran, _, turns = f.read().split()[:3]
+        with open(f"/proc/{pid}/status", "rb") as f:
+            slept = next(
+                int(line.split()[1])
+                for line in f
+                if line.startswith(b"voluntary_ctxt_switches:")
+            )
+    except (OSError, ValueError, StopIteration):
+        return own, 0, 0
+    return max(own, int(ran) * 1e-9), int(turns), slept
+
+
 def usage(
-    pid: int, worker: int | None = None, since: dict[int, int] | None = None
+    pid: int,
+    worker: int | None = None,
+    since: dict[int, tuple[float, int, int]] | None = None,
 ) -> Usage:
     """Sample the tree below (and including) ``pid``; ``worker``: its main process.
 
@@ -167,10 +211,13 @@ def usage(
         # utime, stime, cutime, cstime: fields 14-17 of stat, 12-15 here
         ticks += sum(int(x) for x in fields[11:15])
         if fields[0] == b"R":
-            own = int(fields[11]) + int(fields[12])
-            now[p] = since.get(p, own)
-            running += own > now[p]
-    return Usage(ticks / TICK, _wait(worker), procs, running, now)
+            cur = _turns(p, (int(fields[11]) + int(fields[12])) / TICK)
+            first = since.get(p, cur)
+            if first[2] != cur[2]:  # it slept since: seen running from now on
+                first = cur
+            now[p] = first
+            running += cur[0] - first[0] >= BUSY_CPU or cur[1] - first[1] >= BUSY_TURNS
+    return Usage(ticks / TICK, _wait(worker), procs, running, now, time.monotonic())
 
 
 def find_worker(pid: int, argv: list[str]) -> int | None:

@@ -4,8 +4,8 @@
 - `Proc`: one sandboxed worker (student or check process), its pipes, a
   thread reading its frames (each event carries when its frame arrived),
   its CPU time (`Proc.sample`).
-- `Clock`: the time charged to one cell, call or check: CPU time, or wall
-  time not spent waiting for a CPU.
+- `Clock`: the time charged to one cell, call or check: CPU time, or (the
+  student's code) wall time not spent waiting for a CPU.
 - `kill_job`: end every process carrying a job's id (without the sandbox).
 
 Imports `cpu`, `sandbox` and `worker` (the wire format).
@@ -142,31 +142,51 @@ def _env(job: str, sandbox: bool) -> dict[str, str]:
 
 @dataclass
 class Clock:
-    """Time charged to one cell, call or check (see `cpu`)."""
+    """Time charged to one cell, call or check (see `cpu`).
+
+    A check process runs the instructor's code, which waits only for the
+    grader (relaying a call into the student's code): it is charged its CPU
+    time alone. The student's code may also sleep or block (``blocking``):
+    it is charged the larger of its CPU time and the wall time between the
+    grader's samples less the time its main thread waited for a CPU in
+    them. That wall time ends at the last sample, never at the moment the
+    grader reads a reply: on a busy machine the grader itself reads late,
+    and a check making thousands of short calls (Lab 2's potential field,
+    once per control step) would be charged those delays. A call shorter
+    than the sampling period is so charged its CPU time; a hang is charged
+    in full, one sample late at most.
+    """
 
     proc: Proc
     wall: float
     cpu: float
     wait: float
+    sampled: float  # when the start's sample was taken
+    blocking: bool = True
     paused: float = 0.0  # wall time spent in the other process (a check's calls)
 
     @classmethod
-    def start(cls, proc: Proc) -> Clock:
-        """Start a clock on ``proc`` now."""
+    def start(cls, proc: Proc, blocking: bool = True) -> Clock:
+        """Start a clock on ``proc`` now (``blocking``: the student's code)."""
         u = proc.sample()
-        return cls(proc, time.monotonic(), u.cpu, u.wait)
+        return cls(proc, time.monotonic(), u.cpu, u.wait, u.time, blocking)
 
     def elapsed(self, now: float) -> float:
         """Return the wall time since the start, pauses excluded, s."""
         return now - self.wall - self.paused
 
-    def charged(self, now: float) -> float:
-        """Return the time charged: CPU time, or wall time not waiting for a CPU, s.
+    def charged(self, fresh: bool = False) -> float:
+        """Return the time charged so far, s.
 
-        Both from the last sample (`Proc.sample`).
+        From the last sample (`Proc.sample`); ``fresh``: the CPU time read
+        now (a call or check that has just ended).
         """
-        u = self.proc.last
-        return max(u.cpu - self.cpu, self.elapsed(now) - (u.wait - self.wait))
+        last = self.proc.last
+        used = (self.proc.sample() if fresh else last).cpu - self.cpu
+        if not self.blocking:
+            return used
+        awake = last.time - self.sampled - (last.wait - self.wait)
+        return max(used, awake)
 
 
 class Proc:
@@ -277,7 +297,7 @@ class Proc:
         u = cpu.usage(self.popen.pid, self.worker, self.last.since)
         # a child ending between two reads can hide its time for one sample
         cpu_s, wait = max(u.cpu, self.last.cpu), max(u.wait, self.last.wait)
-        self.last = cpu.Usage(cpu_s, wait, u.processes, u.running, u.since)
+        self.last = cpu.Usage(cpu_s, wait, u.processes, u.running, u.since, u.time)
         return self.last
 
     def kill(self) -> None:

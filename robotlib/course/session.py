@@ -18,9 +18,10 @@ through `run_submission`, which also keeps the time:
 - the submission's total CPU time (start-ups, restarts and checks) is
   bounded: what has not run by then fails with that reason.
 
-Every limit is charged time (`cpu`): CPU time of the process tree, or wall
-time not spent waiting for a CPU, so a busy machine or a classmate's CPU
-hogs cost a student nothing. Wall time only bounds it from behind
+Every limit is charged time (`processes.Clock`): CPU time of the process
+tree, or for the student's code wall time between samples not spent waiting
+for a CPU, so a busy machine or a classmate's CPU hogs cost a student
+nothing. Wall time only bounds it from behind
 (``Options.backstop`` times each limit): a submission that reaches it
 is "overloaded" (to grade again), never scored. A student process running
 more than `cpu.HOGS` busy processes at once is flagged; its slot's control
@@ -136,7 +137,7 @@ def run_submission(
             "check", spec, scratch, opts, cuid, events, gen["check"], logf, share
         )
         made.append(procs["check"])
-        ck.update(cur=None, clock=Clock.start(procs["check"]), index=index)
+        ck.update(cur=None, clock=Clock.start(procs["check"], False), index=index)
 
     def fail_call(error: str):
         if st["pending"] is not None:
@@ -172,9 +173,9 @@ def run_submission(
                     }  # fmt: skip
                 )
 
-    def check_time(now: float) -> float:
+    def check_time(fresh: bool = False) -> float:
         """Charged time of the current check so far: its own and its calls."""
-        own = ck["clock"].charged(now) if ck["cur"] is not None else 0.0
+        own = ck["clock"].charged(fresh) if ck["cur"] is not None else 0.0
         return own + ck["calls"]
 
     def budget() -> float:
@@ -188,7 +189,7 @@ def run_submission(
 
     def forward(item):
         header, payload, sent = item
-        base = check_time(sent)  # the check's time before this call
+        base = check_time()  # the check's time before this call
         st["pending"] = (header, payload, base, Clock.start(procs["student"]), sent)
         if not procs["student"].post(header, payload):
             student_died("the process of your code had ended")
@@ -199,7 +200,7 @@ def run_submission(
         ``base``: time already charged against the same limit.
         """
         now = time.monotonic()
-        if base + clock.charged(now) > limit:
+        if base + clock.charged() > limit:
             return "over"
         return "overloaded" if clock.elapsed(now) > limit * opts.backstop else None
 
@@ -338,7 +339,7 @@ def run_submission(
                     if st["queued"] is not None:
                         item, st["queued"] = st["queued"], None
                         # the wait for the restart is not the check's time
-                        ck["clock"] = Clock.start(procs["check"])
+                        ck["clock"] = Clock.start(procs["check"], False)
                         forward((*item[:2], time.monotonic()))
                 elif op == "tripwire":
                     hit = (
@@ -350,10 +351,9 @@ def run_submission(
                         out.tripwires.append(hit)
                 elif op == "result" and st["pending"] is not None:
                     call, sent = st["pending"][3:]
-                    # the check waits from its call's frame to this reply's
-                    # relay; the student is charged until it wrote the reply
+                    # the check waits from its call's frame to this reply's relay
                     ck["clock"].paused += time.monotonic() - sent
-                    ck["calls"] += call.charged(arrived)
+                    ck["calls"] += call.charged(fresh=True)
                     st["pending"] = None
                     procs["check"].post(
                         {
@@ -367,15 +367,15 @@ def run_submission(
                     student_died("your code ended or crashed the process")
             else:
                 if op == "ready":
-                    ck["clock"] = Clock.start(procs["check"])
+                    ck["clock"] = Clock.start(procs["check"], False)
                 elif op == "begin":
                     ck["cur"] = header.get("gid")
-                    ck["clock"] = Clock.start(procs["check"])
+                    ck["clock"] = Clock.start(procs["check"], False)
                     ck["calls"] = 0.0
                 elif op == "end":
-                    header["cpu"] = round(check_time(arrived), 3)
+                    header["cpu"] = round(check_time(fresh=True), 3)
                     out.checks.setdefault(str(header.get("gid")), header)
-                    ck["cur"], ck["clock"] = None, Clock.start(procs["check"])
+                    ck["cur"], ck["clock"] = None, Clock.start(procs["check"], False)
                     ck["calls"] = 0.0
                 elif op in ("call", "get"):
                     item = (header, payload, arrived)
@@ -391,7 +391,7 @@ def run_submission(
                     elif st["ready"]:
                         forward(item)
                     else:  # its time so far kept; the wait not charged
-                        ck["calls"] = check_time(arrived)
+                        ck["calls"] = check_time()
                         st["queued"] = item
                 elif op == "done":
                     ck["done"] = True

@@ -60,6 +60,59 @@ def test_sleeping_processes_are_not_busy_and_a_busy_loop_is():
         _end([flood, busy])
 
 
+FOUR_LOOPS = (
+    "import os, time\n"
+    "for _ in range(4):\n"
+    "    if os.fork() == 0:\n        while True:\n            pass\n"
+    "time.sleep(600)\n"
+)
+
+
+def _quota(share: cpu.Share, fraction: float) -> None:
+    """Give the slot's group ``fraction`` of one core, as a loaded machine would."""
+    for g in share.groups:
+        if (g / "cpu.max").exists():  # v2
+            (g / "cpu.max").write_text(f"{int(fraction * 100_000)} 100000")
+        elif (g / "cpu.cfs_quota_us").exists():  # v1
+            period = int((g / "cpu.cfs_period_us").read_text())
+            (g / "cpu.cfs_quota_us").write_text(str(int(fraction * period)))
+
+
+def test_busy_loops_are_seen_however_little_cpu_their_slot_gets():
+    """Four busy loops in a slot that gets 2 % of a core are seen busy at once.
+
+    That is about a slot's share on two cores at a load of 100. Each loop
+    then gets about 5 ms of CPU time a second. Counted by CPU time (a clock
+    tick, 10 ms, since first seen running) they were seen busy after 1.5-2 s
+    of samples, and could miss a hog whose submission ended sooner. They get
+    many short turns on a CPU and never sleep, so more than `cpu.HOGS` are
+    busy in two of the grader's first five samples (every 0.25 s).
+    """
+    if not cpu._controllers():
+        pytest.skip("no control groups the grader may make here (not root, none)")
+    with slot() as k:
+        share = cpu.Share(k, 64)
+        if not share.groups:
+            pytest.skip("the control groups are not ours to change here")
+        tree = subprocess.Popen(share.wrap([sys.executable, "-c", FOUR_LOOPS]))
+        try:
+            deadline = time.monotonic() + 30
+            while len(cpu.descendants(tree.pid)) < 4 and time.monotonic() < deadline:
+                time.sleep(0.05)
+            _quota(share, 0.02)
+            u, busy = cpu.usage(tree.pid), []
+            for _ in range(5):
+                time.sleep(0.25)
+                u = cpu.usage(tree.pid, since=u.since)
+                busy.append(u.running)
+        finally:
+            for p in cpu.descendants(tree.pid):
+                subprocess.run(["kill", "-9", str(p)], check=False)
+            _end([tree])
+            share.close()
+        assert sum(b > cpu.HOGS for b in busy) >= 2, busy
+
+
 def test_a_slot_holds_its_processes_to_one_core_and_the_quota_is_waiting():
     """Three busy loops in a slot's group use one core at most between them;
     the time the quota holds each back shows as waiting for a CPU."""

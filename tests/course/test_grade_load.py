@@ -25,6 +25,7 @@ from robotlib.course.notebooks import write_notebook
 from robotlib.course.plan import lab_plan
 from tests.course.test_course_grade import (
     ADD,
+    ADD_CHECK,
     FULL,
     MEAN,
     TINY,
@@ -35,6 +36,7 @@ from tests.course.test_course_grade import (
 from tests.sandboxing import need_sandbox
 
 CELL_LIMIT = 5.0
+MANY_CALLS = 3000
 
 
 def _loop_count(cpu_seconds: float) -> int:
@@ -90,16 +92,11 @@ def test_same_grade_alone_beside_a_hog_and_under_load(tmp_path):
     beside = rows["slow"]
     assert any("CPU hogs" in f for f in rows["hog"].flags), rows["hog"].flags
 
-    busy = [
-        subprocess.Popen([sys.executable, "-c", "while True:\n    pass"])
-        for _ in range(10)
-    ]
+    busy = _busy(10)
     try:
         loaded = _grade(alone, jobs=1)["slow"]
     finally:
-        for p in busy:
-            p.kill()
-            p.wait()
+        _end(busy)
     for again in (beside, loaded):
         assert again.points == first.points, again.reasons
         assert again.status == "ok", (again.status, again.reasons)
@@ -141,6 +138,52 @@ def test_ten_times_slower_than_the_solution_passes():
     failed = g.grade_notebook("slow", slow, plan, reference, strict)
     assert failed.points["mean"] == 0
     assert "timed out after 1 s" in failed.reasons["mean"], failed.reasons
+
+
+def _busy(n: int) -> list[subprocess.Popen]:
+    """Start ``n`` busy processes of this test's own (end them with `_end`)."""
+    return [
+        subprocess.Popen([sys.executable, "-c", "while True:\n    pass"])
+        for _ in range(n)
+    ]
+
+
+def _end(procs: list[subprocess.Popen]) -> None:
+    for p in procs:
+        p.kill()
+        p.wait()
+
+
+@pytest.mark.slow
+def test_many_short_calls_are_charged_their_cpu_time_under_load():
+    """A check making thousands of short calls is not charged the machine's delays.
+
+    Lab 2's potential-field check calls the student's function once per
+    control step. Here a check calls a correct ``add`` 3000 times, against
+    the 2 s floor, beside six busy processes of this test: each call takes
+    far less CPU than a millisecond but waits for a CPU, and for the grader
+    to relay it. Charged their wall time, the calls ran out of time (13 of
+    15 for Lab 2's ``process_flood`` case under load); charged the CPU they
+    used, the check passes, and its charged time stays below the limit.
+    """
+    need_sandbox()
+    calls = (
+        f"for i in range({MANY_CALLS}):\n    assert add(i, 1) == i + 1\n"
+        "print('CHECK add', add(2, 3))\n"
+    )
+    sol = with_cell(solution(), ADD_CHECK, calls)
+    plan = lab_plan(sol, "tiny")
+    opts = g.Options(cell_timeout=2, timeout=120, backstop=200)
+    reference = g.reference_run(plan, sol, opts)
+    reference["add"]["cpu"] = 0.0  # its limit: the 2 s floor
+    busy = _busy(6)
+    try:
+        graded = g.grade_notebook("many", sol, plan, reference, opts)
+    finally:
+        _end(busy)
+    assert graded.status == "ok", (graded.status, graded.reasons)
+    assert graded.points["add"] == 1, graded.reasons
+    assert graded.check_lines["add"]["cpu"] < 2
 
 
 def test_cpu_time_counts_the_whole_tree_and_not_sleep():
