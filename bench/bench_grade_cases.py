@@ -4,6 +4,7 @@ python bench/bench_grade_cases.py [--lab lab2_avoidance] [--runs alone hog load]
                                   [--jobs 2] [--busy 2] [--cell-timeout 10]
                                   [--out bench/results/grade_cases_LAB.md]
                                   [--students answered ordinary_code ...]
+                                  [--report DIR]
 
 The submissions are built by ``tests/class_cases.py`` from the lab's
 solution and release (honest layouts and mistakes, cheats, hangs, hogs, fork
@@ -15,7 +16,8 @@ reused. Writes a Markdown table: one line per run (wall time, 1-minute load
 average sampled every 5 s, the cases graded as expected), then one row per
 case (its points in each run, ``same`` when every run gave the same points
 and status). The table is written after each run (a run cut short keeps
-the runs before it).
+the runs before it). ``--report DIR`` also writes each run's class report
+(``DIR/<lab>-<run>-report.html``, as ``robotlib grade`` does).
 """
 
 from __future__ import annotations
@@ -36,6 +38,7 @@ sys.path.insert(0, str(ROOT))  # tests/class_cases.py
 
 from robotlib.course import grade as g  # noqa: E402
 from robotlib.course.notebooks import write_notebook  # noqa: E402
+from robotlib.course.report import class_report  # noqa: E402
 from tests.class_cases import Case, build, compare  # noqa: E402
 
 HOG = (
@@ -60,7 +63,7 @@ def _run(subs, lab, args, records, busy):
     t0 = time.monotonic()
     opts = g.Options(cell_timeout=args.cell_timeout)
     try:
-        results, _ = g.grade(
+        results, checks = g.grade(
             subs,
             lab,
             jobs=args.jobs,
@@ -75,7 +78,7 @@ def _run(subs, lab, args, records, busy):
         for p in procs:
             p.kill()
             p.wait()
-    return results, time.monotonic() - t0, loads
+    return results, checks, time.monotonic() - t0, loads
 
 
 def _table(args, cases, runs, rows, diffs) -> list[str]:
@@ -126,6 +129,7 @@ def main() -> None:
     parser.add_argument("--cell-timeout", type=float, default=10.0)
     parser.add_argument("--out", type=Path)
     parser.add_argument("--students", nargs="+", help="grade only these cases")
+    parser.add_argument("--report", type=Path, help="write each run's class report")
     args = parser.parse_args()
     out = args.out or ROOT / "bench" / "results" / f"grade_cases_{args.lab}.md"
     out.parent.mkdir(parents=True, exist_ok=True)
@@ -151,9 +155,13 @@ def main() -> None:
                     "zz_hog", "bench", "the hog beside", None, None, True
                 )
             busy = args.busy if run == "load" else 0
-            results, wall, loads = _run(
+            results, checks, wall, loads = _run(
                 subs, args.lab, args, Path(tmp) / "records", busy
             )
+            if args.report:
+                args.report.mkdir(parents=True, exist_ok=True)
+                page = args.report / f"{args.lab}-{run}-report.html"
+                class_report(page, results, checks, args.lab)
             wrong = compare(here, results)
             lo, hi = (min(loads), max(loads)) if loads else (0, 0)
             ok = f"{len(here) - len({w.split(':')[0] for w in wrong})} of {len(here)}"
