@@ -138,11 +138,16 @@ def exercise_of(notebook, name: str) -> str | None:
         cell), else ``"Exercise `id`"`` from the cell's ``robotlib.exercise``
         metadata, else ``"This exercise"``; None when no cell defines it.
     """
+    define = re.compile(rf"^\s*(def|class)\s+{re.escape(name)}\b", re.M)
+    return _exercise_of_cell(notebook, define.search)
+
+
+def _exercise_of_cell(notebook, is_it) -> str | None:
+    """`exercise_of` the first code cell whose source ``is_it(source)`` says is it."""
     try:
         cells = _cells(Path(notebook))
     except (OSError, ValueError):
         return None
-    define = re.compile(rf"^\s*(def|class)\s+{re.escape(name)}\b", re.M)
     heading = None
     for cell in cells:
         source = "".join(cell.get("source", ""))
@@ -150,7 +155,7 @@ def exercise_of(notebook, name: str) -> str | None:
             found = _EXERCISE.findall(source)
             heading = found[-1] if found else heading
             continue
-        if cell.get("cell_type") == "code" and define.search(source):
+        if cell.get("cell_type") == "code" and is_it(source):
             meta = cell.get("metadata", {}).get("robotlib", {})
             if heading is not None:
                 return f"Exercise {heading}"
@@ -192,7 +197,7 @@ def unsolved_message(shell, tb) -> list[str] | None:
         else f"in the cell above (In [{where}])"
     )
     what = "your code" if top_level else f"`{name}`"
-    exercise = None if top_level else _exercise(name)
+    exercise = _exercise_of_this_cell(shell) if top_level else _exercise(name)
     return [
         f"{exercise or 'This exercise'} is not done yet: write {what} {cell}.",
         "Replace its `raise NotImplementedError()` with your code, run that cell,",
@@ -218,6 +223,20 @@ def _exercise(name: str) -> str:
     top = name.split(".")[0]
     found = (e for nb in _notebooks() if (e := exercise_of(nb, top)))
     return next(found, None) or "This exercise"
+
+
+def _exercise_of_this_cell(shell) -> str | None:
+    """Name the running cell's exercise (a cell whose whole answer is a stub)."""
+    raw = getattr(getattr(shell, "history_manager", None), "input_hist_raw", None)
+    here = raw[-1].strip() if raw else ""
+    if not here:
+        return None
+    found = (
+        e
+        for nb in _notebooks()
+        if (e := _exercise_of_cell(nb, lambda source: source.strip() == here))
+    )
+    return next(found, None)
 
 
 def _bound(source: str) -> set[str]:

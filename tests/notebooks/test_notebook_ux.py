@@ -134,11 +134,15 @@ def test_an_unsolved_exercise_is_said_plainly_and_still_fails(tmp_path):
             ("code", "def resize(n):\n    raise NotImplementedError()"),
             ("code", "resize(3)"),
             ("code", "import lib\nlib.later()"),
+            ("markdown", "### Exercise 4\nWrite the matrix `GAINS`."),
+            ("code", "# YOUR CODE HERE\nraise NotImplementedError()"),
         ],
         tmp_path,
     )
-    assert len(errors) == 2  # both cells fail: the grader and Run All see them
-    unsolved, library = errors
+    assert len(errors) == 3  # the cells fail: the grader and Run All see them
+    unsolved, library, stub = errors
+    said = "Exercise 4 is not done yet: write your code in this cell."
+    assert stub.ename == "NotImplementedError" and said in stub.traceback[0]
     text = "\n".join(unsolved.traceback)
     assert unsolved.ename == "NotImplementedError"
     assert "Exercise 3 is not done yet: write `resize` in the cell above" in text
