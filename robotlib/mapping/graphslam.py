@@ -294,12 +294,7 @@ def _match_between(poses, graph, kf, owner, points, z, ang, rmax, mount, s):
                 ref, scan, guess, max_distance=s.gate, point_to_line=s.point_to_line,
                 tree=tree, normals=normals,
             )  # fmt: skip
-            off = relative_pose(guess, r.pose)
-            if (
-                r.inliers >= s.min_inliers
-                and math.hypot(off[0], off[1]) <= s.max_correction[0]
-                and abs(off[2]) <= s.max_correction[1]
-            ):
+            if _holds(r, guess, s):
                 poses[t] = compose(graph.poses[k], _pinned(r, guess, s)[0])
 
 
@@ -320,15 +315,20 @@ def _sequential(graph, points, k, guess, s):
     normals = line_normals(ref, tree=tree) if s.point_to_line else None
     r = icp(ref, points[k], guess, max_distance=s.gate, point_to_line=s.point_to_line,
             tree=tree, normals=normals)  # fmt: skip
-    off = relative_pose(guess, r.pose)
-    if (
-        r.inliers < s.min_inliers
-        or math.hypot(off[0], off[1]) > s.max_correction[0]
-        or abs(off[2]) > s.max_correction[1]
-    ):
+    if not _holds(r, guess, s):
         return None
     z, cov = _pinned(r, guess, s)
     return z, _information(cov, s.match_sigma_floor)
+
+
+def _holds(r, guess, s) -> bool:
+    """Whether a match pairs enough points and lies near its guess."""
+    off = relative_pose(guess, r.pose)
+    return (
+        r.inliers >= s.min_inliers
+        and math.hypot(off[0], off[1]) <= s.max_correction[0]
+        and abs(off[2]) <= s.max_correction[1]
+    )
 
 
 def _pinned(r, guess, s):
