@@ -510,9 +510,16 @@ def _notice_compiling() -> None:
         def on_end(self, ev):
             pass
 
-    def close(*_args) -> None:
-        if state["bar"] is not None:
-            state["bar"].close()
+    def close(*_args) -> None:  # the cell ended: say what compiled, not "now ..."
+        bar = state["bar"]
+        if bar is not None:
+            seconds = time.perf_counter() - state["t0"]
+            bar.set_postfix_str(
+                f"{state['n']} compiled in {seconds:.0f} s; next time they load "
+                "from the cache",
+                refresh=False,
+            )
+            bar.close()
             state["bar"] = None
 
     _NOTICE["listener"] = Listener()

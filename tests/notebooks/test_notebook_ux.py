@@ -449,3 +449,24 @@ def test_a_first_cell_shows_a_line_that_moves_until_setup_ends_it(tmp_path):
     assert re.fullmatch(ready, shown[-1])  # and nothing after it
     stopped = book.cells[2].outputs[0].data["text/plain"]
     assert re.fullmatch(r"stopped after \d+\.\d s\.", stopped)
+
+
+def test_a_cell_that_compiles_says_so_and_its_bar_ends_with_what_compiled(tmp_path):
+    book = _execute(
+        [
+            ("code", "import numba\nimport robotlib.notebook as nb\n"
+                     "nb.setup(warm=(), style=False)"),
+            ("code", "@numba.njit\ndef fresh(x):\n    return x + 1\n\n\n"
+                     "fresh.py_func.__module__ = 'robotlib.tests_ux'\nfresh(1)"),
+        ],
+        tmp_path,
+    )  # fmt: skip
+    models = book.metadata.widgets["application/vnd.jupyter.widget-state+json"]["state"]
+    (view,) = [
+        o.data["application/vnd.jupyter.widget-view+json"]["model_id"]
+        for o in book.cells[1].outputs if o.output_type == "display_data"
+    ]  # fmt: skip
+    text = models[models[view]["state"]["children"][2].removeprefix("IPY_MODEL_")]
+    said = text["state"]["value"].replace("\u2007", " ")  # tqdm: figure spaces
+    assert "compiling kernels (once, then cached): 1 done" in said
+    assert "1 compiled in" in said and "now " not in said  # finished, not "now ..."
