@@ -40,7 +40,8 @@ class ExploreSettings:
     gain_radius : float
         Half-side of the window in which unknown area counts as gain (1.5).
     discount_radius : float
-        Range of the coordination discount (4).
+        Range of the coordination discount (6; of 4, 6 and 8 m, three
+        robots reached 90 % soonest with 6 on generated halls and offices).
     free_level, occupied_level : float
         Log-odds below ``-free_level`` are free, above ``occupied_level``
         occupied, unknown between (0.2, 0.2).
@@ -81,7 +82,7 @@ class ExploreSettings:
     resolution: float = 0.1
     beta: float = 0.5
     gain_radius: float = 1.5
-    discount_radius: float = 4.0
+    discount_radius: float = 6.0
     free_level: float = 0.2
     occupied_level: float = 0.2
     min_frontier: int = 4
