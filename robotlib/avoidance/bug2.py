@@ -1,6 +1,8 @@
 """Bug2 (Lumelsky and Stepanov 1987) on sonar and odometry, without a map.
 
-The m-line runs from where the robot starts (its first odometry pose) to the
+The m-line runs from where the robot is when it gets its goal (its first
+odometry pose, or where it is when the goal moves by more than 0.5 m: the
+next waypoint of a planned path, `robotlib.planning.Localized`) to the
 goal. Bug2 drives along it towards the goal until the front sonars see an
 obstacle (the hit point), then follows the obstacle's boundary (a
 `WallFollower`, the obstacle on the left) until it meets the m-line again
@@ -86,6 +88,7 @@ class Bug2(Controller):
     def _reset(self) -> None:
         self.mode = "goal"
         self.start = None
+        self._aim = None
         self.hit_point = None
         self._left_hit = False
         self._followed = 0.0
@@ -103,9 +106,13 @@ class Bug2(Controller):
         if self.goal is None:
             return 0.0, 0.0
         xy = np.array(pose[:2])
-        if self.start is None:
-            self.start = xy.copy()
         bearing, dist = self.goal_direction(pose)
+        if self._aim is None or np.hypot(*(self._aim - self.goal)) > 0.5:
+            # a new goal (a waypoint): a new m-line from here; on a boundary,
+            # here is its hit point (leaving at once drove into side walls)
+            self._aim, self.start = self.goal.copy(), xy.copy()
+            self.hit_point, self._hit_dist = xy.copy(), dist
+            self._left_hit, self._followed, self._last = False, 0.0, xy.copy()
         ahead = min(sonar[2], sonar[3], sonar[4], sonar[5])
         if self.mode == "goal":
             # an echo beyond the goal does not block the way to it

@@ -324,6 +324,19 @@ def test_bug2_leaves_the_boundary_towards_a_goal_on_its_free_side():
     assert not bug._goal_side_free(OPEN, 2.5)  # round to the left: unseen
 
 
+def test_bug2_draws_a_new_m_line_when_its_goal_moves():
+    bug = Bug2(goal=(5.0, 0.0))
+    bug.command(OPEN, np.array([0.0, 0.0, 0.0]))
+    bug.command(OPEN, np.array([1.0, 0.0, 0.0]), goal=(5.1, 0.0))  # jitter: same
+    assert bug.start.tolist() == [0.0, 0.0]
+    bug.mode = "follow"
+    bug.command(OPEN, np.array([2.0, 0.0, 0.0]), goal=(2.0, 4.0))  # the next one
+    assert bug.start.tolist() == [2.0, 0.0] == bug.hit_point.tolist()
+    assert bug.mode == "follow"  # it leaves the boundary by Bug2's own test
+    assert bug._on_m_line(np.array([2.0, 3.0]))  # the line runs up to it
+    assert not bug._on_m_line(np.array([3.0, 0.0]))
+
+
 def test_the_same_controller_drives_a_simrobot():
     sim = Simulator(load_world("clutter"), seed=0)
     pair = start_goal_pairs("clutter", 1, seed=0)[0]
