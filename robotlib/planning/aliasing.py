@@ -10,6 +10,9 @@ themselves; `look_alike` says whether a trajectory turned by one of them
 stays in free space and explains the recorded sonar as well as the
 trajectory itself does. `robotlib.planning.Navigator` asks before it says
 "reached", and says ``"ambiguous"`` instead when the answer is yes.
+`drive_score` weighs one hypothesis of where the robot is now by the whole
+drive behind it: the navigator compares its belief with the places it
+believed in earlier and gave up (carried along by the odometry).
 
 Imports the world and the sonar model; never plots.
 """
@@ -21,9 +24,12 @@ import math
 import numpy as np
 
 from ..sensing import expected_ranges
-from ..world import World, compose
+from ..world import World, compose, relative
 
-__all__ = ["map_symmetries", "look_alike", "agreement"]
+__all__ = ["map_symmetries", "look_alike", "agreement", "drive_score"]
+
+PASS_THROUGH = 0.05
+"""A hypothesis whose drive comes this close to a wall went through it, m."""
 
 
 def _wall_points(world: World, step: float) -> np.ndarray:
@@ -143,3 +149,49 @@ def look_alike(world: World, poses, scans, symmetries, margin: float = 0.03):
         if agreement(world, turned, scans) >= own - margin:
             return np.asarray(g)
     return None
+
+
+def drive_score(world: World, pose, odometry, scans, every: int = 5) -> float:
+    """Share of the drive's readings the map explains, were the robot at ``pose`` now.
+
+    The drive is laid out backwards from ``pose`` by the odometry (its last
+    row is now): the trajectory ``pose * odometry[-1]^-1 * odometry[k]``.
+    Every ``every``-th row's readings are compared with the map's (as in
+    `agreement`); where the trajectory comes within `PASS_THROUGH` of a wall
+    before the next scored row (a wrong place's drive runs through walls),
+    that row explains none of its readings. The odometry's drift lowers the
+    score of the true place's early rows too, so compare scores of places,
+    not a score with a bar.
+
+    Parameters
+    ----------
+    world : World
+        The map.
+    pose : array_like, shape (3,)
+        The hypothesis: where the robot is at the drive's last row, m and rad.
+    odometry : array_like, shape (K, 3)
+        The odometry poses of the drive, m and rad.
+    scans : array_like, shape (K, S)
+        The sonar readings at those rows, m.
+    every : int
+        Score every ``every``-th row (the walls are tested at every row).
+
+    Returns
+    -------
+    float
+        In [0, 1] (nan without rows).
+    """
+    odo = np.asarray(odometry, dtype=float).reshape(-1, 3)
+    if len(odo) == 0:
+        return math.nan
+    path = compose(np.asarray(pose, dtype=float), relative(odo[-1], odo))
+    every = max(int(every), 1)
+    z = np.asarray(scans, dtype=float)[::every]
+    expected = expected_ranges(world, path[::every])
+    ok = (np.abs(z - expected) < 0.25 + 0.1 * expected).mean(axis=1)
+    # a scored row counts nothing if the walls are crossed before the next one
+    through = np.zeros(len(ok), dtype=bool)
+    np.logical_or.at(
+        through, np.arange(len(odo)) // every, ~world.is_free(path[:, :2], PASS_THROUGH)
+    )
+    return float(np.where(through, 0.0, ok).mean())

@@ -11,8 +11,10 @@ and the path is re-planned. A small state machine: LOCALIZE (turn in place,
 wander when that is not enough) until the cloud is tight, then FOLLOW or
 AVOID (the follower's hand-over), back to LOCALIZE when the sonar stops
 agreeing with the map. At the goal it says "reached" only if a second,
-independently seeded filter fed the same readings agrees (`NavSettings.confirm`);
-otherwise it localizes again; and where the map looks the same turned (a
+independently seeded filter fed the same readings agrees (`NavSettings.confirm`)
+and no place it believed in earlier and gave up explains the whole drive
+behind it better (`NavSettings.rival_margin`); otherwise it localizes again
+(around that place if there is one); and where the map looks the same turned (a
 warehouse of racks) and the drive since localizing fits the turned place as
 well, it says "ambiguous" instead (`robotlib.planning.aliasing`). Its knobs
 are a `NavSettings`. The true pose is
@@ -36,7 +38,7 @@ from ..localization import BEST, MCL
 from ..p3dx import ROBOT_LENGTH_REAR, ROBOT_RADIUS, ROBOT_WIDTH
 from ..sensing import expected_ranges
 from ..world import World, compose, relative, wrap_angle
-from .aliasing import look_alike, map_symmetries
+from .aliasing import drive_score, look_alike, map_symmetries
 from .cspace import CSpace, configuration_space
 from .follow import PathFollower, PurePursuit, cross_track, sonar_points
 from .grid import astar, path_length
@@ -194,17 +196,24 @@ class Navigator:
         ok = np.abs(z - expected) < 0.25 + 0.1 * expected
         self._agree += 0.025 * (float(ok.mean()) - self._agree)
         if np.hypot(*(pose[:2] - self.goal)) < s.goal_tolerance:
-            if self._settled() and self._confirmed(pose):
+            rival = self._better_place(pose, z)
+            if rival is None and self._settled() and self._confirmed(pose):
                 self.outcome = "ambiguous" if self._aliased() else "reached"
                 return 0.0, 0.0
-            # the second filter sees it elsewhere: start again, both
-            self.mcl.reset()
-            self.second.reset()
+            # doubt: give this place (and the second filter's) up, and start
+            # again, both filters around a place the drive fits better if any
+            self._given_up.append((pose.copy(), self._odo.copy()))
+            if self.second is not None:
+                self._given_up.append((self._second_place(), self._odo.copy()))
+            self.mcl.reset(rival)
+            if self.second is not None:
+                self.second.reset(rival)
             self._start_localizing(now)
             self._doubt_times.append(now)
             return 0.0, 0.0
         if self._agree < s.lost_agreement or now - self._best_time > s.no_progress:
             # lost: forget the pose and the marks, localize again
+            self._given_up.append((pose.copy(), self._odo.copy()))
             self.mcl.reset()
             self._start_localizing(now)
             self._lost_times.append(now)
@@ -255,14 +264,43 @@ class Navigator:
                 return False
         return True
 
+    def _second_place(self) -> np.ndarray:
+        """Return the second filter's estimate, carried to now by the odometry."""
+        return compose(self._second_at, relative(self._odo_at, self._odo))
+
     def _confirmed(self, pose) -> bool:
         """Whether the second filter is tight and within ``confirm`` of ``pose``."""
         if self.second is None:
             return True
         pos, head = _spread(self.second)
-        other = compose(self._second_at, relative(self._odo_at, self._odo))
-        near = math.hypot(*(other[:2] - pose[:2])) < self.settings.confirm
-        return near and pos < self.settings.spread and head < 0.15
+        off = math.hypot(*(self._second_place()[:2] - pose[:2]))
+        return (
+            off < self.settings.confirm and pos < self.settings.spread and head < 0.15
+        )
+
+    def _better_place(self, pose, z) -> np.ndarray | None:
+        """Return a place that explains the whole drive better than ``pose``, or None.
+
+        The candidates are the places given up earlier (at the goal in
+        doubt, or lost) and the second filter's, each carried to now by the
+        odometry, unless within ``rival_radius`` of ``pose``; the best of
+        them by `drive_score`, if it beats ``pose`` by ``rival_margin``
+        (`NavSettings`).
+        """
+        s = self.settings
+        places = [compose(p, relative(o, self._odo)) for p, o in self._given_up]
+        if self.second is not None:
+            places.append(self._second_place())
+        places = [p for p in places if math.dist(p[:2], pose[:2]) > s.rival_radius]
+        if not places:
+            return None
+        rows = len(self._rec["odo"])
+        odometry = np.vstack([np.reshape(self._rec["odo"], (rows, 3)), self._odo])
+        scans = np.vstack([np.reshape(self._rec["sonar"], (rows, len(z))), z])
+        own = drive_score(self.world, pose, odometry, scans)
+        scores = [drive_score(self.world, p, odometry, scans) for p in places]
+        k = int(np.argmax(scores))
+        return places[k] if scores[k] > own + s.rival_margin else None
 
     def _aliased(self) -> bool:
         """Whether a symmetry of the map explains the drive as well (`look_alike`)."""
@@ -312,7 +350,7 @@ class Navigator:
         self._ran = True
         s = self.settings
         self._plans, self._plan_times, self._lost_times = [], [], []
-        self._doubt_times = []
+        self._doubt_times, self._given_up = [], []
         self._need_plan, self._last_plan, self._agree = False, -np.inf, 1.0
         self._best_left, self._best_time = np.inf, np.inf
         self._start_localizing(0.0)

@@ -68,9 +68,20 @@ class NavSettings:
         filter). In a building of look-alike places a filter can settle in
         the wrong one, tight and agreeing with the sonar; two filters
         settling independently in the same wrong place is much rarer. When
-        they disagree at the goal, both start again from scratch (LOCALIZE).
-        Only with the navigator's own filters (a filter handed to it, e.g.
-        one told the start pose, is trusted alone).
+        they disagree at the goal, both start again (LOCALIZE). Only with
+        the navigator's own filters (a filter handed to it, e.g. one told
+        the start pose, is trusted alone).
+    rival_radius, rival_margin : float
+        At the goal the estimate is also weighed by the whole drive
+        (`robotlib.planning.aliasing.drive_score`) against the places given
+        up earlier (at the goal in doubt, or lost) and the second filter's,
+        each carried to now by the odometry, unless within ``rival_radius``
+        m of it (1.0). If one of them explains the drive better by
+        ``rival_margin`` (0.05), it does not say "reached": both filters
+        start again around the best of them. Two filters can settle in
+        the same look-alike room after a fresh start (an office floor: 8.6
+        m off); the drive behind the robot, laid out from there, runs
+        through walls.
     """
 
     speed: float = 0.3
@@ -91,6 +102,8 @@ class NavSettings:
     lost_agreement: float = 0.62
     no_progress: float = 30.0
     confirm: float = 0.5
+    rival_radius: float = 1.0
+    rival_margin: float = 0.05
 
     def __post_init__(self):
         if int(self.filter_every) < 1 or int(self.min_filter_steps) < 0:
