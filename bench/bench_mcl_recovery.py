@@ -11,8 +11,9 @@ without its global and tracking runs) and runs on it:
   carrying a 5 % share, the weighted mean reported (the recovery's earlier
   settings; the particles now come on any step, not only when the filter
   resamples, as they did before);
-- ``best+rec``: `RECOVERY_CONFIG` (up to 50,000 carrying up to half the
-  weight, the heaviest place reported).
+- ``best+rec``: `RECOVERY_CONFIG` (200,000 particles at the start, up to
+  200,000 added carrying up to half the weight, the heaviest place
+  reported).
 
 Prints per seed the steps to recover ("-": not within the run) and per
 configuration the share recovered within 30 steps, with the load average.
