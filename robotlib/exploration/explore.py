@@ -160,6 +160,17 @@ class Exploration:
         gap = np.hypot(*(mates - r.pose[:2]).T) if len(mates) else [np.inf]
         return bool(np.min(gap) > 2 * ROBOT_RADIUS + 0.15)
 
+    def _held_up(self, r: Member) -> bool:
+        """Whether a teammate holds ``r`` up.
+
+        Close ahead of it, or near it while no arc along its path keeps clear
+        (a teammate parked on its way home).
+        """
+        mates = self._positions(skip=r)
+        gap = np.hypot(*(mates - r.pose[:2]).T) if len(mates) else [np.inf]
+        near = np.min(gap) < self.settings.keep_out + 2 * ROBOT_RADIUS
+        return bool(r.blocked or (r.stuck > 0 and near))
+
     def _needs_target(self, r: Member, state, frontier) -> bool:
         if r.mode != EXPLORE or r.target is None or r.follower is None:
             return True
@@ -267,7 +278,7 @@ class Exploration:
                 r.targets.append(r.target.copy())
             elif spaces[n] is not cs and r.mode != HOME:
                 r.waited = 0.0  # nothing reachable around the teammates: wait again
-            elif r.mode == HOME and r.blocked and r.distance_home() < PARK:
+            elif r.mode == HOME and self._held_up(r) and r.distance_home() < PARK:
                 r.stop()  # parked by home
             else:
                 self._go_home(r, spaces[n])

@@ -96,3 +96,15 @@ def test_two_robots_each_waiting_for_the_other_do_not_wait_for_ever():
     res = explore_team(w, 2, ExploreSettings(max_time=150.0, go_home=False), rng=4)
     assert res.explored >= 0.9
     assert res.robot_collisions == 0 and res.wall_collisions == 0
+
+
+@pytest.mark.slow
+def test_a_team_whose_teammate_parked_on_its_way_home_parks_too():
+    """The building, three robots: the third parked on the second's start,
+    and the second, in sight of it, re-planned home every second for the
+    rest of the run (timeout at 1200 s, 99.7 % explored by 110 s)."""
+    w = load_world("building")
+    res = explore_team(w, 3, ExploreSettings(max_time=400.0), rng=0)
+    assert res.outcome == "home"
+    assert res.explored >= 0.95
+    assert res.collisions == 0
