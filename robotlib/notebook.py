@@ -37,6 +37,7 @@ from pathlib import Path
 
 import numpy as np
 
+from . import _loading
 from ._ipython import in_kernel, ipython_shell
 from ._versions import version_mismatch
 from .warmups import WARMUPS
@@ -307,69 +308,6 @@ def warm_up(parts: Iterable[str] = ("sim",), show: bool = True) -> dict[str, flo
     return spent
 
 
-class _Importing:
-    """A finder on ``sys.meta_path`` that finds nothing: it notes what imports now."""
-
-    def __init__(self):
-        self.package = ""
-
-    def find_spec(self, name, path=None, target=None):
-        """Note ``name``'s top-level package (a public one); find nothing."""
-        if not name.startswith("_"):
-            self.package = name.partition(".")[0]
-
-
-class _LoadingLine:
-    """The first cell's status line (`loading`): redrawn from a thread, ended once."""
-
-    def __init__(self, shell, every: float):
-        from IPython.display import display
-
-        self.t0, self.now = time.perf_counter(), ""
-        self.importing = _Importing()
-        self.handle = display(
-            {"text/plain": "importing ..."}, raw=True, display_id=True
-        )
-        self.lock, self.done = threading.Lock(), threading.Event()
-        sys.meta_path.insert(0, self.importing)
-        shell.events.register("post_run_cell", self._cell_ended)
-        self.shell = shell
-        threading.Thread(
-            target=self._run, args=(every,), name="loading-line", daemon=True
-        ).start()
-
-    def _text(self) -> str:
-        doing = self.now or f"importing {self.importing.package}".rstrip()
-        return f"{self.seconds():.1f} s: {doing} ..."
-
-    def _run(self, every: float) -> None:
-        while not self.done.wait(every):
-            with self.lock:
-                if not self.done.is_set():
-                    self.handle.update({"text/plain": self._text()}, raw=True)
-
-    def end(self, text: str) -> None:
-        """Stop the line's thread and show ``text`` in its place (once)."""
-        with self.lock:
-            if self.done.is_set():
-                return
-            self.done.set()
-            self.handle.update({"text/plain": text}, raw=True)
-        if self.importing in sys.meta_path:
-            sys.meta_path.remove(self.importing)
-        self.shell.events.unregister("post_run_cell", self._cell_ended)
-
-    def _cell_ended(self, *_args) -> None:  # before `setup` (an error, say)
-        self.end(f"stopped after {self.seconds():.1f} s.")
-
-    def seconds(self) -> float:
-        """Seconds since the line showed."""
-        return time.perf_counter() - self.t0
-
-
-_LOADING: list[_LoadingLine] = []  # the line `setup` ends
-
-
 def loading(every: float = 0.5) -> None:
     """Show a line that moves while a lab's first cell loads, until `setup` ends it.
 
@@ -387,22 +325,7 @@ def loading(every: float = 0.5) -> None:
     """
     if not in_kernel():
         return
-    for line in _LOADING:
-        line.end(f"stopped after {line.seconds():.1f} s.")
-    _LOADING[:] = [_LoadingLine(ipython_shell(), every)]
-
-
-def _loading_now(step: str) -> None:
-    """Name the step `loading`'s line shows (instead of the package importing)."""
-    for line in _LOADING:
-        line.now = step
-
-
-def _loaded() -> None:
-    """End `loading`'s line: how long it all took."""
-    while _LOADING:
-        line = _LOADING.pop()
-        line.end(f"Ready ({line.seconds():.1f} s of imports and set-up).")
+    _loading.start(ipython_shell(), every)
 
 
 def setup(
@@ -451,14 +374,14 @@ def setup(
     np.random.seed(seed)  # noqa: NPY002 - only for students' legacy calls
     np.set_printoptions(precision=4, suppress=True)
     explain_unsolved()
-    _loading_now("checking numba's cache")
+    _loading.now("checking numba's cache")
     cold = [part for part in warm if part not in warmed_parts()]
     if cold and not os.environ.get("ROBOTLIB_SKIP_WARM_UP"):  # set by robotlib
-        _loading_now("compiling kernels: see the bar below")
+        _loading.now("compiling kernels: see the bar below")
         warm_up(cold)  # a cold cache: compile now, with a progress bar (grade's
     # sandboxes set it when their copy of the numba cache holds the kernels)
     _notice_compiling()  # any later cell that compiles says so
-    _loaded()
+    _loading.loaded()
     return np.random.default_rng(seed)
 
 

@@ -427,11 +427,12 @@ def test_a_first_cell_shows_a_line_that_moves_until_setup_ends_it(tmp_path):
     (tmp_path / "slowpackage.py").write_text("import time\ntime.sleep(0.6)\n")
     book = _execute(
         [
-            ("code", "import robotlib.notebook as nb\nnb.loading(every=0.05)\n"
-                     "shown, update = [], nb._LOADING[0].handle.update\n"
-                     "nb._LOADING[0].handle.update = lambda data, **kw: ("
+            ("code", "import robotlib.notebook as nb\nfrom robotlib import _loading\n"
+                     "nb.loading(every=0.05)\n"
+                     "shown, update = [], _loading.LINES[0].handle.update\n"
+                     "_loading.LINES[0].handle.update = lambda data, **kw: ("
                      "shown.append(data['text/plain']), update(data, **kw))\n"
-                     "import slowpackage\nnb._loading_now('a step')\n"
+                     "import slowpackage\n_loading.now('a step')\n"
                      "import time\ntime.sleep(0.3)\nnb.setup(warm=(), style=False)\n"
                      "time.sleep(0.2)"),
             ("code", "print('\\n'.join(shown))"),

@@ -39,6 +39,7 @@ LAYERS = {
     "robotlib.warmups": 6,  # what `robotlib warmup` runs: the layers below, once
     "robotlib._unsolved": 0,  # a leaf: the notebook set-up's IPython handler
     "robotlib._ipython": 0,  # a leaf: which shell runs us (notebook, widgets)
+    "robotlib._loading": 0,  # a leaf: the first cell's status line (notebook)
     "robotlib._versions": 0,  # a leaf: the version, and a lab's check against it
     "robotlib._shipped": 0,  # a leaf: where the worlds, labs and syllabus are
     "robotlib.course": 7,
