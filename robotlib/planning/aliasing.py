@@ -26,10 +26,29 @@ import numpy as np
 from ..sensing import expected_ranges
 from ..world import World, compose, relative
 
-__all__ = ["map_symmetries", "look_alike", "agreement", "drive_score"]
+__all__ = ["map_symmetries", "look_alike", "fits", "agreement", "drive_score"]
 
 PASS_THROUGH = 0.05
 """A hypothesis whose drive comes this close to a wall went through it, m."""
+
+
+def fits(scans, expected: np.ndarray) -> np.ndarray:
+    """Tell which sonar readings agree with the ranges expected from the map.
+
+    A reading agrees within 0.25 m plus 10 % of the expected range.
+
+    Parameters
+    ----------
+    scans : array_like, shape (..., S)
+        The readings, m.
+    expected : numpy.ndarray, shape (..., S)
+        The map's ranges at the same poses, m.
+
+    Returns
+    -------
+    numpy.ndarray of bool, the shape of ``expected``
+    """
+    return np.abs(np.asarray(scans, dtype=float) - expected) < 0.25 + 0.1 * expected
 
 
 def _wall_points(world: World, step: float) -> np.ndarray:
@@ -111,8 +130,7 @@ def agreement(world: World, poses, scans) -> float:
     if len(poses) == 0:
         return math.nan
     expected = expected_ranges(world, poses)
-    ok = np.abs(np.asarray(scans, dtype=float) - expected) < 0.25 + 0.1 * expected
-    return float(ok.mean())
+    return float(fits(scans, expected).mean())
 
 
 def look_alike(world: World, poses, scans, symmetries, margin: float = 0.03):
@@ -188,7 +206,7 @@ def drive_score(world: World, pose, odometry, scans, every: int = 5) -> float:
     every = max(int(every), 1)
     z = np.asarray(scans, dtype=float)[::every]
     expected = expected_ranges(world, path[::every])
-    ok = (np.abs(z - expected) < 0.25 + 0.1 * expected).mean(axis=1)
+    ok = fits(z, expected).mean(axis=1)
     # a scored row counts nothing if the walls are crossed before the next one
     through = np.zeros(len(ok), dtype=bool)
     np.logical_or.at(

@@ -38,7 +38,7 @@ from ..localization import BEST, MCL
 from ..p3dx import ROBOT_LENGTH_REAR, ROBOT_RADIUS, ROBOT_WIDTH
 from ..sensing import expected_ranges
 from ..world import World, compose, relative, wrap_angle
-from .aliasing import drive_score, look_alike, map_symmetries
+from .aliasing import drive_score, fits, look_alike, map_symmetries
 from .cspace import CSpace, configuration_space
 from .follow import PathFollower, PurePursuit, cross_track, sonar_points
 from .grid import astar, path_length
@@ -193,8 +193,7 @@ class Navigator:
         """FOLLOW or AVOID: stop at the goal, notice being lost, mark, re-plan."""
         s = self.settings
         expected = expected_ranges(self.world, pose)[0]
-        ok = np.abs(z - expected) < 0.25 + 0.1 * expected
-        self._agree += 0.025 * (float(ok.mean()) - self._agree)
+        self._agree += 0.025 * (float(fits(z, expected).mean()) - self._agree)
         if np.hypot(*(pose[:2] - self.goal)) < s.goal_tolerance:
             rival = self._better_place(pose, z)
             if rival is None and self._settled() and self._confirmed(pose):
